@@ -1,0 +1,207 @@
+// SPDX-License-Identifier: MIT
+// Binned SAH builder: centroid binning per node (Wald 2007), in-place partition of PrimRefs,
+// TBB tasks per subtree and a parallel binning pass for large nodes.
+#include "accel/builders/binned_sah.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "accel/builders/top_down.h"
+#include "accel/core/binning.h"
+#include "accel/core/check.h"
+#include "accel/core/sah.h"
+
+namespace bvhlab::accel {
+namespace {
+
+/// Bins of all three axes for one node.
+struct BinSet {
+    std::vector<Bin> bins;  // 3 * num_bins, axis-major
+    explicit BinSet(int num_bins) : bins(3 * size_t(num_bins)) {}
+    void merge(const BinSet& o) {
+        for (size_t i = 0; i < bins.size(); ++i) {
+            bins[i].bounds.extend(o.bins[i].bounds);
+            bins[i].count += o.bins[i].count;
+        }
+    }
+};
+
+/// Best split found by the SAH sweep over the bins.
+struct Split {
+    float cost = std::numeric_limits<float>::infinity();
+    int axis = -1;
+    int bin = -1;  // references in bins <= bin go left
+};
+
+class Recursion {
+public:
+    Recursion(const BinnedSahBuilder::Config& c, std::vector<PrimRef>& refs, SparseTree& tree)
+        : c_(c), refs_(refs), tree_(tree) {}
+
+    /// Builds the subtree over refs_[b, e) whose bounds and centroid bounds are given.
+    void build(uint32_t slot, uint32_t b, uint32_t e, const AABB& bounds, const AABB& cbounds, uint32_t depth) {
+        const uint32_t count = e - b;
+        BinMapping map(cbounds, c_.num_bins);
+        Split split;
+        if (count > c_.min_leaf_size) split = find_split(b, e, bounds, map);
+        SplitDecision d = decide_split(c_, count, depth, split.cost);
+        if (d == SplitDecision::kLeaf) {
+            tree_.set_leaf(slot, b, e, bounds);
+            return;
+        }
+        uint32_t m = d == SplitDecision::kSplit ? partition(b, e, split, map) : median(b, e, cbounds);
+        tree_.set_interior(slot, b, m, bounds);
+        AABB lb, lc, rb, rc;
+        range_bounds(b, m, lb, lc);
+        range_bounds(m, e, rb, rc);
+        auto left = [&] { build(SparseTree::left_slot(slot), b, m, lb, lc, depth + 1); };
+        auto right = [&] { build(SparseTree::right_slot(slot, b, m), m, e, rb, rc, depth + 1); };
+        if (count >= c_.task_threshold) {
+            tbb::parallel_invoke(left, right);
+        } else {
+            left();
+            right();
+        }
+    }
+
+    /// Bounds and centroid bounds of refs_[b, e).
+    void range_bounds(uint32_t b, uint32_t e, AABB& bounds, AABB& cbounds) const {
+        bounds = AABB::empty();
+        cbounds = AABB::empty();
+        if (e - b >= c_.parallel_bin_threshold) {
+            using Pair = std::pair<AABB, AABB>;
+            Pair r = tbb::parallel_reduce(
+                tbb::blocked_range<uint32_t>(b, e, 8192), Pair{AABB::empty(), AABB::empty()},
+                [&](const auto& rg, Pair acc) {
+                    for (uint32_t i = rg.begin(); i < rg.end(); ++i) {
+                        acc.first.extend(refs_[i].bounds);
+                        acc.second.extend(refs_[i].centroid());
+                    }
+                    return acc;
+                },
+                [](Pair x, const Pair& y) {
+                    x.first.extend(y.first);
+                    x.second.extend(y.second);
+                    return x;
+                });
+            bounds = r.first;
+            cbounds = r.second;
+            return;
+        }
+        for (uint32_t i = b; i < e; ++i) {
+            bounds.extend(refs_[i].bounds);
+            cbounds.extend(refs_[i].centroid());
+        }
+    }
+
+private:
+    void bin_range(uint32_t b, uint32_t e, const BinMapping& map, BinSet& set) const {
+        const int nb = c_.num_bins;
+        for (uint32_t i = b; i < e; ++i) {
+            const PrimRef& r = refs_[i];
+            Vec3 c = r.centroid();
+            for (int a = 0; a < 3; ++a) {
+                Bin& bin = set.bins[size_t(a) * nb + map.bin(c[a], a)];
+                bin.bounds.extend(r.bounds);
+                ++bin.count;
+            }
+        }
+    }
+
+    Split find_split(uint32_t b, uint32_t e, const AABB& bounds, const BinMapping& map) const {
+        const int nb = c_.num_bins;
+        BinSet set(nb);
+        if (e - b >= c_.parallel_bin_threshold) {
+            set = tbb::parallel_reduce(
+                tbb::blocked_range<uint32_t>(b, e, 16384), BinSet(nb),
+                [&](const auto& rg, BinSet acc) {
+                    bin_range(rg.begin(), rg.end(), map, acc);
+                    return acc;
+                },
+                [](BinSet x, const BinSet& y) {
+                    x.merge(y);
+                    return x;
+                });
+        } else {
+            bin_range(b, e, map, set);
+        }
+        Split best;
+        const float parent_area = bounds.half_area();
+        std::vector<float> right_area(nb);
+        std::vector<uint32_t> right_count(nb);
+        for (int a = 0; a < 3; ++a) {
+            if (!map.splittable(a)) continue;
+            const Bin* bins = &set.bins[size_t(a) * nb];
+            AABB acc = AABB::empty();
+            uint32_t n = 0;
+            for (int i = nb - 1; i > 0; --i) {
+                acc.extend(bins[i].bounds);
+                n += bins[i].count;
+                right_area[i] = acc.half_area();
+                right_count[i] = n;
+            }
+            acc = AABB::empty();
+            n = 0;
+            for (int i = 0; i < nb - 1; ++i) {
+                acc.extend(bins[i].bounds);
+                n += bins[i].count;
+                if (n == 0 || right_count[i + 1] == 0) continue;
+                float cost = sah_split_cost(c_, parent_area, acc.half_area(), n,
+                                            right_area[i + 1], right_count[i + 1]);
+                if (cost < best.cost) best = {cost, a, i};
+            }
+        }
+        return best;
+    }
+
+    uint32_t partition(uint32_t b, uint32_t e, const Split& s, const BinMapping& map) {
+        auto mid = std::partition(refs_.begin() + b, refs_.begin() + e, [&](const PrimRef& r) {
+            return map.bin(r.centroid()[s.axis], s.axis) <= s.bin;
+        });
+        return uint32_t(mid - refs_.begin());
+    }
+
+    /// Object-median split on the widest centroid axis; ties broken by id so the result is
+    /// deterministic even when every centroid coincides.
+    uint32_t median(uint32_t b, uint32_t e, const AABB& cbounds) {
+        const int axis = cbounds.largest_axis();
+        const uint32_t m = b + (e - b) / 2;
+        std::nth_element(refs_.begin() + b, refs_.begin() + m, refs_.begin() + e,
+                         [axis](const PrimRef& x, const PrimRef& y) {
+                             float cx = x.centroid()[axis], cy = y.centroid()[axis];
+                             return cx < cy || (cx == cy && x.prim_id < y.prim_id);
+                         });
+        return m;
+    }
+
+    const BinnedSahBuilder::Config& c_;
+    std::vector<PrimRef>& refs_;
+    SparseTree& tree_;
+};
+
+}  // namespace
+
+BuildTree BinnedSahBuilder::build(const TriangleMesh& mesh) const {
+    return build(make_prim_refs(mesh));
+}
+
+BuildTree BinnedSahBuilder::build(std::vector<PrimRef> refs) const {
+    BVHLAB_CHECK(!refs.empty(), "cannot build a BVH over zero triangles");
+    BVHLAB_CHECK(config_.num_bins >= 2 && config_.num_bins <= 256, "num_bins must be in [2, 256]");
+    BVHLAB_CHECK(refs.size() < (size_t(1) << 31), "too many references for 32-bit indices");
+    SparseTree sparse(refs.size());
+    Recursion rec(config_, refs, sparse);
+    AABB bounds, cbounds;
+    rec.range_bounds(0, uint32_t(refs.size()), bounds, cbounds);
+    rec.build(0, 0, uint32_t(refs.size()), bounds, cbounds, 0);
+    std::vector<uint32_t> ids(refs.size());
+    for (size_t i = 0; i < refs.size(); ++i) ids[i] = refs[i].prim_id;
+    return sparse.compact(std::move(ids));
+}
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: MIT
+// The intermediate binary tree that every builder returns and every pass and layout consumes.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "accel/core/aabb.h"
+
+namespace bvhlab::accel {
+
+/// One node of a BuildTree, 32 bytes. An interior node has prim_count == 0 and its two
+/// children at first_index and first_index + 1 (siblings are always adjacent). A leaf
+/// references prim_indices[first_index .. first_index + prim_count).
+struct BuildNode {
+    AABB bounds;           // 24 bytes
+    uint32_t first_index;  // 4 bytes: left child, or first entry in prim_indices
+    uint32_t prim_count;   // 4 bytes: 0 for interior nodes; total 32 bytes
+
+    bool is_leaf() const { return prim_count != 0; }
+};
+static_assert(sizeof(BuildNode) == 32, "BuildNode is 32 bytes");
+
+/// Binary BVH in builder-neutral form. Node 0 is the root. prim_indices holds triangle ids;
+/// an object-split builder references each triangle exactly once, a spatial-split builder
+/// (SBVH) at least once. Owns all its data.
+struct BuildTree {
+    std::vector<BuildNode> nodes;
+    std::vector<uint32_t> prim_indices;
+
+    bool empty() const { return nodes.empty(); }
+    size_t bytes() const {
+        return nodes.size() * sizeof(BuildNode) + prim_indices.size() * sizeof(uint32_t);
+    }
+};
+
+/// Settings every top-down builder shares. Builders nest their own Config deriving from it.
+struct BuildConfig {
+    float traversal_cost = 1.0f;     ///< Ct: cost of visiting an interior node
+    float intersection_cost = 1.0f;  ///< Ci: cost of one triangle test
+    uint32_t min_leaf_size = 1;      ///< nodes this small always become leaves
+    uint32_t max_leaf_size = 8;      ///< nodes larger than this are always split
+    uint32_t max_depth = 64;         ///< the traversal stacks are sized for this depth
+};
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: MIT
+#include "accel/core/clip.h"
+
+#include <cmath>
+
+namespace bvhlab::accel {
+namespace {
+
+struct P3 {
+    double v[3];
+};
+
+/// Keeps the part of `in` (n vertices) on the side sign*(x[axis] - plane) <= 0.
+int clip_plane(const P3* in, int n, P3* out, int axis, double plane, double sign) {
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        const P3& p = in[i];
+        const P3& q = in[(i + 1) % n];
+        double dp = sign * (p.v[axis] - plane), dq = sign * (q.v[axis] - plane);
+        if (dp <= 0) out[m++] = p;
+        if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
+            double t = dp / (dp - dq);
+            P3 r;
+            for (int k = 0; k < 3; ++k) r.v[k] = p.v[k] + t * (q.v[k] - p.v[k]);
+            r.v[axis] = plane;  // exact on the plane, so clipped bounds never leak past it
+            out[m++] = r;
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
+    // A triangle clipped by 6 planes has at most 9 vertices.
+    P3 buf[2][12];
+    Vec3 tri[3] = {a, b, c};
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) buf[0][i].v[k] = tri[i][k];
+    int n = 3, cur = 0;
+    for (int axis = 0; axis < 3 && n > 0; ++axis) {
+        n = clip_plane(buf[cur], n, buf[cur ^ 1], axis, box.lo[axis], -1.0);
+        cur ^= 1;
+        if (n == 0) break;
+        n = clip_plane(buf[cur], n, buf[cur ^ 1], axis, box.hi[axis], 1.0);
+        cur ^= 1;
+    }
+    ClipResult r;
+    if (n < 3) {
+        for (int i = 0; i < n; ++i)
+            r.bounds.extend(Vec3{float(buf[cur][i].v[0]), float(buf[cur][i].v[1]), float(buf[cur][i].v[2])});
+        return r;
+    }
+    // Area of a planar polygon: half the norm of the summed fan cross products.
+    const P3* p = buf[cur];
+    double s[3] = {0, 0, 0};
+    for (int i = 1; i + 1 < n; ++i) {
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = p[i].v[k] - p[0].v[k];
+            e2[k] = p[i + 1].v[k] - p[0].v[k];
+        }
+        s[0] += e1[1] * e2[2] - e1[2] * e2[1];
+        s[1] += e1[2] * e2[0] - e1[0] * e2[2];
+        s[2] += e1[0] * e2[1] - e1[1] * e2[0];
+    }
+    r.area = 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    for (int i = 0; i < n; ++i)
+        r.bounds.extend(Vec3{float(p[i].v[0]), float(p[i].v[1]), float(p[i].v[2])});
+    // Rounding to float may step outside the box by an ulp; clamp back in.
+    r.bounds.lo = vmax(r.bounds.lo, box.lo);
+    r.bounds.hi = vmin(r.bounds.hi, box.hi);
+    return r;
+}
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: MIT
+// Indexed triangle mesh: the input of every builder and of the Embree oracle.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "accel/core/aabb.h"
+#include "accel/core/vec3.h"
+
+namespace bvhlab::accel {
+
+/// A material as far as the testbed needs it: a name, a diffuse colour and an emission.
+struct Material {
+    std::string name;
+    Vec3 diffuse{0.8f, 0.8f, 0.8f};
+    Vec3 emission{0.0f, 0.0f, 0.0f};
+};
+
+/// Triangles that the loader or a generator dropped, with the reason.
+struct DropCounts {
+    uint64_t non_finite = 0;  ///< a vertex had a NaN or inf coordinate
+    uint64_t zero_area = 0;   ///< the three vertices are collinear or coincide
+    uint64_t total() const { return non_finite + zero_area; }
+};
+
+/// Indexed triangle mesh. Triangle i uses vertices indices[3i..3i+2]; ids are dense in
+/// [0, triangle_count()). Every triangle kept has finite vertices and a non-zero area.
+struct TriangleMesh {
+    std::vector<Vec3> vertices;
+    std::vector<uint32_t> indices;       ///< 3 per triangle
+    std::vector<int32_t> material_ids;   ///< one per triangle, -1 = none
+    std::vector<Material> materials;
+    DropCounts dropped;
+
+    size_t triangle_count() const { return indices.size() / 3; }
+    Vec3 vertex(size_t tri, int corner) const { return vertices[indices[3 * tri + corner]]; }
+    AABB triangle_bounds(size_t tri) const;
+    AABB bounds() const;
+    /// Length of the bounding-box diagonal.
+    float diagonal() const;
+    /// Sum of the triangles' areas.
+    double surface_area() const;
+};
+
+/// Verdict of the loader's triangle filter.
+enum class TriangleCheck { kOk, kNonFinite, kZeroArea };
+
+/// Classifies a triangle: non-finite coordinates or zero area (tested in double precision,
+/// so tiny but valid triangles pass) make it unusable.
+TriangleCheck check_triangle(Vec3 a, Vec3 b, Vec3 c);
+
+/// Counts a failed check in `drops`; returns true when the triangle is kept.
+bool count_drop(TriangleCheck check, DropCounts& drops);
+
+/// Appends a triangle unless it has a non-finite vertex or zero area, which it counts in
+/// mesh.dropped instead. Returns true when the triangle was kept.
+bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t material);
+
+/// 64-bit FNV-1a over the triangles' vertex coordinates in triangle order, as 16 hex digits.
+/// Two meshes with the same triangles give the same hash whatever their vertex sharing.
+std::string scene_hash(const TriangleMesh& mesh);
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: MIT
+// Tree-quality figures reported for every build: SAH cost and EPO (Aila, Karras, Laine 2013,
+// "On quality metrics of bounding volume hierarchies"), sizes and leaf statistics.
+#pragma once
+
+#include <cstdint>
+
+#include "accel/core/build_tree.h"
+#include "accel/core/mesh.h"
+
+namespace bvhlab::accel {
+
+struct TreeStats {
+    uint64_t nodes = 0;
+    uint64_t leaves = 0;
+    uint64_t references = 0;   ///< sum of leaf sizes (= triangles without spatial splits)
+    uint32_t depth = 0;        ///< deepest leaf; the root is at depth 0
+    double mean_leaf_size = 0;
+    uint32_t max_leaf_size = 0;
+    uint64_t bytes = 0;        ///< BuildTree nodes plus primitive indices
+    /// SAH cost with the config's Ct (per interior node) and Ci (per triangle in a leaf),
+    /// normalised by the root's surface area.
+    double sah = 0;
+    /// Sum over nodes n of C_n * (area of triangles outside n's subtree that lies inside n)
+    /// / (total triangle area); C_n = Ct for interior nodes and Ci for leaves. -1 if skipped.
+    double epo = -1;
+};
+
+/// Computes every figure. EPO clips each triangle against the nodes its bounds overlap, in
+/// parallel; pass with_epo = false to skip it on huge scenes.
+TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs,
+                        bool with_epo = true);
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: MIT
+// Minimal float3 for code shared by host and device. Host-only math (cameras, loaders) uses GLM.
+#pragma once
+
+#include <cmath>
+
+#include "accel/core/hd.h"
+
+namespace bvhlab {
+
+/// Three packed floats (12 bytes), usable in host and device code.
+struct Vec3 {
+    float x, y, z;
+
+    BVHLAB_HD float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    BVHLAB_HD float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+};
+static_assert(sizeof(Vec3) == 12, "Vec3 must be three packed floats");
+
+BVHLAB_HD inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+BVHLAB_HD inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+BVHLAB_HD inline Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
+BVHLAB_HD inline Vec3 operator*(float s, Vec3 a) { return a * s; }
+BVHLAB_HD inline Vec3 operator*(Vec3 a, Vec3 b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+BVHLAB_HD inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+BVHLAB_HD inline Vec3 cross(Vec3 a, Vec3 b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+BVHLAB_HD inline float length(Vec3 a) { return sqrtf(dot(a, a)); }
+BVHLAB_HD inline Vec3 vmin(Vec3 a, Vec3 b) { return {fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
+BVHLAB_HD inline Vec3 vmax(Vec3 a, Vec3 b) { return {fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+
+}  // namespace bvhlab

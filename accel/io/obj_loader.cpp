@@ -1,0 +1,204 @@
+// SPDX-License-Identifier: MIT
+// OBJ loading: one read of the file, a strict syntax scan (tinyobjloader reads `v 1 0 abc`
+// as a zero and only warns about out-of-range indices), then tinyobjloader's parser.
+#include "accel/io/obj_loader.h"
+
+#include <tiny_obj_loader.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <sys/stat.h>
+
+#include "accel/core/check.h"
+
+namespace bvhlab::accel {
+namespace {
+
+std::string read_file(const std::string& path) {
+    struct stat st{};
+    if (stat(path.c_str(), &st) != 0) throw Error("cannot open '" + path + "': " + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) throw Error("cannot read '" + path + "': it is a directory");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open '" + path + "': " + std::strerror(errno));
+    std::string data(size_t(st.st_size), '\0');
+    if (!in.read(data.data(), std::streamsize(data.size())))
+        throw Error("cannot read '" + path + "': read failed");
+    return data;
+}
+
+bool is_number(const char* b, const char* e) {
+    if (b == e) return false;
+    std::string tok(b, e);
+    char* end = nullptr;
+    std::strtod(tok.c_str(), &end);
+    return end == tok.c_str() + tok.size();
+}
+
+/// One face-vertex token: v, v/vt, v//vn or v/vt/vn with non-zero integers.
+bool parse_face_token(const char* b, const char* e, long& vi) {
+    std::string tok(b, e);
+    const char* p = tok.c_str();
+    char* end = nullptr;
+    vi = std::strtol(p, &end, 10);
+    if (end == p || vi == 0) return false;
+    for (int part = 0; part < 2 && *end == '/'; ++part) {
+        p = end + 1;
+        if (*p == '/' && part == 0) {  // v//vn
+            end = const_cast<char*>(p);
+            continue;
+        }
+        long x = std::strtol(p, &end, 10);
+        if (end == p || x == 0) return false;
+    }
+    return *end == '\0';
+}
+
+/// Throws on the first malformed v/vt/vn/f line or face index out of range.
+void scan_obj(const std::string& path, const std::string& text) {
+    size_t line_no = 0, nv = 0, pos = 0;
+    long max_index = 0;
+    size_t max_line = 0;
+    auto fail = [&](size_t ln, const std::string& what) {
+        throw Error("'" + path + "' line " + std::to_string(ln) + ": " + what);
+    };
+    while (pos < text.size()) {
+        size_t eol = text.find('\n', pos);
+        if (eol == std::string::npos) eol = text.size();
+        ++line_no;
+        const char* b = text.data() + pos;
+        const char* e = text.data() + eol;
+        pos = eol + 1;
+        // Tokenise on blanks; comments run to the end of the line.
+        const char* toks[32][2];
+        int nt = 0;
+        for (const char* p = b; p < e && nt < 32;) {
+            while (p < e && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
+            if (p >= e || *p == '#') break;
+            const char* s = p;
+            while (p < e && *p != ' ' && *p != '\t' && *p != '\r' && *p != '#') ++p;
+            toks[nt][0] = s;
+            toks[nt][1] = p;
+            ++nt;
+        }
+        if (nt == 0) continue;
+        const std::string key(toks[0][0], toks[0][1]);
+        if (key == "v" || key == "vn" || key == "vt") {
+            const int need = key == "vt" ? 1 : 3;
+            if (nt - 1 < need) fail(line_no, "malformed '" + key + "' line: needs " + std::to_string(need) + " numbers");
+            for (int i = 1; i < nt; ++i)
+                if (!is_number(toks[i][0], toks[i][1]))
+                    fail(line_no, "malformed '" + key + "' line: '" + std::string(toks[i][0], toks[i][1]) + "' is not a number");
+            if (key == "v") ++nv;
+        } else if (key == "f") {
+            if (nt < 4) fail(line_no, "malformed 'f' line: a face needs at least 3 vertices");
+            for (int i = 1; i < nt; ++i) {
+                long vi = 0;
+                if (!parse_face_token(toks[i][0], toks[i][1], vi))
+                    fail(line_no, "malformed 'f' line: bad vertex reference '" + std::string(toks[i][0], toks[i][1]) + "'");
+                if (vi < 0 && size_t(-vi) > nv) fail(line_no, "face index " + std::to_string(vi) + " out of range");
+                if (vi > max_index) {
+                    max_index = vi;
+                    max_line = line_no;
+                }
+            }
+        }
+    }
+    if (size_t(max_index) > nv)
+        fail(max_line, "face index " + std::to_string(max_index) + " out of range (the file has " +
+                           std::to_string(nv) + " vertices)");
+}
+
+}  // namespace
+
+TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings) {
+    const std::string text = read_file(path);
+    scan_obj(path, text);
+    tinyobj::attrib_t attrib;
+    std::vector<tinyobj::shape_t> shapes;
+    std::vector<tinyobj::material_t> materials;
+    std::string warn, err;
+    const size_t slash = path.find_last_of('/');
+    tinyobj::MaterialFileReader mtl_reader(slash == std::string::npos ? "./" : path.substr(0, slash + 1));
+    std::istringstream stream(text);
+    const bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &stream, &mtl_reader,
+                                     /*triangulate=*/true, /*default_vcols_fallback=*/false);
+    if (!ok || !err.empty()) {
+        while (!err.empty() && (err.back() == '\n' || err.back() == '.')) err.pop_back();
+        for (char& ch : err) if (ch == '\n') ch = ' ';
+        throw Error("cannot parse '" + path + "': " + (err.empty() ? "tinyobjloader failed" : err));
+    }
+    if (warnings && !warn.empty()) {
+        std::istringstream ws(warn);
+        for (std::string line; std::getline(ws, line);)
+            if (!line.empty()) warnings->push_back(line);
+    }
+    TriangleMesh mesh;
+    for (const auto& m : materials) {
+        Material mat;
+        mat.name = m.name;
+        mat.diffuse = {m.diffuse[0], m.diffuse[1], m.diffuse[2]};
+        mat.emission = {m.emission[0], m.emission[1], m.emission[2]};
+        mesh.materials.push_back(mat);
+    }
+    const size_t nv = attrib.vertices.size() / 3;
+    mesh.vertices.resize(nv);
+    std::memcpy(mesh.vertices.data(), attrib.vertices.data(), nv * sizeof(Vec3));
+    for (const auto& shape : shapes) {
+        size_t offset = 0;
+        for (size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
+            const size_t fv = shape.mesh.num_face_vertices[f];
+            if (fv != 3) {  // triangulation could not handle this polygon
+                offset += fv;
+                ++mesh.dropped.zero_area;
+                continue;
+            }
+            uint32_t idx[3];
+            for (int k = 0; k < 3; ++k) {
+                const int vi = shape.mesh.indices[offset + k].vertex_index;
+                if (vi < 0 || size_t(vi) >= nv) throw Error("'" + path + "': face index out of range");
+                idx[k] = uint32_t(vi);
+            }
+            offset += 3;
+            const TriangleCheck check =
+                check_triangle(mesh.vertices[idx[0]], mesh.vertices[idx[1]], mesh.vertices[idx[2]]);
+            if (!count_drop(check, mesh.dropped)) continue;
+            mesh.indices.insert(mesh.indices.end(), idx, idx + 3);
+            const int mat = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
+            mesh.material_ids.push_back(mat >= 0 && size_t(mat) < materials.size() ? mat : -1);
+        }
+    }
+    if (mesh.triangle_count() == 0) {
+        throw Error("'" + path + "' has no usable triangles" +
+                    (mesh.dropped.total() ? " (all " + std::to_string(mesh.dropped.total()) +
+                                                " were dropped as non-finite or zero-area)"
+                                          : ""));
+    }
+    return mesh;
+}
+
+void write_obj(const TriangleMesh& mesh, const std::string& path) {
+    std::ofstream out(path);
+    if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    char buf[96];
+    for (const Vec3& v : mesh.vertices) {
+        // %.9g round-trips every float exactly.
+        std::snprintf(buf, sizeof buf, "v %.9g %.9g %.9g\n", v.x, v.y, v.z);
+        out << buf;
+    }
+    int32_t current = -1;
+    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const int32_t m = mesh.material_ids.empty() ? -1 : mesh.material_ids[t];
+        if (m != current && m >= 0 && size_t(m) < mesh.materials.size()) {
+            out << "usemtl " << mesh.materials[size_t(m)].name << "\n";
+            current = m;
+        }
+        out << "f " << mesh.indices[3 * t] + 1 << ' ' << mesh.indices[3 * t + 1] + 1 << ' '
+            << mesh.indices[3 * t + 2] + 1 << "\n";
+    }
+    if (!out.flush()) throw Error("cannot write '" + path + "': write failed");
+}
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: MIT
+#include "accel/layouts/bvh2_convert.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cfloat>
+
+#include "accel/core/check.h"
+
+namespace bvhlab::accel {
+
+WoopTriangle make_woop_triangle(Vec3 v0, Vec3 v1, Vec3 v2) {
+    double e1[3], e2[3], n[3], p[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = double(v1[k]) - v0[k];
+        e2[k] = double(v2[k]) - v0[k];
+        p[k] = v0[k];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    BVHLAB_CHECK(len > 0.0, "Woop transform of a zero-area triangle");
+    for (double& x : n) x /= len;
+    // Columns of M are e1, e2, n; invert by cofactors: rows of M^-1 are (e2 x n, n x e1,
+    // e1 x e2) / det.
+    auto crs = [](const double* a, const double* b, double* out) {
+        out[0] = a[1] * b[2] - a[2] * b[1];
+        out[1] = a[2] * b[0] - a[0] * b[2];
+        out[2] = a[0] * b[1] - a[1] * b[0];
+    };
+    double ru[3], rv[3], rw[3];
+    crs(e2, n, ru);
+    crs(n, e1, rv);
+    crs(e1, e2, rw);
+    const double det = e1[0] * ru[0] + e1[1] * ru[1] + e1[2] * ru[2];
+    WoopTriangle w;
+    const double* rows[3] = {rw, ru, rv};
+    for (int r = 0; r < 3; ++r) {
+        double dotp = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            w.row[r][k] = float(rows[r][k] / det);
+            dotp += rows[r][k] / det * p[k];
+        }
+        w.row[r][3] = float(r == 0 ? dotp : -dotp);
+    }
+    return w;
+}
+
+namespace {
+
+void set_child_box(Bvh2Node& n, int slot, const AABB& b) {
+    float* xy = slot == 0 ? &n.c0_lo_x : &n.c1_lo_x;
+    xy[0] = b.lo.x;
+    xy[1] = b.hi.x;
+    xy[2] = b.lo.y;
+    xy[3] = b.hi.y;
+    float* z = slot == 0 ? &n.c0_lo_z : &n.c1_lo_z;
+    z[0] = b.lo.z;
+    z[1] = b.hi.z;
+}
+
+}  // namespace
+
+Bvh2 convert_to_bvh2(const BuildTree& tree, const TriangleMesh& mesh) {
+    BVHLAB_CHECK(!tree.empty(), "cannot convert an empty BuildTree");
+    Bvh2 out;
+    // Interior BuildTree nodes keep their relative order; map each to its Bvh2 index.
+    std::vector<int32_t> index(tree.nodes.size(), -1);
+    int32_t next = 0;
+    for (size_t i = 0; i < tree.nodes.size(); ++i)
+        if (!tree.nodes[i].is_leaf()) index[i] = next++;
+    const bool root_leaf = tree.nodes[0].is_leaf();
+    out.nodes.resize(root_leaf ? 1 : size_t(next));
+    out.tri_ids = tree.prim_indices;
+    out.tris.resize(tree.prim_indices.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tris.size(), 4096), [&](const auto& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+            uint32_t t = tree.prim_indices[k];
+            out.tris[k] = make_woop_triangle(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2));
+        }
+    });
+    auto fill_child = [&](Bvh2Node& n, int slot, const BuildNode& c, size_t ci) {
+        set_child_box(n, slot, c.bounds);
+        if (c.is_leaf()) {
+            n.child[slot] = ~int32_t(c.first_index);
+            n.count[slot] = c.prim_count;
+        } else {
+            n.child[slot] = index[ci];
+            n.count[slot] = 0;
+        }
+    };
+    if (root_leaf) {
+        Bvh2Node& n = out.nodes[0];
+        fill_child(n, 0, tree.nodes[0], 0);
+        set_child_box(n, 1, AABB::empty());
+        n.child[1] = ~int32_t(0);
+        n.count[1] = 0;
+        return out;
+    }
+    for (size_t i = 0; i < tree.nodes.size(); ++i) {
+        const BuildNode& b = tree.nodes[i];
+        if (b.is_leaf()) continue;
+        Bvh2Node& n = out.nodes[size_t(index[i])];
+        fill_child(n, 0, tree.nodes[b.first_index], b.first_index);
+        fill_child(n, 1, tree.nodes[b.first_index + 1], b.first_index + 1);
+    }
+    return out;
+}
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,50 @@
+// SPDX-License-Identifier: MIT
+// Woop's unit-triangle intersection (Woop 2004; as used by Aila & Laine 2009): each triangle
+// stores the affine map from world space to the space where it is the unit triangle.
+#pragma once
+
+#include <cstdint>
+
+#include "accel/core/hd.h"
+#include "accel/core/vec3.h"
+
+namespace bvhlab::accel {
+
+/// The inverse of M = [e1 e2 n | v0], where e1 = v1 - v0, e2 = v2 - v0 and n is the unit
+/// normal, as three rows of 4 floats (48 bytes, three 16-byte loads on the GPU):
+///   row 0 = ( r_w, r_w . v0)   the plane row: t = (row0.w - row0.xyz . o) / (row0.xyz . d)
+///   row 1 = ( r_u, -r_u . v0)  u = row1.w + row1.xyz . (o + t d)
+///   row 2 = ( r_v, -r_v . v0)  v = row2.w + row2.xyz . (o + t d)
+/// The hit point is (1 - u - v) v0 + u v1 + v v2, the same barycentrics Embree reports.
+struct alignas(16) WoopTriangle {
+    float row[3][4];  // 48 bytes: total 48 bytes
+
+    /// Intersects the ray o + t d with t in (tmin, tmax). On a hit writes t, u, v and
+    /// returns true. Parallel rays give a NaN or infinite t, which the comparisons reject.
+    BVHLAB_HD BVHLAB_FORCEINLINE bool intersect(Vec3 o, Vec3 d, float tmin, float tmax, float& t_out,
+                                                float& u_out, float& v_out) const {
+        const float oz = row[0][3] - (o.x * row[0][0] + o.y * row[0][1] + o.z * row[0][2]);
+        const float dz = d.x * row[0][0] + d.y * row[0][1] + d.z * row[0][2];
+        const float t = oz / dz;
+        if (!(t > tmin && t < tmax)) return false;
+        const float ox = row[1][3] + o.x * row[1][0] + o.y * row[1][1] + o.z * row[1][2];
+        const float dx = d.x * row[1][0] + d.y * row[1][1] + d.z * row[1][2];
+        const float u = ox + t * dx;
+        if (!(u >= 0.0f)) return false;
+        const float oy = row[2][3] + o.x * row[2][0] + o.y * row[2][1] + o.z * row[2][2];
+        const float dy = d.x * row[2][0] + d.y * row[2][1] + d.z * row[2][2];
+        const float v = oy + t * dy;
+        if (!(v >= 0.0f && u + v <= 1.0f)) return false;
+        t_out = t;
+        u_out = u;
+        v_out = v;
+        return true;
+    }
+};
+static_assert(sizeof(WoopTriangle) == 48 && alignof(WoopTriangle) == 16, "WoopTriangle layout");
+
+/// Computes the map for triangle (v0, v1, v2) in double precision, then rounds to float.
+/// The triangle must have non-zero area.
+WoopTriangle make_woop_triangle(Vec3 v0, Vec3 v1, Vec3 v2);
+
+}  // namespace bvhlab::accel

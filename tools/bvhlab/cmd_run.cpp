@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: MIT
+// `bvhlab run`: the main job. For each scene: build, print quality figures, benchmark every
+// ray type, verify every ray against Embree, then print one summary table.
+#include <cstdio>
+#include <memory>
+
+#include "tools/bvhlab/commands.h"
+#include "tools/bvhlab/pipeline.h"
+
+namespace bvhlab::cli {
+
+void print_bench_row(const nlohmann::json& j);
+void print_verify_header();
+void print_verify_row(const nlohmann::json& j);
+
+void register_run(CLI::App& app, Globals& g) {
+    struct Opts {
+        std::vector<std::string> scenes;
+        std::string types = "all";
+        BuildOptions build;
+        RayOptions rays;
+        BenchSettings bench{3, 1};
+        trav::CompareConfig cc;
+    };
+    auto o = std::make_shared<Opts>();
+    CLI::App* sub = app.add_subcommand(
+        "run", "build, benchmark and verify: cornell-box plus every scene in $BVHLAB_SCENES unless scenes are given");
+    sub->add_option("scenes", o->scenes, "scenes (OBJ files, catalogue names or gen: specs)");
+    sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
+    sub->add_option("--runs", o->bench.runs, "timed runs per ray type")->check(CLI::Range(1, 1000))->capture_default_str();
+    o->build.add_to(*sub);
+    o->rays.add_to(*sub);
+    add_compare_options(*sub, o->cc);
+    sub->callback([o, &g] {
+        std::vector<std::string> scenes = o->scenes;
+        if (scenes.empty()) {
+            scenes.push_back(std::string(BVHLAB_DATA_DIR) + "/cornell_box.obj");
+            for (const auto& n : catalogue_scene_names()) scenes.push_back(n);
+        }
+        const auto types = parse_ray_types(o->types);
+        struct Row {
+            std::string scene;
+            nlohmann::json build;
+            std::vector<nlohmann::json> bench, verify;
+        };
+        std::vector<Row> rows;
+        for (const auto& spec : scenes) {
+            Scene s = load_scene(spec, g);
+            Built b = build_scene(s, o->build, g);
+            Row row{s.name, b.record, {}, {}};
+            if (g.json) emit(b.record);
+            trav::EmbreeOracle oracle(s.mesh);
+            trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
+            for (trav::RayType t : types) {
+                trav::RaySet set = proto.make(t);
+                std::vector<trav::Hit> hits;
+                nlohmann::json bj = bench_ray_set(s, b, set, trav::ray_type_name(t), o->bench, g, &hits);
+                nlohmann::json vj = verify_ray_set(s, oracle, set, hits, trav::ray_type_name(t), b.structure, o->cc, g);
+                if (g.json) {
+                    emit(bj);
+                    emit(vj);
+                }
+                if (vj["mismatches"].get<size_t>() > 0) g_exit_code = 1;
+                row.bench.push_back(bj);
+                row.verify.push_back(vj);
+            }
+            if (!g.json) {
+                std::printf("\n== %s ==\n", s.name.c_str());
+                print_build_table(s, b);
+                std::printf("\n");
+                for (const auto& j : row.bench) print_bench_row(j);
+                std::printf("\n");
+                print_verify_header();
+                for (const auto& j : row.verify) print_verify_row(j);
+                std::fflush(stdout);
+            }
+            rows.push_back(std::move(row));
+        }
+        if (!g.json) {
+            std::printf("\n== summary (%s, %s build, commit %s) ==\n", machine_description().c_str(), build_type(), git_commit());
+            std::printf("%-16s %10s %8s %8s %9s", "scene", "triangles", "SAH", "EPO", "build ms");
+            for (auto t : types) std::printf(" %10s", (std::string(trav::ray_type_name(t)) + " Mr/s").c_str());
+            std::printf(" %10s\n", "mismatch");
+            for (const auto& r : rows) {
+                size_t mism = 0;
+                for (const auto& v : r.verify) mism += v["mismatches"].get<size_t>();
+                const double epo = r.build["epo"].is_null() ? -1.0 : r.build["epo"].get<double>();
+                std::printf("%-16s %10zu %8.3f %8.3f %9.1f", r.scene.c_str(), r.build["triangles"].get<size_t>(),
+                            r.build["sah"].get<double>(), epo, r.build["build_ms"].get<double>());
+                for (const auto& bj : r.bench) std::printf(" %10.2f", bj["mrays_per_s"].get<double>());
+                std::printf(" %10zu\n", mism);
+            }
+        }
+        if (g_exit_code) std::fprintf(stderr, "bvhlab: error: real mismatches against Embree (see above)\n");
+    });
+}
+
+}  // namespace bvhlab::cli

@@ -1,0 +1,268 @@
+// SPDX-License-Identifier: MIT
+#include "tools/bvhlab/context.h"
+
+#include <glm/geometric.hpp>
+#include <tbb/info.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "accel/core/check.h"
+#include "accel/io/obj_loader.h"
+#include "accel/io/procedural.h"
+
+namespace fs = std::filesystem;
+
+namespace bvhlab::cli {
+
+Stage::Stage(const Globals& g, std::string what) : g_(g), what_(std::move(what)), t0_(std::chrono::steady_clock::now()) {
+    if (!g_.quiet) std::fprintf(stderr, "[bvhlab] %s ...\n", what_.c_str());
+}
+
+Stage::~Stage() {
+    if (!g_.quiet) std::fprintf(stderr, "[bvhlab] %s: done (%.2f s)\n", what_.c_str(), seconds());
+}
+
+double Stage::seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+}
+
+void Stage::progress(size_t done, size_t total) const {
+    if (g_.quiet || !isatty(fileno(stderr))) return;
+    std::fprintf(stderr, "\r[bvhlab] %s: %3d%%%s", what_.c_str(), int(100.0 * double(done) / double(total)),
+                 done >= total ? "\n" : "");
+}
+
+namespace {
+
+/// A catalogue: scenes.json of the shared benchmark scenes or of data/.
+struct Catalogue {
+    fs::path dir;
+    nlohmann::json scenes;
+};
+
+std::vector<Catalogue> catalogues() {
+    std::vector<Catalogue> out;
+    std::vector<fs::path> dirs;
+    if (const char* env = std::getenv("BVHLAB_SCENES"); env && *env) dirs.emplace_back(env);
+    dirs.emplace_back(BVHLAB_DATA_DIR);
+    for (const auto& d : dirs) {
+        const fs::path file = d / "scenes.json";
+        std::ifstream in(file);
+        if (!in) continue;
+        try {
+            nlohmann::json j = nlohmann::json::parse(in);
+            if (j.contains("scenes")) out.push_back({d, j["scenes"]});
+        } catch (const std::exception& e) {
+            throw Error("cannot parse '" + file.string() + "': " + e.what());
+        }
+    }
+    return out;
+}
+
+glm::vec3 vec3_of(const nlohmann::json& j) { return {j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()}; }
+
+/// Camera looking at the bounds' centre from a raised diagonal, fitting the bounding sphere.
+trav::Camera auto_camera(const accel::TriangleMesh& mesh) {
+    const AABB b = mesh.bounds();
+    const Vec3 c = b.center();
+    const float radius = 0.5f * length(b.extent());
+    trav::Camera cam;
+    cam.fov_y_deg = 45.0f;
+    const float dist = radius / std::sin(0.5f * 45.0f * 3.14159265f / 180.0f) * 1.05f;
+    const glm::vec3 dir = glm::normalize(glm::vec3(0.5f, 0.7f, 1.0f));
+    cam.target = {c.x, c.y, c.z};
+    cam.eye = cam.target + dir * dist;
+    cam.up = {0.0f, 1.0f, 0.0f};
+    return cam;
+}
+
+void apply_entry(Scene& s, const nlohmann::json& e) {
+    if (e.contains("camera")) {
+        const auto& c = e["camera"];
+        s.camera.eye = vec3_of(c.at("eye"));
+        s.camera.target = vec3_of(c.at("target"));
+        s.camera.up = vec3_of(c.at("up"));
+        s.camera.fov_y_deg = c.at("fov_y_deg").get<float>();
+        s.camera_from_catalogue = true;
+    }
+    if (e.contains("ao_length")) s.ao_length = e["ao_length"].get<float>();
+}
+
+}  // namespace
+
+std::vector<std::string> catalogue_scene_names() {
+    std::vector<std::string> names;
+    const char* env = std::getenv("BVHLAB_SCENES");
+    if (!env || !*env) return names;
+    for (const auto& c : catalogues())
+        if (c.dir == fs::path(env))
+            for (const auto& [name, _] : c.scenes.items()) names.push_back(name);
+    return names;
+}
+
+Scene load_scene(const std::string& spec, const Globals& g) {
+    Scene s;
+    s.source = spec;
+    const nlohmann::json* entry = nullptr;
+    fs::path file;
+    std::vector<Catalogue> cats = catalogues();
+    if (spec.rfind("gen:", 0) == 0) {
+        // gen:KIND:TRIANGLES[:SEED]
+        std::vector<std::string> parts;
+        std::stringstream ss(spec);
+        for (std::string p; std::getline(ss, p, ':');) parts.push_back(p);
+        if (parts.size() < 3 || parts.size() > 4)
+            throw Error("bad generated-scene spec '" + spec + "' (expected gen:soup|structured:TRIANGLES[:SEED])");
+        uint64_t n = 0, seed = 1;
+        try {
+            n = std::stoull(parts[2]);
+            if (parts.size() == 4) seed = std::stoull(parts[3]);
+        } catch (const std::exception&) {
+            throw Error("bad number in generated-scene spec '" + spec + "'");
+        }
+        Stage st(g, "generating " + spec);
+        s.mesh = accel::make_procedural(accel::parse_procedural_kind(parts[1]), n, seed);
+        s.name = spec;
+    } else {
+        for (const auto& c : cats) {
+            if (c.scenes.contains(spec)) {
+                entry = &c.scenes[spec];
+                file = c.dir / entry->at("file").get<std::string>();
+                s.name = spec;
+                break;
+            }
+        }
+        if (!entry) {
+            file = spec;
+            if (!fs::exists(file))
+                throw Error("no scene '" + spec + "': not a file, and not a name in " +
+                            (std::getenv("BVHLAB_SCENES") ? "$BVHLAB_SCENES/scenes.json or " : "") +
+                            "data/scenes.json");
+            s.name = file.stem().string();
+            // A path inside a catalogue's folder picks up that entry's camera.
+            std::error_code ec;
+            for (const auto& c : cats)
+                for (const auto& [name, e] : c.scenes.items())
+                    if (fs::equivalent(c.dir / e.at("file").get<std::string>(), file, ec)) {
+                        entry = &e;
+                        s.name = name;
+                    }
+        }
+        Stage st(g, "loading " + file.string());
+        std::vector<std::string> warnings;
+        s.mesh = accel::load_obj(file.string(), &warnings);
+        if (!g.quiet)
+            for (const auto& w : warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
+    }
+    if (entry) apply_entry(s, *entry);
+    if (!s.camera_from_catalogue) s.camera = auto_camera(s.mesh);
+    if (s.ao_length <= 0.0f) s.ao_length = 0.05f * s.mesh.diagonal();
+    s.hash = accel::scene_hash(s.mesh);
+    if (!g.quiet) {
+        std::fprintf(stderr, "[bvhlab] %s: %zu triangles, dropped %llu (%llu non-finite, %llu zero-area)\n",
+                     s.name.c_str(), s.mesh.triangle_count(), (unsigned long long)s.mesh.dropped.total(),
+                     (unsigned long long)s.mesh.dropped.non_finite, (unsigned long long)s.mesh.dropped.zero_area);
+    }
+    return s;
+}
+
+void BuildOptions::add_to(CLI::App& app) {
+    app.add_option("--builder", builder, "BVH builder: binned (binned SAH) or sweep (full-sweep SAH)")
+        ->check(CLI::IsMember({"binned", "sweep"}))
+        ->capture_default_str();
+    app.add_option("--bins", opts.num_bins, "bins per axis for the binned builder")
+        ->check(CLI::Range(2, 256))
+        ->capture_default_str();
+    app.add_option("--max-leaf", opts.config.max_leaf_size, "largest leaf (triangles)")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    app.add_option("--min-leaf", opts.config.min_leaf_size, "nodes this small always become leaves")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+}
+
+void RayOptions::add_to(CLI::App& app) {
+    app.add_option("--width", cfg.primary.width, "image width in pixels")->check(CLI::Range(1, 65536))->capture_default_str();
+    app.add_option("--height", cfg.primary.height, "image height in pixels")->check(CLI::Range(1, 65536))->capture_default_str();
+    app.add_option("--spp", cfg.primary.samples, "samples per pixel, a perfect square (regular sub-grid)")
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
+    app.add_option("--tile", cfg.primary.tile, "order primary rays in TxT pixel tiles (0 = row-major)")
+        ->check(CLI::Range(0, 4096))
+        ->capture_default_str();
+    app.add_option("--ao-rays", cfg.ao_rays, "AO rays per primary hit")->check(CLI::Range(1, 1024))->capture_default_str();
+    app.add_option("--diffuse-rays", cfg.diffuse_rays, "diffuse rays per primary hit")
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
+    app.add_option("--seed", cfg.seed, "seed of every random choice")->capture_default_str();
+}
+
+trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
+    trav::ProtocolConfig c = cfg;
+    c.camera = s.camera;
+    c.ao_length = s.ao_length;
+    return c;
+}
+
+std::vector<trav::RayType> parse_ray_types(const std::string& list) {
+    if (list == "all")
+        return {trav::RayType::kPrimary, trav::RayType::kAo, trav::RayType::kDiffuse, trav::RayType::kShadow};
+    std::vector<trav::RayType> out;
+    std::stringstream ss(list);
+    for (std::string t; std::getline(ss, t, ',');) out.push_back(trav::parse_ray_type(t));
+    if (out.empty()) throw Error("no ray types given");
+    return out;
+}
+
+std::string machine_description() {
+    char host[256] = "unknown";
+    gethostname(host, sizeof host - 1);
+    std::string cpu = "unknown CPU";
+    std::ifstream in("/proc/cpuinfo");
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("model name", 0) == 0) {
+            cpu = line.substr(line.find(':') + 2);
+            break;
+        }
+    }
+    return std::string(host) + " (" + cpu + ", " + std::to_string(tbb::info::default_concurrency()) + " threads)";
+}
+
+nlohmann::json base_record(const char* kind, const Scene& scene) {
+    return {{"record", kind},          {"commit", git_commit()}, {"build_type", build_type()},
+            {"scene", scene.name},     {"scene_hash", scene.hash}, {"triangles", scene.mesh.triangle_count()}};
+}
+
+void emit(const nlohmann::json& j) {
+    std::cout << j.dump() << std::endl;
+}
+
+nlohmann::json stats_json(const accel::TreeStats& s, const accel::BuildResult& r, const std::string& builder,
+                          const accel::TriangleMesh& mesh) {
+    nlohmann::json j;
+    j["builder"] = builder;
+    j["structure"] = "bvh2";
+    j["triangles"] = mesh.triangle_count();
+    j["dropped_non_finite"] = mesh.dropped.non_finite;
+    j["dropped_zero_area"] = mesh.dropped.zero_area;
+    j["nodes"] = s.nodes;
+    j["leaves"] = s.leaves;
+    j["depth"] = s.depth;
+    j["mean_leaf_size"] = s.mean_leaf_size;
+    j["max_leaf_size"] = s.max_leaf_size;
+    j["references"] = s.references;
+    j["bytes"] = s.bytes;
+    j["sah"] = s.sah;
+    j["epo"] = s.epo >= 0 ? nlohmann::json(s.epo) : nlohmann::json(nullptr);
+    j["build_ms"] = r.build_ms;
+    return j;
+}
+
+}  // namespace bvhlab::cli

@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: MIT
+// What the bvhlab subcommands share: scene resolution (paths, catalogue names, generated
+// scenes), option groups, progress on stderr and JSON-line output.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "accel/builders/builder.h"
+#include "accel/core/mesh.h"
+#include "accel/core/stats.h"
+#include "traversal/rays/protocol.h"
+
+namespace bvhlab {
+
+const char* git_commit();  // generated at build time
+const char* build_type();
+
+namespace cli {
+
+/// Options every subcommand has.
+struct Globals {
+    bool json = false;
+    bool quiet = false;
+};
+
+/// Stage lines on stderr: "[bvhlab] loading X ..." then "... done (1.23 s)".
+class Stage {
+public:
+    Stage(const Globals& g, std::string what);
+    ~Stage();
+    double seconds() const;
+    /// Percent updates for long loops (only on a terminal).
+    void progress(size_t done, size_t total) const;
+
+private:
+    const Globals& g_;
+    std::string what_;
+    std::chrono::steady_clock::time_point t0_;
+};
+
+/// A scene ready to use: mesh plus camera and AO length from its catalogue entry (or an
+/// automatic framing when it has none).
+struct Scene {
+    std::string name;
+    std::string source;  ///< file path, or the gen: spec
+    accel::TriangleMesh mesh;
+    trav::Camera camera;
+    bool camera_from_catalogue = false;
+    float ao_length = 0.0f;
+    std::string hash;
+};
+
+/// Resolves SPEC: an OBJ path, a scene name from $BVHLAB_SCENES/scenes.json or data/scenes.json,
+/// or gen:KIND:TRIANGLES[:SEED]. Prints load progress and dropped-triangle counts on stderr.
+Scene load_scene(const std::string& spec, const Globals& g);
+
+/// Names of the scenes in $BVHLAB_SCENES/scenes.json (empty when unset).
+std::vector<std::string> catalogue_scene_names();
+
+/// Builder flags: --builder, --bins, --max-leaf, --min-leaf.
+struct BuildOptions {
+    std::string builder = "binned";
+    accel::BuilderOptions opts;
+    bool epo = true;
+    void add_to(CLI::App& app);
+    accel::BuilderKind kind() const { return accel::parse_builder_kind(builder); }
+};
+
+/// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.
+struct RayOptions {
+    trav::ProtocolConfig cfg;
+    void add_to(CLI::App& app);
+    /// The protocol config for a scene: its camera and AO length unless overridden.
+    trav::ProtocolConfig for_scene(const Scene& s) const;
+};
+
+/// "primary,ao" -> types; "all" -> the four.
+std::vector<trav::RayType> parse_ray_types(const std::string& list);
+
+/// Machine description: hostname, CPU model, hardware threads.
+std::string machine_description();
+
+/// Fields every JSON line carries: commit, build type, scene name and hash.
+nlohmann::json base_record(const char* kind, const Scene& scene);
+
+/// Prints a JSON object as one line on stdout.
+void emit(const nlohmann::json& j);
+
+/// Build statistics as JSON (keys: triangles, nodes, leaves, ..., build_ms, builder).
+nlohmann::json stats_json(const accel::TreeStats& s, const accel::BuildResult& r, const std::string& builder,
+                          const accel::TriangleMesh& mesh);
+
+}  // namespace cli
+}  // namespace bvhlab

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: MIT
+// bvhlab: build acceleration structures from OBJ files, benchmark traversal, verify every hit
+// against Embree. This file only wires up the subcommands.
+#include <cstdio>
+#include <exception>
+
+#include "accel/core/check.h"
+#include "tools/bvhlab/commands.h"
+
+namespace bvhlab::cli {
+int g_exit_code = 0;
+}
+
+int main(int argc, char** argv) {
+    using namespace bvhlab::cli;
+    CLI::App app{"bvhlab: ray-tracing acceleration structure testbed (commit " +
+                 std::string(bvhlab::git_commit()) + ")"};
+    app.require_subcommand(1);
+    Globals g;
+    app.add_flag("--json", g.json, "print one JSON object per line on stdout");
+    app.add_flag("-q,--quiet", g.quiet, "no progress on stderr");
+    app.set_version_flag("--version", std::string(bvhlab::git_commit()));
+    register_build(app, g);
+    register_rays(app, g);
+    register_bench(app, g);
+    register_verify(app, g);
+    register_gen(app, g);
+    register_run(app, g);
+    // Global flags are also accepted after the subcommand name.
+    for (CLI::App* sub : app.get_subcommands({})) {
+        sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
+        sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
+    }
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::fprintf(stderr, "bvhlab: error: %s (see --help)\n", e.what());
+        return 2;
+    } catch (const bvhlab::Error& e) {
+        std::fprintf(stderr, "bvhlab: error: %s\n", e.what());
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "bvhlab: error: out of memory\n");
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bvhlab: error: %s\n", e.what());
+        return 1;
+    }
+    return g_exit_code;
+}

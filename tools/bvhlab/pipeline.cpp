@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: MIT
+#include "tools/bvhlab/pipeline.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "accel/core/check.h"
+#include "accel/core/validate.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "traversal/cpu/cpu_trace.h"
+
+namespace bvhlab::cli {
+
+Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g) {
+    Built b;
+    const std::string builder = opts.builder;
+    {
+        Stage st(g, "building " + builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
+        b.result = accel::run_builder(opts.kind(), scene.mesh, opts.opts);
+    }
+    const std::string err = accel::validate(b.result.tree, scene.mesh, opts.opts.config);
+    if (!err.empty()) throw Error("builder '" + builder + "' produced an invalid tree: " + err);
+    {
+        Stage st(g, opts.epo ? "computing SAH and EPO" : "computing SAH");
+        b.stats = accel::compute_stats(b.result.tree, scene.mesh, opts.opts.config, opts.epo);
+    }
+    b.bvh = accel::convert_to_bvh2(b.result.tree, scene.mesh);
+    b.structure = "bvh2/" + builder;
+    b.record = base_record("build", scene);
+    b.record.update(stats_json(b.stats, b.result, builder, scene.mesh));
+    b.record["structure"] = b.structure;
+    b.record["layout_bytes"] = b.bvh.bytes();
+    if (builder == "binned") b.record["bins"] = opts.opts.num_bins;
+    b.record["max_leaf"] = opts.opts.config.max_leaf_size;
+    b.record["machine"] = machine_description();
+    return b;
+}
+
+nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav::RaySet& set,
+                             const std::string& ray_type, const BenchSettings& bs, const Globals& g,
+                             std::vector<trav::Hit>* hits_out) {
+    std::vector<trav::Hit> hits;
+    std::vector<double> ms;
+    Stage st(g, "tracing " + std::to_string(set.rays.size()) + " " + ray_type + " rays (" +
+                    std::to_string(bs.warmup) + " warm-up + " + std::to_string(bs.runs) + " runs)");
+    for (int i = 0; i < bs.warmup + bs.runs; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+        const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        if (i >= bs.warmup) ms.push_back(t);
+        st.progress(size_t(i + 1), size_t(bs.warmup + bs.runs));
+    }
+    std::sort(ms.begin(), ms.end());
+    const double median = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
+    size_t nhit = 0;
+    for (const auto& h : hits) nhit += h.is_hit();
+    nlohmann::json j = base_record("bench", scene);
+    j["ray_type"] = ray_type;
+    j["query"] = set.query == trav::Query::kAny ? "any" : "closest";
+    j["rays"] = set.rays.size();
+    j["hit_fraction"] = set.rays.empty() ? 0.0 : double(nhit) / double(set.rays.size());
+    j["runs"] = bs.runs;
+    j["median_ms"] = median;
+    j["min_ms"] = ms.front();
+    j["mrays_per_s"] = median > 0 ? double(set.rays.size()) / (median * 1e3) : 0.0;
+    j["device"] = "cpu";
+    j["gpu"] = nullptr;
+    j["driver"] = nullptr;
+    j["structure"] = built.structure;
+    j["kernel"] = "cpu-bvh2-stack";
+    j["machine"] = machine_description();
+    if (hits_out) *hits_out = std::move(hits);
+    return j;
+}
+
+nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
+                              const std::vector<trav::Hit>& ours, const std::string& ray_type,
+                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g) {
+    std::vector<trav::Hit> ref;
+    trav::CompareReport rep;
+    {
+        Stage st(g, "verifying " + std::to_string(set.rays.size()) + " " + ray_type + " rays against Embree");
+        oracle.trace(set.rays, set.query, ref);
+        rep = trav::compare_hits(scene.mesh, set.rays, set.query, ours, ref,
+                                 [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
+    }
+    for (const auto& d : rep.first_mismatches) {
+        std::fprintf(stderr, "[bvhlab] MISMATCH %s ray %zu: ours tri %d t %.9g, embree tri %d t %.9g: %s\n",
+                     ray_type.c_str(), d.ray, d.ours.tri, d.ours.t, d.oracle.tri, d.oracle.t, d.reason.c_str());
+    }
+    nlohmann::json j = base_record("verify", scene);
+    j["ray_type"] = ray_type;
+    j["query"] = set.query == trav::Query::kAny ? "any" : "closest";
+    j["structure"] = structure;
+    j["kernel"] = "cpu-bvh2-stack";
+    j["rays"] = rep.rays;
+    j["agree"] = rep.agree;
+    j["ties"] = rep.ties;
+    j["ties_shared_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kSharedEdgeOrVertex)];
+    j["ties_near_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kNearEdge)];
+    j["ties_interval_end"] = rep.ties_by_kind[size_t(trav::TieKind::kIntervalEnd)];
+    j["mismatches"] = rep.mismatches;
+    j["max_rel_dt"] = rep.max_rel_dt;
+    j["edge_eps"] = cc.edge_eps;
+    j["t_rel_tol"] = cc.t_rel_tol;
+    return j;
+}
+
+void add_compare_options(CLI::App& app, trav::CompareConfig& cc) {
+    app.add_option("--edge-eps", cc.edge_eps, "barycentric distance from an edge that counts as a tie")
+        ->check(CLI::Range(0.0, 0.1))
+        ->capture_default_str();
+    app.add_option("--t-tol", cc.t_rel_tol, "relative t difference under which two hits are at the same t")
+        ->check(CLI::Range(0.0, 0.1))
+        ->capture_default_str();
+}
+
+}  // namespace bvhlab::cli

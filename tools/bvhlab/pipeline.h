@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: MIT
+// The steps the subcommands compose: build (+ validate + stats + layout), benchmark a ray
+// set, verify a ray set against Embree. Each returns its JSON record.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "accel/layouts/bvh2_node.h"
+#include "tools/bvhlab/context.h"
+#include "traversal/oracle/compare.h"
+#include "traversal/oracle/embree_oracle.h"
+
+namespace bvhlab::cli {
+
+struct Built {
+    accel::BuildResult result;
+    accel::TreeStats stats;
+    accel::Bvh2 bvh;
+    std::string structure;  ///< e.g. "bvh2/binned"
+    nlohmann::json record;  ///< the "build" JSON line
+};
+
+/// Builds, validates (throws on an invalid tree), computes statistics and converts to Bvh2.
+Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g);
+
+struct BenchSettings {
+    int runs = 5;
+    int warmup = 1;
+};
+
+/// Times trace_cpu over the set; the record has mrays_per_s (from the median run) and the
+/// provenance keys. `hits` receives the last run's hits.
+nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav::RaySet& set,
+                             const std::string& ray_type, const BenchSettings& bs, const Globals& g,
+                             std::vector<trav::Hit>* hits = nullptr);
+
+/// Compares `ours` with Embree's answers; the record has rays, agree, ties, mismatches.
+/// Prints the first mismatches on stderr.
+nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
+                              const std::vector<trav::Hit>& ours, const std::string& ray_type,
+                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g);
+
+/// Adds --edge-eps and --t-tol.
+void add_compare_options(CLI::App& app, trav::CompareConfig& cc);
+
+}  // namespace bvhlab::cli

@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: MIT
+// Stack-based traversal of a Bvh2 with Woop triangles, written once for host and device.
+// Near child first; leaves are tested as soon as their box is hit.
+#pragma once
+
+#include <cstdint>
+
+#include "accel/core/hd.h"
+#include "accel/layouts/bvh2_node.h"
+#include "traversal/device/ray.h"
+
+namespace bvhlab::trav {
+
+/// Traversal stack depth; builders guarantee trees shallower than this (BuildConfig::max_depth).
+constexpr int kBvh2StackSize = 64;
+
+/// Per-ray work counters, filled when a non-null pointer is given.
+struct TraversalCounters {
+    uint32_t nodes = 0;     ///< interior nodes fetched
+    uint32_t leaves = 0;    ///< leaves whose box the ray entered
+    uint32_t tri_tests = 0; ///< triangle intersection tests
+};
+
+/// Reciprocal with Aila & Laine's guard: components closer to 0 than 2^-80 are clamped, so
+/// slab distances stay finite (never 0 * inf = NaN).
+BVHLAB_HD BVHLAB_FORCEINLINE Vec3 safe_reciprocal(Vec3 d) {
+    const float eps = 8.271806e-25f;  // 2^-80
+    auto inv = [eps](float x) { return 1.0f / (fabsf(x) > eps ? x : copysignf(eps, x)); };
+    return {inv(d.x), inv(d.y), inv(d.z)};
+}
+
+/// Entry distance into a box, or +inf when the ray misses it within [tmin, tmax]. The exit
+/// distance is widened by 2 ulp-scale units so rays grazing a flat box are not lost to
+/// rounding (Ize 2013, "Robust BVH ray traversal").
+BVHLAB_HD BVHLAB_FORCEINLINE float slab_entry(float lox, float hix, float loy, float hiy, float loz,
+                                              float hiz, Vec3 o, Vec3 inv, float tmin, float tmax) {
+    const float x0 = (lox - o.x) * inv.x, x1 = (hix - o.x) * inv.x;
+    const float y0 = (loy - o.y) * inv.y, y1 = (hiy - o.y) * inv.y;
+    const float z0 = (loz - o.z) * inv.z, z1 = (hiz - o.z) * inv.z;
+    const float tn = fmaxf(fmaxf(fminf(x0, x1), fminf(y0, y1)), fmaxf(fminf(z0, z1), tmin));
+    const float tf = fminf(fminf(fmaxf(x0, x1), fmaxf(y0, y1)), fmaxf(z0, z1)) * 1.0000004f;
+    return tn <= fminf(tf, tmax) ? tn : INFINITY;
+}
+
+/// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
+template <bool kAnyHit>
+BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::WoopTriangle* tris,
+                                   const uint32_t* tri_ids, const Ray& ray,
+                                   TraversalCounters* counters = nullptr) {
+    Hit hit = Hit::miss();
+    float tmax = ray.tmax;
+    const Vec3 o = ray.org, d = ray.dir, inv = safe_reciprocal(ray.dir);
+    int32_t stack[kBvh2StackSize];
+    int sp = 0;
+    int32_t node = 0;
+    while (true) {
+        const accel::Bvh2Node& n = nodes[node];
+        if (counters) ++counters->nodes;
+        float t0 = slab_entry(n.c0_lo_x, n.c0_hi_x, n.c0_lo_y, n.c0_hi_y, n.c0_lo_z, n.c0_hi_z, o,
+                              inv, ray.tmin, tmax);
+        float t1 = slab_entry(n.c1_lo_x, n.c1_hi_x, n.c1_lo_y, n.c1_hi_y, n.c1_lo_z, n.c1_hi_z, o,
+                              inv, ray.tmin, tmax);
+        int32_t next[2];
+        float tnext[2];
+        int nnext = 0;
+        for (int c = 0; c < 2; ++c) {
+            const float tc = c == 0 ? t0 : t1;
+            if (tc == INFINITY) continue;
+            const int32_t ref = n.child[c];
+            if (ref >= 0) {
+                next[nnext] = ref;
+                tnext[nnext++] = tc;
+                continue;
+            }
+            if (counters) ++counters->leaves;
+            const uint32_t first = uint32_t(~ref);
+            for (uint32_t k = first; k < first + n.count[c]; ++k) {
+                if (counters) ++counters->tri_tests;
+                float t, u, v;
+                if (tris[k].intersect(o, d, ray.tmin, tmax, t, u, v)) {
+                    hit = {int32_t(tri_ids[k]), t, u, v};
+                    tmax = t;
+                    if (kAnyHit) return hit;
+                }
+            }
+        }
+        if (nnext == 2) {
+            // Visit the nearer child first; the farther one waits on the stack.
+            const bool swap = tnext[1] < tnext[0];
+            BVHLAB_DCHECK(sp < kBvh2StackSize);
+            stack[sp++] = next[swap ? 0 : 1];
+            node = next[swap ? 1 : 0];
+        } else if (nnext == 1) {
+            node = next[0];
+        } else {
+            if (sp == 0) break;
+            node = stack[--sp];
+        }
+    }
+    return hit;
+}
+
+}  // namespace bvhlab::trav

@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: MIT
+// Tie rules. A closest-hit disagreement is a tie when
+//   (a) both hit at the same t triangles that share a vertex position (the ray crosses their
+//       common edge or vertex), or
+//   (b) the closer of the two hits lies within eps of its triangle's edge, so the other side
+//       may have slipped through the crack of a non-watertight test, or
+//   (c) the closer hit sits at the end of the ray's [tmin, tmax] interval.
+// Everything else is a real mismatch. An any-hit disagreement is a tie under (b) or (c).
+#include "traversal/oracle/compare.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+
+#include "accel/core/check.h"
+
+namespace bvhlab::trav {
+namespace {
+
+double rel_dt(float a, float b) {
+    const double m = std::max(std::fabs(double(a)), std::fabs(double(b)));
+    return m > 0 ? std::fabs(double(a) - double(b)) / m : 0.0;
+}
+
+/// Distance from p to segment ab.
+double seg_dist(const double* p, Vec3 a, Vec3 b) {
+    double ab[3], ap[3];
+    for (int k = 0; k < 3; ++k) {
+        ab[k] = double(b[k]) - a[k];
+        ap[k] = p[k] - a[k];
+    }
+    const double len2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    double s = len2 > 0 ? (ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / len2 : 0.0;
+    s = std::min(1.0, std::max(0.0, s));
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (ap[k] - s * ab[k]) * (ap[k] - s * ab[k]);
+    return std::sqrt(d2);
+}
+
+class Classifier {
+public:
+    Classifier(const accel::TriangleMesh& mesh, const CompareConfig& cfg)
+        : mesh_(mesh), cfg_(cfg), edge_dist_(double(cfg.edge_dist_rel) * mesh.diagonal()) {}
+
+    bool near_edge(const Hit& h) const {
+        const double w = 1.0 - double(h.u) - double(h.v);
+        if (std::min({double(h.u), double(h.v), w}) < cfg_.edge_eps) return true;
+        const Vec3 a = mesh_.vertex(h.tri, 0), b = mesh_.vertex(h.tri, 1), c = mesh_.vertex(h.tri, 2);
+        double p[3];
+        for (int k = 0; k < 3; ++k) p[k] = w * a[k] + double(h.u) * b[k] + double(h.v) * c[k];
+        return std::min({seg_dist(p, a, b), seg_dist(p, b, c), seg_dist(p, c, a)}) <= edge_dist_;
+    }
+    bool at_interval_end(const Hit& h, const Ray& r) const {
+        return rel_dt(h.t, r.tmax) <= cfg_.t_rel_tol || rel_dt(h.t, r.tmin) <= cfg_.t_rel_tol;
+    }
+    bool share_vertex(int32_t s, int32_t t) const {
+        for (int i = 0; i < 3; ++i) {
+            const Vec3 a = mesh_.vertex(s, i);
+            for (int j = 0; j < 3; ++j) {
+                const Vec3 b = mesh_.vertex(t, j);
+                if (a.x == b.x && a.y == b.y && a.z == b.z) return true;
+            }
+        }
+        return false;
+    }
+    /// True when two t values of `ray` on triangle `tri` agree within float error.
+    bool same_t(float ta, float tb, const Ray& r, int32_t tri) const {
+        const Vec3 a = mesh_.vertex(tri, 0), b = mesh_.vertex(tri, 1), c = mesh_.vertex(tri, 2);
+        const Vec3 n = cross(b - a, c - a);
+        const double dl = length(r.dir);
+        const double cosv = std::fabs(double(dot(n, r.dir))) / (double(length(n)) * dl);
+        auto inf = [](Vec3 v) { return double(std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)})); };
+        const float t = std::max(ta, tb);
+        const double scale = inf(r.org) + inf(r.org + r.dir * t);
+        const double tol = cfg_.t_rel_tol * double(t) + cfg_.t_abs_rel * scale / (dl * std::max(cosv, 1e-6));
+        return std::fabs(double(ta) - double(tb)) <= tol;
+    }
+    /// Tie kind for the hit that the other side did not report, or -1 for a real mismatch.
+    int tie_for(const Hit& h, const Ray& r) const {
+        if (near_edge(h)) return int(TieKind::kNearEdge);
+        if (at_interval_end(h, r)) return int(TieKind::kIntervalEnd);
+        return -1;
+    }
+
+private:
+    const accel::TriangleMesh& mesh_;
+    const CompareConfig& cfg_;
+    double edge_dist_;
+};
+
+}  // namespace
+
+CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
+                           const std::vector<Hit>& ours, const std::vector<Hit>& oracle,
+                           const ClosestLookup& lookup, const CompareConfig& cfg) {
+    BVHLAB_CHECK(ours.size() == rays.size() && oracle.size() == rays.size(),
+                 "hit sets and ray set differ in size");
+    BVHLAB_CHECK(query == Query::kClosest || lookup, "any-hit comparison needs a closest-hit lookup");
+    const Classifier cls(mesh, cfg);
+    CompareReport rep;
+    rep.rays = rays.size();
+    std::mutex mu;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const auto& range) {
+        CompareReport local;
+        std::vector<Disagreement> found;
+        for (size_t i = range.begin(); i < range.end(); ++i) {
+            const Hit& a = ours[i];
+            const Hit& b = oracle[i];
+            const Ray& r = rays[i];
+            if (a.is_hit() == b.is_hit() && (!a.is_hit() || query == Query::kAny)) {
+                ++local.agree;
+                continue;
+            }
+            Disagreement d{i, a, b, false, ""};
+            int kind = -1;
+            if (query == Query::kClosest && a.is_hit() && b.is_hit() && a.tri == b.tri) {
+                const double dt = rel_dt(a.t, b.t);
+                if (cls.same_t(a.t, b.t, r, a.tri)) {
+                    ++local.agree;
+                    local.max_rel_dt = std::max(local.max_rel_dt, dt);
+                    continue;
+                }
+                d.reason = "same triangle, t differs by " + std::to_string(dt) + " (relative)";
+            } else if (query == Query::kClosest) {
+                const bool a_closer = a.is_hit() && (!b.is_hit() || a.t <= b.t);
+                const Hit& closer = a_closer ? a : b;
+                if (a.is_hit() && b.is_hit() && cls.same_t(a.t, b.t, r, a.tri) &&
+                    cls.share_vertex(a.tri, b.tri)) {
+                    kind = int(TieKind::kSharedEdgeOrVertex);
+                } else {
+                    kind = cls.tie_for(closer, r);
+                }
+                d.reason = std::string(a_closer ? "ours" : "oracle") + " is closer: triangle " +
+                           std::to_string(closer.tri) + " at t=" + std::to_string(closer.t);
+            } else {
+                // Any-hit: only one side hit. Find a triangle that side found.
+                Hit h = a.is_hit() ? a : lookup(r);
+                if (h.is_hit()) {
+                    kind = cls.tie_for(h, r);
+                    d.reason = std::string(a.is_hit() ? "only ours" : "only the oracle") +
+                               " hit: triangle " + std::to_string(h.tri) + " at t=" + std::to_string(h.t);
+                } else {
+                    d.reason = "oracle reports occlusion but its closest-hit query finds nothing";
+                }
+                if (!a.is_hit()) d.oracle = h;
+            }
+            d.tie = kind >= 0;
+            // A chunk's first few of each sort are enough to keep the global lowest indices.
+            if (d.tie ? local.ties < 4 : local.mismatches < 16) found.push_back(std::move(d));
+            if (d.tie) {
+                ++local.ties;
+                ++local.ties_by_kind[size_t(kind)];
+            } else {
+                ++local.mismatches;
+            }
+        }
+        std::lock_guard<std::mutex> lock(mu);
+        rep.agree += local.agree;
+        rep.ties += local.ties;
+        rep.mismatches += local.mismatches;
+        for (size_t k = 0; k < 3; ++k) rep.ties_by_kind[k] += local.ties_by_kind[k];
+        rep.max_rel_dt = std::max(rep.max_rel_dt, local.max_rel_dt);
+        for (auto& d : found) {
+            auto& list = d.tie ? rep.first_ties : rep.first_mismatches;
+            list.push_back(std::move(d));
+        }
+    });
+    // Keep the lowest ray indices so the report does not depend on thread scheduling.
+    auto trim = [](std::vector<Disagreement>& v, size_t n) {
+        std::sort(v.begin(), v.end(), [](const auto& x, const auto& y) { return x.ray < y.ray; });
+        if (v.size() > n) v.resize(n);
+    };
+    trim(rep.first_mismatches, 16);
+    trim(rep.first_ties, 4);
+    return rep;
+}
+
+}  // namespace bvhlab::trav

@@ -1,0 +1,112 @@
+// SPDX-License-Identifier: MIT
+#include "traversal/oracle/embree_oracle.h"
+
+#include <embree3/rtcore.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "accel/core/check.h"
+
+namespace bvhlab::trav {
+
+struct EmbreeOracle::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::string error;  // first error Embree reported through the callback
+};
+
+namespace {
+
+void on_error(void* user, RTCError code, const char* str) {
+    auto* impl = static_cast<EmbreeOracle::Impl*>(user);
+    if (impl->error.empty()) impl->error = "Embree error " + std::to_string(int(code)) + ": " + (str ? str : "");
+}
+
+RTCRay to_rtc(const Ray& r) {
+    RTCRay x;
+    x.org_x = r.org.x;
+    x.org_y = r.org.y;
+    x.org_z = r.org.z;
+    x.tnear = r.tmin;
+    x.dir_x = r.dir.x;
+    x.dir_y = r.dir.y;
+    x.dir_z = r.dir.z;
+    x.time = 0.0f;
+    x.tfar = r.tmax;
+    x.mask = ~0u;
+    x.id = 0;
+    x.flags = 0;
+    return x;
+}
+
+}  // namespace
+
+EmbreeOracle::EmbreeOracle(const accel::TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
+    impl_->device = rtcNewDevice(nullptr);
+    BVHLAB_CHECK(impl_->device != nullptr, "rtcNewDevice failed");
+    rtcSetDeviceErrorFunction(impl_->device, on_error, impl_.get());
+    impl_->scene = rtcNewScene(impl_->device);
+    // Robust mode: watertight triangle tests, no precision-for-speed shortcuts.
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    const size_t nv = mesh.vertices.size(), nt = mesh.triangle_count();
+    // Embree reads vertex buffers with 16-byte loads, so pad the last vertex.
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                         RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv + 1));
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
+                                                              RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
+    if (v && idx) {
+        std::memcpy(v, mesh.vertices.data(), nv * sizeof(Vec3));
+        std::memcpy(idx, mesh.indices.data(), nt * 3 * sizeof(unsigned));
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(impl_->scene, geom);
+    }
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(impl_->scene);
+    if (!impl_->error.empty()) throw Error(impl_->error);
+}
+
+EmbreeOracle::~EmbreeOracle() {
+    if (impl_->scene) rtcReleaseScene(impl_->scene);
+    if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+Hit EmbreeOracle::intersect(const Ray& ray) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    rh.ray = to_rtc(ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit::miss();
+    return {int32_t(rh.hit.primID), rh.ray.tfar, rh.hit.u, rh.hit.v};
+}
+
+bool EmbreeOracle::occluded(const Ray& ray) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r = to_rtc(ray);
+    rtcOccluded1(impl_->scene, &ctx, &r);
+    // Embree marks an occluded ray by setting tfar to -inf.
+    return r.tfar == -INFINITY;
+}
+
+void EmbreeOracle::trace(const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits) const {
+    hits.resize(rays.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const auto& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+            if (query == Query::kClosest) {
+                hits[i] = intersect(rays[i]);
+            } else {
+                hits[i] = occluded(rays[i]) ? Hit{0, 0.0f, 0.0f, 0.0f} : Hit::miss();
+            }
+        }
+    });
+}
+
+}  // namespace bvhlab::trav

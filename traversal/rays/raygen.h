@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+// Seeded ray generators: primary (pinhole), ambient occlusion, diffuse bounce and shadow.
+// Defaults follow ray_protocol in the scenes' scenes.json. Same arguments, same bytes.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+#include "accel/core/mesh.h"
+#include "traversal/device/ray.h"
+
+namespace bvhlab::trav {
+
+/// Pinhole camera; fov_y_deg is the full vertical field of view.
+struct Camera {
+    glm::vec3 eye{0.0f, 0.0f, 1.0f};
+    glm::vec3 target{0.0f, 0.0f, 0.0f};
+    glm::vec3 up{0.0f, 1.0f, 0.0f};
+    float fov_y_deg = 45.0f;
+};
+
+struct PrimaryConfig {
+    uint32_t width = 1024;
+    uint32_t height = 768;
+    uint32_t samples = 1;  ///< per pixel, on a regular sqrt(S) x sqrt(S) sub-grid; a square
+    uint32_t tile = 0;     ///< 0: row-major pixels; T: T x T pixel tiles, row-major within
+};
+
+/// One ray per sample, pixels in row-major or tile order, a pixel's samples consecutive.
+/// Throws bvhlab::Error on a non-square sample count, a zero size or a degenerate camera.
+std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg);
+
+/// Settings of the rays spawned from primary hits.
+struct SecondaryConfig {
+    uint32_t per_hit = 8;  ///< rays per primary hit (AO and diffuse)
+    float offset = 0.0f;   ///< origin offset along the geometric normal (1e-4 x diagonal)
+    float tmax = 1.0f;     ///< AO length; diffuse rays use +inf
+    uint64_t seed = 1;
+};
+
+/// Cosine-weighted hemisphere rays around each hit's geometric normal (facing the incoming
+/// ray), tmax = cfg.tmax. For any-hit queries.
+std::vector<Ray> generate_ao(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+                             const std::vector<Hit>& hits, const SecondaryConfig& cfg);
+/// Like generate_ao with tmax = +inf. For closest-hit queries.
+std::vector<Ray> generate_diffuse(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+                                  const std::vector<Hit>& hits, const SecondaryConfig& cfg);
+/// One ray per hit towards `light`, tmax = the distance to it. For any-hit queries.
+std::vector<Ray> generate_shadow(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+                                 const std::vector<Hit>& hits, Vec3 light, float offset);
+
+/// Hit point and the unit geometric normal turned towards the ray's origin side.
+void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point,
+               Vec3& normal);
+
+}  // namespace bvhlab::trav
