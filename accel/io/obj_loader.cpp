@@ -6,6 +6,7 @@
 #include <tiny_obj_loader.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -56,8 +57,11 @@ bool parse_face_token(const char* b, const char* e, long& vi) {
     return *end == '\0';
 }
 
-/// Throws on the first malformed v/vt/vn/f line or face index out of range.
-void scan_obj(const std::string& path, const std::string& text) {
+/// Throws on the first malformed v/vt/vn/f line or face index out of range. Returns the
+/// (0-based) indices of vertices with a NaN or infinite coordinate: tinyobjloader reads those
+/// as 0, which would silently move the vertex instead of dropping its triangles.
+std::vector<size_t> scan_obj(const std::string& path, const std::string& text) {
+    std::vector<size_t> non_finite;
     size_t line_no = 0, nv = 0, pos = 0;
     long max_index = 0;
     size_t max_line = 0;
@@ -88,10 +92,17 @@ void scan_obj(const std::string& path, const std::string& text) {
         if (key == "v" || key == "vn" || key == "vt") {
             const int need = key == "vt" ? 1 : 3;
             if (nt - 1 < need) fail(line_no, "malformed '" + key + "' line: needs " + std::to_string(need) + " numbers");
-            for (int i = 1; i < nt; ++i)
+            bool finite = true;
+            for (int i = 1; i < nt; ++i) {
                 if (!is_number(toks[i][0], toks[i][1]))
                     fail(line_no, "malformed '" + key + "' line: '" + std::string(toks[i][0], toks[i][1]) + "' is not a number");
-            if (key == "v") ++nv;
+                if (i <= 3 && !std::isfinite(std::strtod(std::string(toks[i][0], toks[i][1]).c_str(), nullptr)))
+                    finite = false;
+            }
+            if (key == "v") {
+                if (!finite) non_finite.push_back(nv);
+                ++nv;
+            }
         } else if (key == "f") {
             if (nt < 4) fail(line_no, "malformed 'f' line: a face needs at least 3 vertices");
             for (int i = 1; i < nt; ++i) {
@@ -109,13 +120,14 @@ void scan_obj(const std::string& path, const std::string& text) {
     if (size_t(max_index) > nv)
         fail(max_line, "face index " + std::to_string(max_index) + " out of range (the file has " +
                            std::to_string(nv) + " vertices)");
+    return non_finite;
 }
 
 }  // namespace
 
 TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings) {
     const std::string text = read_file(path);
-    scan_obj(path, text);
+    const std::vector<size_t> non_finite = scan_obj(path, text);
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;
@@ -146,6 +158,8 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     const size_t nv = attrib.vertices.size() / 3;
     mesh.vertices.resize(nv);
     std::memcpy(mesh.vertices.data(), attrib.vertices.data(), nv * sizeof(Vec3));
+    for (size_t v : non_finite)
+        if (v < nv) mesh.vertices[v] = {NAN, NAN, NAN};
     for (const auto& shape : shapes) {
         size_t offset = 0;
         for (size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {

@@ -67,14 +67,8 @@ public:
     }
     /// True when two t values of `ray` on triangle `tri` agree within float error.
     bool same_t(float ta, float tb, const Ray& r, int32_t tri) const {
-        const Vec3 a = mesh_.vertex(tri, 0), b = mesh_.vertex(tri, 1), c = mesh_.vertex(tri, 2);
-        const Vec3 n = cross(b - a, c - a);
-        const double dl = length(r.dir);
-        const double cosv = std::fabs(double(dot(n, r.dir))) / (double(length(n)) * dl);
-        auto inf = [](Vec3 v) { return double(std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)})); };
-        const float t = std::max(ta, tb);
-        const double scale = inf(r.org) + inf(r.org + r.dir * t);
-        const double tol = cfg_.t_rel_tol * double(t) + cfg_.t_abs_rel * scale / (dl * std::max(cosv, 1e-6));
+        const double tol = t_tolerance(r, std::max(ta, tb), mesh_.vertex(tri, 0), mesh_.vertex(tri, 1),
+                                       mesh_.vertex(tri, 2), cfg_);
         return std::fabs(double(ta) - double(tb)) <= tol;
     }
     /// Tie kind for the hit that the other side did not report, or -1 for a real mismatch.
@@ -91,6 +85,15 @@ private:
 };
 
 }  // namespace
+
+double t_tolerance(const Ray& r, float t, Vec3 a, Vec3 b, Vec3 c, const CompareConfig& cfg) {
+    const Vec3 n = cross(b - a, c - a);
+    const double dl = length(r.dir);
+    const double cosv = std::fabs(double(dot(n, r.dir))) / (double(length(n)) * dl);
+    auto inf = [](Vec3 v) { return double(std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)})); };
+    const double scale = inf(r.org) + inf(r.org + r.dir * t);
+    return cfg.t_rel_tol * double(t) + cfg.t_abs_rel * scale / (dl * std::max(cosv, 1e-6));
+}
 
 CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
                            const std::vector<Hit>& ours, const std::vector<Hit>& oracle,

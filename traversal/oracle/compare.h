@@ -25,6 +25,10 @@ struct CompareConfig {
     float edge_dist_rel = 1e-6f;
 };
 
+/// Largest |dt| at which two hits of `ray` at about `t` on triangle (v0, v1, v2) still count
+/// as the same t (see CompareConfig).
+double t_tolerance(const Ray& ray, float t, Vec3 v0, Vec3 v1, Vec3 v2, const CompareConfig& cfg = {});
+
 /// Why a disagreement is a tie.
 enum class TieKind { kSharedEdgeOrVertex = 0, kNearEdge = 1, kIntervalEnd = 2 };
 

@@ -1,0 +1,102 @@
+// SPDX-License-Identifier: MIT
+// OBJ loading: good files, every kind of bad file (written by the test), dropped triangles.
+#include "accel/io/obj_loader.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "accel/core/check.h"
+#include "tests/support/test_support.h"
+
+namespace bvhlab {
+namespace {
+
+using test::TempFile;
+
+/// Loads `text` as an OBJ and expects an Error whose message contains `what`.
+void expect_load_error(const std::string& name, const std::string& text, const std::string& what) {
+    TempFile f(name, text);
+    try {
+        accel::load_obj(f.path());
+        FAIL() << "no error for " << name;
+    } catch (const Error& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find(what), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << "error must be one line: " << msg;
+    }
+}
+
+const char* kTri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+}  // namespace
+
+TEST(ObjLoader, MissingFileAndDirectory) {
+    EXPECT_THROW(accel::load_obj("/nonexistent/bvhlab/scene.obj"), Error);
+    try {
+        accel::load_obj("/tmp");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("directory"), std::string::npos);
+    }
+}
+
+TEST(ObjLoader, MalformedLines) {
+    expect_load_error("bad_v.obj", std::string("v 0 0 0\nv 1 0 abc\nv 0 1 0\nf 1 2 3\n"), "line 2");
+    expect_load_error("short_v.obj", std::string("v 0 0\nf 1 1 1\n"), "needs 3 numbers");
+    expect_load_error("bad_f.obj", std::string(kTri) + "f 1 2 x\n", "bad vertex reference");
+    expect_load_error("zero_f.obj", std::string(kTri) + "f 0 1 2\n", "line 4");
+    expect_load_error("two_f.obj", std::string(kTri) + "f 1 2\n", "at least 3 vertices");
+}
+
+TEST(ObjLoader, FaceIndexOutOfRange) {
+    expect_load_error("range.obj", std::string(kTri) + "f 1 2 9\n", "out of range");
+    expect_load_error("neg_range.obj", std::string(kTri) + "f -1 -2 -4\n", "out of range");
+}
+
+TEST(ObjLoader, EmptyAndAllDropped) {
+    expect_load_error("empty.obj", "", "no usable triangles");
+    expect_load_error("comments.obj", "# nothing\n\n", "no usable triangles");
+    expect_load_error("degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n", "all 1 were dropped");
+}
+
+TEST(ObjLoader, DropsNonFiniteAndZeroAreaTriangles) {
+    TempFile f("drops.obj", std::string(kTri) +
+                                "v nan 0 0\nv 1 1 1\nv 2 2 2\nv inf 0 1\n"
+                                "f 1 2 3\nf 4 2 3\nf 1 5 6\nf 7 2 3\nf 1 2 3\n");
+    accel::TriangleMesh m = accel::load_obj(f.path());
+    EXPECT_EQ(m.triangle_count(), 2u);
+    EXPECT_EQ(m.dropped.non_finite, 2u);
+    EXPECT_EQ(m.dropped.zero_area, 1u);
+}
+
+TEST(ObjLoader, TriangulatesPolygonsAndNegativeIndices) {
+    TempFile f("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf -4 -3 -2\n");
+    accel::TriangleMesh m = accel::load_obj(f.path());
+    ASSERT_EQ(m.triangle_count(), 3u);
+    EXPECT_NEAR(m.surface_area(), 1.5, 1e-6);
+}
+
+TEST(ObjLoader, CornellBoxKeepsMaterialsAndEmission) {
+    accel::TriangleMesh m = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    EXPECT_EQ(m.triangle_count(), 32u);
+    EXPECT_EQ(m.dropped.total(), 0u);
+    int light = -1;
+    for (size_t i = 0; i < m.materials.size(); ++i)
+        if (m.materials[i].name == "light") light = int(i);
+    ASSERT_GE(light, 0);
+    EXPECT_GT(m.materials[size_t(light)].emission.x, 1.0f);
+    int light_tris = 0;
+    for (int32_t id : m.material_ids) light_tris += id == light;
+    EXPECT_EQ(light_tris, 2);
+}
+
+TEST(ObjLoader, WriteThenLoadIsExact) {
+    accel::TriangleMesh a = test::mesh_of({{0.1f, 0.2f, 0.3f, 1.0f / 3.0f, 0, 0, 0, 1e-7f, 5}});
+    TempFile f("roundtrip.obj");
+    accel::write_obj(a, f.path());
+    accel::TriangleMesh b = accel::load_obj(f.path());
+    EXPECT_EQ(accel::scene_hash(a), accel::scene_hash(b));
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Bad input to the bvhlab CLI: every case must exit non-zero with exactly one line on stderr
+# that names the problem, and nothing on stdout. Usage: cli_errors.sh BVHLAB DATA_DIR
+set -u
+bin=$1
+data=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+pass=0
+fail=0
+
+# expect_error NAME PATTERN ARGS...: non-zero exit, one stderr line matching PATTERN.
+expect_error() {
+    local name=$1 pattern=$2
+    shift 2
+    "$bin" -q "$@" >"$tmp/out" 2>"$tmp/err"
+    local rc=$?
+    local lines
+    lines=$(wc -l <"$tmp/err")
+    if [ $rc -ne 0 ] && [ "$lines" -eq 1 ] && grep -qE -- "$pattern" "$tmp/err" && [ ! -s "$tmp/out" ]; then
+        pass=$((pass + 1))
+    else
+        fail=$((fail + 1))
+        echo "FAIL $name: rc=$rc, $lines stderr lines, expected /$pattern/:"
+        sed 's/^/    /' "$tmp/err" | head -5
+    fi
+}
+
+printf 'v 0 0 0\nv 1 0 abc\nv 0 1 0\nf 1 2 3\n' >"$tmp/malformed.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n' >"$tmp/range.obj"
+printf 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n' >"$tmp/degenerate.obj"
+: >"$tmp/empty.obj"
+head -c 100 /dev/urandom >"$tmp/random.obj"
+printf 'NOTRAYS!\1\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badmagic.rays"
+printf 'BVHLRAYS\7\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badversion.rays"
+printf 'BVHLRAYS\1\0\0\0\0\0\0\0\5\0\0\0\0\0\0\0' >"$tmp/truncated.rays"
+
+expect_error missing-file "cannot open|no scene" build "$tmp/nope.obj"
+expect_error directory "no scene|directory" build "$tmp"
+expect_error malformed-v "line 2: malformed 'v'" build "$tmp/malformed.obj"
+expect_error face-range "out of range" build "$tmp/range.obj"
+expect_error empty "no usable triangles" build "$tmp/empty.obj"
+expect_error all-degenerate "dropped" build "$tmp/degenerate.obj"
+expect_error garbage "no usable triangles|malformed" build "$tmp/random.obj"
+expect_error ray-magic "magic" verify "$data/cornell_box.obj" --rays "$tmp/badmagic.rays"
+expect_error ray-version "version 7" bench "$data/cornell_box.obj" --rays "$tmp/badversion.rays"
+expect_error ray-truncated "truncated" verify "$data/cornell_box.obj" --rays "$tmp/truncated.rays"
+expect_error unknown-flag "--frobnicate|frobnicate" build "$data/cornell_box.obj" --frobnicate
+expect_error unknown-command "invalid|extras|subcommand" frobnicate
+expect_error no-command "subcommand" 
+expect_error bad-builder "builder" build "$data/cornell_box.obj" --builder magic
+expect_error bad-bins "bins" build "$data/cornell_box.obj" --bins 1
+expect_error contradictory "excludes" verify "$data/cornell_box.obj" --types primary --rays "$tmp/truncated.rays"
+expect_error hits-needs-rays "requires|needs" verify "$data/cornell_box.obj" --hits "$tmp/truncated.rays"
+expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
+expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
+expect_error bad-gen "procedural|generated" build gen:blobs:100
+expect_error gpu-unavailable "no GPU" bench "$data/cornell_box.obj" --device gpu
+expect_error rays-needs-out "--out" rays "$data/cornell_box.obj"
+
+# The good path still works and --json prints parseable lines.
+if "$bin" -q build "$data/cornell_box.obj" --json | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); assert j["triangles"]==32 and j["nodes"]>0 and "sah" in j and "epo" in j and j["builder"]=="binned"'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL build --json"
+fi
+"$bin" -q rays "$data/cornell_box.obj" --type ao --width 16 --height 12 --out "$tmp/a.rays" >/dev/null &&
+"$bin" -q rays "$data/cornell_box.obj" --type ao --width 16 --height 12 --out "$tmp/b.rays" >/dev/null
+if cmp -s "$tmp/a.rays" "$tmp/b.rays" && "$bin" -q verify "$data/cornell_box.obj" --rays "$tmp/a.rays" >/dev/null; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL identical ray files / verify from file"
+fi
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]

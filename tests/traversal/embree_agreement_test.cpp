@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: MIT
+// Oracle tests: every ray type, ray by ray against Embree, on the Cornell box, generated
+// scenes, and every scene in $BVHLAB_SCENES. Zero real mismatches allowed.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "accel/builders/builder.h"
+#include "accel/io/obj_loader.h"
+#include "accel/io/procedural.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "tests/support/test_support.h"
+#include "traversal/cpu/cpu_trace.h"
+#include "traversal/oracle/compare.h"
+#include "traversal/rays/protocol.h"
+
+namespace bvhlab::trav {
+namespace {
+
+Camera framing_camera(const accel::TriangleMesh& m) {
+    const AABB b = m.bounds();
+    const Vec3 c = b.center();
+    Camera cam;
+    cam.target = {c.x, c.y, c.z};
+    const float r = 0.5f * length(b.extent());
+    cam.eye = cam.target + glm::vec3(0.4f, 0.6f, 1.0f) * (2.2f * r);
+    return cam;
+}
+
+/// Traces all four ray types with the given builder and expects zero real mismatches.
+void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+                      accel::BuilderKind builder) {
+    accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
+    EmbreeOracle oracle(mesh);
+    ProtocolConfig cfg;
+    cfg.camera = cam;
+    cfg.primary = {w, h, 1, 0};
+    cfg.ao_length = ao_length;
+    RayProtocol proto(mesh, oracle, cfg);
+    for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
+        SCOPED_TRACE(ray_type_name(t));
+        RaySet set = proto.make(t);
+        std::vector<Hit> ours, ref;
+        trace_cpu(bvh, set.rays, set.query, ours);
+        oracle.trace(set.rays, set.query, ref);
+        CompareReport rep = compare_hits(mesh, set.rays, set.query, ours, ref,
+                                         [&](const Ray& r) { return oracle.intersect(r); });
+        EXPECT_EQ(rep.mismatches, 0u);
+        for (const auto& d : rep.first_mismatches)
+            ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
+                          << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
+        EXPECT_GT(set.rays.size(), 0u);
+        // Ties are rare: a large share means the tie rules are hiding a bug.
+        EXPECT_LE(rep.ties, set.rays.size() / 1000 + 5);
+        EXPECT_EQ(rep.agree + rep.ties + rep.mismatches, rep.rays);
+    }
+}
+
+}  // namespace
+
+TEST(EmbreeAgreement, CornellBox) {
+    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    Camera cam;
+    cam.eye = {278, 273, -800};
+    cam.target = {278, 273, 0};
+    cam.fov_y_deg = 39.3f;
+    for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep})
+        expect_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b);
+}
+
+TEST(EmbreeAgreement, GeneratedScenes) {
+    for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
+        accel::TriangleMesh mesh = accel::make_procedural(kind, 20000, 3);
+        for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep})
+            expect_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b);
+    }
+}
+
+TEST(EmbreeAgreement, DetectsABrokenTracer) {
+    // The oracle must notice wrong answers: drop every hit on one triangle in ten.
+    accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kStructured, 5000, 1);
+    accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, mesh, {}).tree, mesh);
+    EmbreeOracle oracle(mesh);
+    ProtocolConfig cfg;
+    cfg.camera = framing_camera(mesh);
+    cfg.primary = {64, 48, 1, 0};
+    RaySet set = RayProtocol(mesh, oracle, cfg).make(RayType::kPrimary);
+    std::vector<Hit> ours, ref;
+    trace_cpu(bvh, set.rays, set.query, ours);
+    oracle.trace(set.rays, set.query, ref);
+    for (Hit& h : ours)
+        if (h.tri % 10 == 3) h = Hit::miss();
+    CompareReport rep = compare_hits(mesh, set.rays, set.query, ours, ref, {});
+    EXPECT_GT(rep.mismatches, 10u);
+}
+
+TEST(EmbreeAgreement, BenchmarkScenes) {
+    const std::string dir = test::scenes_dir();
+    if (dir.empty()) GTEST_SKIP() << "BVHLAB_SCENES is not set: skipping the benchmark scenes";
+    std::ifstream in(dir + "/scenes.json");
+    ASSERT_TRUE(in) << "no scenes.json in " << dir;
+    nlohmann::json cat = nlohmann::json::parse(in)["scenes"];
+    ASSERT_FALSE(cat.empty());
+    for (const auto& [name, e] : cat.items()) {
+        SCOPED_TRACE(name);
+        accel::TriangleMesh mesh = accel::load_obj(dir + "/" + e["file"].get<std::string>());
+        EXPECT_EQ(mesh.triangle_count(), e["triangles"].get<size_t>());
+        const auto& c = e["camera"];
+        Camera cam;
+        cam.eye = {c["eye"][0], c["eye"][1], c["eye"][2]};
+        cam.target = {c["target"][0], c["target"][1], c["target"][2]};
+        cam.up = {c["up"][0], c["up"][1], c["up"][2]};
+        cam.fov_y_deg = c["fov_y_deg"];
+        expect_agreement(mesh, cam, e["ao_length"].get<float>(), 160, 120, accel::BuilderKind::kBinned);
+    }
+}
+
+}  // namespace bvhlab::trav

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: MIT
+// Ray and hit files: round trip and every kind of bad file.
+#include "traversal/rays/ray_file.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "accel/core/check.h"
+#include "tests/support/test_support.h"
+
+namespace bvhlab::trav {
+namespace {
+
+std::string read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void expect_error(const std::string& path, const std::string& what) {
+    try {
+        read_ray_file(path);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+}
+
+RaySet sample_set() {
+    RaySet s;
+    s.query = Query::kAny;
+    s.rays = {{{1, 2, 3}, 0.5f, {0, 0, -1}, INFINITY}, {{-1, 0, 7.25f}, 0.0f, {1e-30f, 1, 0}, 2.0f}};
+    return s;
+}
+
+}  // namespace
+
+TEST(RayFile, RoundTripIsByteExact) {
+    test::TempFile f("rays.bin");
+    RaySet a = sample_set();
+    write_ray_file(f.path(), a);
+    const std::string bytes = read_bytes(f.path());
+    ASSERT_EQ(bytes.size(), 24u + 2 * 32u);
+    EXPECT_EQ(bytes.substr(0, 8), "BVHLRAYS");
+    uint32_t version, flags;
+    uint64_t count;
+    std::memcpy(&version, bytes.data() + 8, 4);
+    std::memcpy(&flags, bytes.data() + 12, 4);
+    std::memcpy(&count, bytes.data() + 16, 8);
+    EXPECT_EQ(version, 1u);
+    EXPECT_EQ(flags, 1u);  // any-hit
+    EXPECT_EQ(count, 2u);
+    RaySet b = read_ray_file(f.path());
+    EXPECT_EQ(b.query, Query::kAny);
+    ASSERT_EQ(b.rays.size(), 2u);
+    EXPECT_EQ(std::memcmp(a.rays.data(), b.rays.data(), 64), 0);
+}
+
+TEST(RayFile, EmptySetRoundTrips) {
+    test::TempFile f("empty_rays.bin");
+    write_ray_file(f.path(), RaySet{});
+    EXPECT_TRUE(read_ray_file(f.path()).rays.empty());
+}
+
+TEST(RayFile, BadFiles) {
+    test::TempFile f("bad_rays.bin");
+    write_ray_file(f.path(), sample_set());
+    const std::string good = read_bytes(f.path());
+    auto write = [&](const std::string& bytes) { std::ofstream(f.path(), std::ios::binary) << bytes; };
+
+    expect_error("/nonexistent/rays.bin", "cannot open");
+    write(good.substr(0, 10));
+    expect_error(f.path(), "truncated");
+    write(good.substr(0, good.size() - 1));
+    expect_error(f.path(), "truncated");
+    write(good + "x");
+    expect_error(f.path(), "trailing");
+    std::string bad = good;
+    bad[0] = 'X';
+    write(bad);
+    expect_error(f.path(), "magic");
+    bad = good;
+    bad[8] = 2;  // version 2
+    write(bad);
+    expect_error(f.path(), "version 2");
+    bad = good;
+    bad[12] = 4;  // unknown flag bit
+    write(bad);
+    expect_error(f.path(), "unknown flag");
+    // A hit file is not a ray file.
+    write_hit_file(f.path(), HitSet{{Hit::miss()}, Query::kClosest});
+    expect_error(f.path(), "magic");
+}
+
+TEST(HitFile, RoundTrip) {
+    test::TempFile f("hits.bin");
+    HitSet a{{{5, 1.5f, 0.25f, 0.5f}, Hit::miss()}, Query::kClosest};
+    write_hit_file(f.path(), a);
+    EXPECT_EQ(read_bytes(f.path()).substr(0, 8), "BVHLHITS");
+    HitSet b = read_hit_file(f.path());
+    ASSERT_EQ(b.hits.size(), 2u);
+    EXPECT_EQ(b.hits[0].tri, 5);
+    EXPECT_EQ(b.hits[0].v, 0.5f);
+    EXPECT_EQ(b.hits[1].tri, -1);
+    EXPECT_THROW(read_ray_file(f.path()), Error);
+}
+
+}  // namespace bvhlab::trav

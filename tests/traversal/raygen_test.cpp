@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: MIT
+// Ray generators: determinism, tile order, sample grid, secondary ray geometry.
+#include "traversal/rays/raygen.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <set>
+
+#include "accel/core/check.h"
+#include "accel/io/obj_loader.h"
+#include "tests/support/test_support.h"
+#include "traversal/oracle/embree_oracle.h"
+#include "traversal/rays/protocol.h"
+
+namespace bvhlab::trav {
+namespace {
+
+Camera cornell_camera() {
+    Camera c;
+    c.eye = {278, 273, -800};
+    c.target = {278, 273, 0};
+    c.fov_y_deg = 39.3f;
+    return c;
+}
+
+bool same_bytes(const std::vector<Ray>& a, const std::vector<Ray>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Ray)) == 0;
+}
+
+}  // namespace
+
+TEST(PrimaryRays, TilesArePermutationOfRowMajor) {
+    PrimaryConfig row{37, 23, 4, 0}, tiled{37, 23, 4, 8};
+    std::vector<Ray> a = generate_primary(cornell_camera(), row);
+    std::vector<Ray> b = generate_primary(cornell_camera(), tiled);
+    ASSERT_EQ(a.size(), 37u * 23u * 4u);
+    ASSERT_EQ(a.size(), b.size());
+    auto key = [](const Ray& r) { return std::make_tuple(r.dir.x, r.dir.y, r.dir.z); };
+    std::multiset<std::tuple<float, float, float>> sa, sb;
+    for (const Ray& r : a) sa.insert(key(r));
+    for (const Ray& r : b) sb.insert(key(r));
+    EXPECT_EQ(sa, sb);
+    // The first 8x8 tile's first row of pixels comes first; pixel (8, 0) starts the second tile.
+    EXPECT_EQ(std::memcmp(&b[0], &a[0], sizeof(Ray) * 4 * 8), 0);
+    EXPECT_EQ(std::memcmp(&b[4 * 8], &a[4 * 37], sizeof(Ray) * 4), 0);
+    EXPECT_EQ(std::memcmp(&b[4 * 64], &a[4 * 8], sizeof(Ray) * 4), 0);
+}
+
+TEST(PrimaryRays, CentreRayLooksAtTargetAndSamplesAreDistinct) {
+    std::vector<Ray> r = generate_primary(cornell_camera(), {3, 3, 1, 0});
+    EXPECT_NEAR(r[4].dir.x, 0.0f, 1e-6f);
+    EXPECT_NEAR(r[4].dir.y, 0.0f, 1e-6f);
+    EXPECT_NEAR(r[4].dir.z, 1.0f, 1e-6f);
+    EXPECT_GT(r[0].dir.y, 0.0f);  // row 0 is the top of the image
+    // Column 0 is the camera's left, right = forward x up: +x when looking down +z with +y up,
+    // which puts the Cornell box's red wall (x = 556) on the left as in the classic image.
+    EXPECT_GT(r[0].dir.x, 0.0f);
+    std::vector<Ray> s = generate_primary(cornell_camera(), {1, 1, 16, 0});
+    std::set<std::pair<float, float>> uniq;
+    for (const Ray& x : s) uniq.insert({x.dir.x, x.dir.y});
+    EXPECT_EQ(uniq.size(), 16u);
+}
+
+TEST(PrimaryRays, RejectsBadArguments) {
+    EXPECT_THROW(generate_primary(cornell_camera(), {4, 4, 3, 0}), Error);  // not a square
+    EXPECT_THROW(generate_primary(cornell_camera(), {0, 4, 1, 0}), Error);
+    Camera bad = cornell_camera();
+    bad.target = bad.eye;
+    EXPECT_THROW(generate_primary(bad, {4, 4, 1, 0}), Error);
+    bad = cornell_camera();
+    bad.up = {0, 0, 1};  // parallel to the view direction
+    EXPECT_THROW(generate_primary(bad, {4, 4, 1, 0}), Error);
+}
+
+TEST(Protocol, SecondaryRaysAreSeededAndGeometricallySound) {
+    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    EmbreeOracle oracle(mesh);
+    ProtocolConfig cfg;
+    cfg.camera = cornell_camera();
+    cfg.primary = {64, 48, 1, 0};
+    RayProtocol p1(mesh, oracle, cfg), p2(mesh, oracle, cfg);
+    for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow})
+        EXPECT_TRUE(same_bytes(p1.make(t).rays, p2.make(t).rays)) << ray_type_name(t);
+    cfg.seed = 2;
+    RayProtocol p3(mesh, oracle, cfg);
+    EXPECT_FALSE(same_bytes(p1.make(RayType::kAo).rays, p3.make(RayType::kAo).rays));
+
+    RaySet ao = p1.make(RayType::kAo);
+    EXPECT_EQ(ao.query, Query::kAny);
+    EXPECT_EQ(ao.rays.size() % 8, 0u);
+    const float diag = mesh.diagonal();
+    for (const Ray& r : ao.rays) {
+        EXPECT_NEAR(r.tmax, 0.05f * diag, 1e-3f);
+        EXPECT_NEAR(length(r.dir), 1.0f, 1e-4f);
+    }
+    RaySet diffuse = p1.make(RayType::kDiffuse);
+    EXPECT_EQ(diffuse.query, Query::kClosest);
+    EXPECT_EQ(diffuse.rays.size() * 2, ao.rays.size());  // 4 vs 8 per hit
+    EXPECT_TRUE(std::isinf(diffuse.rays[0].tmax));
+    RaySet shadow = p1.make(RayType::kShadow);
+    const Vec3 light{278.0f, 273.0f + 0.25f * diag, -800.0f};
+    for (const Ray& r : shadow.rays) {
+        const Vec3 end = r.org + r.dir * r.tmax;
+        EXPECT_NEAR(length(end - light), 0.0f, 1e-2f);
+    }
+}
+
+TEST(Protocol, SecondaryOriginsLeaveTheSurfaceOnTheRaySide) {
+    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    EmbreeOracle oracle(mesh);
+    std::vector<Ray> prim = generate_primary(cornell_camera(), {32, 24, 1, 0});
+    std::vector<Hit> hits;
+    oracle.trace(prim, Query::kClosest, hits);
+    SecondaryConfig sc;
+    sc.per_hit = 4;
+    sc.offset = 1e-4f * mesh.diagonal();
+    std::vector<Ray> ao = generate_ao(mesh, prim, hits, sc);
+    size_t k = 0;
+    for (size_t i = 0; i < prim.size(); ++i) {
+        if (!hits[i].is_hit()) continue;
+        Vec3 p, n;
+        hit_frame(mesh, prim[i], hits[i], p, n);
+        EXPECT_LT(dot(n, prim[i].dir), 0.0f);  // normal faces the camera side
+        for (uint32_t s = 0; s < sc.per_hit; ++s, ++k) {
+            EXPECT_GT(dot(ao[k].dir, n), 0.0f);  // into the hemisphere
+            EXPECT_NEAR(dot(ao[k].org - p, n), sc.offset, 1e-3f);
+        }
+    }
+    EXPECT_EQ(k, ao.size());
+}
+
+}  // namespace bvhlab::trav
