@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Installs bvhlab's build dependencies from Debian 12's packages. Idempotent: installs only
+# what is missing. Usage: tools/install_deps.sh [--with-oiio]
+set -euo pipefail
+
+pkgs=(build-essential cmake git python3 libembree-dev libtinyobjloader-dev libglm-dev libtbb-dev
+      libcli11-dev nlohmann-json3-dev libbenchmark-dev libgtest-dev)
+for arg in "$@"; do
+    case "$arg" in
+        --with-oiio) pkgs+=(libopenimageio-dev) ;;
+        -h|--help) echo "usage: $0 [--with-oiio]"; exit 0 ;;
+        *) echo "install_deps.sh: unknown option '$arg' (expected --with-oiio)" >&2; exit 2 ;;
+    esac
+done
+
+missing=()
+for p in "${pkgs[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+    echo "install_deps.sh: all ${#pkgs[@]} packages already installed"
+    exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "install_deps.sh: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+    sudo=sudo
+fi
+echo "install_deps.sh: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install_deps.sh: done"
