@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: MIT
+// BM_Build/<builder>/<scene>: build time (Mtris/s) with SAH, EPO, nodes, references and bytes
+// as counters, so speed and quality land in one JSON.
+#include <benchmark/benchmark.h>
+
+#include "accel/builders/builder.h"
+#include "accel/core/stats.h"
+#include "accel/core/validate.h"
+#include "experiments/bench/bench_common.h"
+
+namespace bvhlab::bench {
+namespace {
+
+void bm_build(benchmark::State& state, accel::BuilderKind kind, std::shared_ptr<accel::TriangleMesh> mesh) {
+    accel::BuilderOptions opts;
+    accel::BuildResult last;
+    for (auto _ : state) {
+        last = accel::run_builder(kind, *mesh, opts);
+        benchmark::DoNotOptimize(last.tree.nodes.data());
+    }
+    // Check the result before trusting the time; then the quality figures (untimed).
+    const std::string err = accel::validate(last.tree, *mesh, opts.config);
+    if (!err.empty()) {
+        state.SkipWithError(("invalid tree: " + err).c_str());
+        return;
+    }
+    const accel::TreeStats s = accel::compute_stats(last.tree, *mesh, opts.config, mesh->triangle_count() <= 3000000);
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(mesh->triangle_count()));
+    state.counters["triangles"] = double(mesh->triangle_count());
+    state.counters["sah"] = s.sah;
+    state.counters["epo"] = s.epo;
+    state.counters["nodes"] = double(s.nodes);
+    state.counters["leaves"] = double(s.leaves);
+    state.counters["references"] = double(s.references);
+    state.counters["bytes"] = double(s.bytes);
+    state.counters["depth"] = double(s.depth);
+}
+
+}  // namespace
+}  // namespace bvhlab::bench
+
+int main(int argc, char** argv) {
+    using namespace bvhlab;
+    benchmark::Initialize(&argc, argv);
+    bench::add_provenance();
+    for (const auto& scene : bench::bench_scenes()) {
+        // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
+        auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
+        auto load = scene.load;
+        for (auto kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep}) {
+            const std::string name = std::string("BM_Build/") + accel::builder_name(kind) + "/" + scene.name;
+            benchmark::RegisterBenchmark(name.c_str(), [holder, load, kind](benchmark::State& st) {
+                if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+                bench::bm_build(st, kind, *holder);
+            })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->Repetitions(3)->ReportAggregatesOnly(true);
+        }
+    }
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
