@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
             benchmark::RegisterBenchmark(name.c_str(), [holder, load, kind](benchmark::State& st) {
                 if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
                 bench::bm_build(st, kind, *holder);
-            })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->Repetitions(3)->ReportAggregatesOnly(true);
+            })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
         }
     }
     benchmark::RunSpecifiedBenchmarks();

@@ -34,7 +34,7 @@ void register_run(CLI::App& app, Globals& g) {
     sub->callback([o, &g] {
         std::vector<std::string> scenes = o->scenes;
         if (scenes.empty()) {
-            scenes.push_back(std::string(BVHLAB_DATA_DIR) + "/cornell_box.obj");
+            scenes.push_back(data_dir() + "/cornell_box.obj");
             for (const auto& n : catalogue_scene_names()) scenes.push_back(n);
         }
         const auto types = parse_ray_types(o->types);

@@ -47,11 +47,24 @@ struct Catalogue {
     nlohmann::json scenes;
 };
 
+}  // namespace
+
+std::string data_dir() {
+    if (const char* env = std::getenv("BVHLAB_DATA"); env && *env) return env;
+    std::error_code ec;
+    if (fs::exists(BVHLAB_DATA_DIR, ec)) return BVHLAB_DATA_DIR;
+    // An installed tree keeps data/ in share/bvhlab/data next to bin/.
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    return (exe.parent_path().parent_path() / "share" / "bvhlab" / "data").string();
+}
+
+namespace {
+
 std::vector<Catalogue> catalogues() {
     std::vector<Catalogue> out;
     std::vector<fs::path> dirs;
     if (const char* env = std::getenv("BVHLAB_SCENES"); env && *env) dirs.emplace_back(env);
-    dirs.emplace_back(BVHLAB_DATA_DIR);
+    dirs.emplace_back(data_dir());
     for (const auto& d : dirs) {
         const fs::path file = d / "scenes.json";
         std::ifstream in(file);

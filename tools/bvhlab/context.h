@@ -59,6 +59,10 @@ struct Scene {
 /// or gen:KIND:TRIANGLES[:SEED]. Prints load progress and dropped-triangle counts on stderr.
 Scene load_scene(const std::string& spec, const Globals& g);
 
+/// The project's data/ folder: $BVHLAB_DATA, else the source tree's, else share/bvhlab/data
+/// of an installed tree.
+std::string data_dir();
+
 /// Names of the scenes in $BVHLAB_SCENES/scenes.json (empty when unset).
 std::vector<std::string> catalogue_scene_names();
 
