@@ -13,8 +13,11 @@
 
 namespace bvhlab::test {
 
-/// The project's data/ folder (set by CMake).
-inline std::string data_dir() { return BVHLAB_TEST_DATA_DIR; }
+/// The project's data/ folder: $BVHLAB_DATA (for installed test binaries), else the source tree's.
+inline std::string data_dir() {
+    const char* env = std::getenv("BVHLAB_DATA");
+    return env && *env ? env : BVHLAB_TEST_DATA_DIR;
+}
 
 /// $BVHLAB_SCENES or "" when unset.
 inline std::string scenes_dir() {

@@ -19,7 +19,7 @@ void print_bench_row(const nlohmann::json& j) {
 
 void register_bench(CLI::App& app, Globals& g) {
     struct Opts {
-        std::string scene, types = "all", rays_file, hits_out, device = "cpu";
+        std::string scene, types = "all", rays_file, hits_out;
         BuildOptions build;
         RayOptions rays;
         BenchSettings bench;
@@ -34,13 +34,12 @@ void register_bench(CLI::App& app, Globals& g) {
     hits->needs(file);
     sub->add_option("--runs", o->bench.runs, "timed runs (the median is reported)")->check(CLI::Range(1, 1000))->capture_default_str();
     sub->add_option("--warmup", o->bench.warmup, "untimed warm-up runs")->check(CLI::Range(0, 100))->capture_default_str();
-    sub->add_option("--device", o->device, "cpu (GPU kernels are not in this build yet)")
-        ->check(CLI::IsMember({"cpu", "gpu"}))
-        ->capture_default_str();
+    add_device_option(*sub, o->bench.device);
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     sub->callback([o, &g, file] {
-        if (o->device != "cpu") throw Error("--device gpu: this build has no GPU traversal kernels yet; use --device cpu");
+        std::string why;
+        if (o->bench.device == "gpu" && !trav::gpu_available(&why)) throw Error("--device gpu: " + why);
         Scene s = load_scene(o->scene, g);
         o->build.epo = false;  // EPO is a build figure; bench does not need it
         Built b = build_scene(s, o->build, g);

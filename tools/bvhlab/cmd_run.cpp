@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "accel/core/check.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
 
@@ -31,7 +32,10 @@ void register_run(CLI::App& app, Globals& g) {
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
+    add_device_option(*sub, o->bench.device);
     sub->callback([o, &g] {
+        std::string why;
+        if (o->bench.device == "gpu" && !trav::gpu_available(&why)) throw Error("--device gpu: " + why);
         std::vector<std::string> scenes = o->scenes;
         if (scenes.empty()) {
             scenes.push_back(data_dir() + "/cornell_box.obj");
@@ -55,7 +59,8 @@ void register_run(CLI::App& app, Globals& g) {
                 trav::RaySet set = proto.make(t);
                 std::vector<trav::Hit> hits;
                 nlohmann::json bj = bench_ray_set(s, b, set, trav::ray_type_name(t), o->bench, g, &hits);
-                nlohmann::json vj = verify_ray_set(s, oracle, set, hits, trav::ray_type_name(t), b.structure, o->cc, g);
+                nlohmann::json vj = verify_ray_set(s, oracle, set, hits, trav::ray_type_name(t), b.structure, o->cc, g,
+                                                   o->bench.device);
                 if (g.json) {
                     emit(bj);
                     emit(vj);

@@ -6,7 +6,6 @@
 #include "accel/core/check.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
-#include "traversal/cpu/cpu_trace.h"
 #include "traversal/rays/ray_file.h"
 
 namespace bvhlab::cli {
@@ -24,7 +23,7 @@ void print_verify_row(const nlohmann::json& j) {
 
 void register_verify(CLI::App& app, Globals& g) {
     struct Opts {
-        std::string scene, types = "all", rays_file, hits_file;
+        std::string scene, types = "all", rays_file, hits_file, device = "cpu";
         BuildOptions build;
         RayOptions rays;
         trav::CompareConfig cc;
@@ -41,7 +40,10 @@ void register_verify(CLI::App& app, Globals& g) {
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
+    add_device_option(*sub, o->device);
     sub->callback([o, &g, file] {
+        std::string why;
+        if (o->device == "gpu" && !trav::gpu_available(&why)) throw Error("--device gpu: " + why);
         Scene s = load_scene(o->scene, g);
         trav::EmbreeOracle oracle(s.mesh);
         std::vector<nlohmann::json> rows;
@@ -59,19 +61,19 @@ void register_verify(CLI::App& app, Globals& g) {
             } else {
                 o->build.epo = false;
                 Built b = build_scene(s, o->build, g);
-                trav::trace_cpu(b.bvh, set.rays, set.query, ours);
+                ours = trace_on(b, set, o->device);
                 structure = b.structure;
             }
-            rows.push_back(verify_ray_set(s, oracle, set, ours, "file", structure, o->cc, g));
+            rows.push_back(verify_ray_set(s, oracle, set, ours, "file", structure, o->cc, g, o->device));
         } else {
             o->build.epo = false;
             Built b = build_scene(s, o->build, g);
             trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
             for (trav::RayType t : parse_ray_types(o->types)) {
                 trav::RaySet set = proto.make(t);
-                std::vector<trav::Hit> ours;
-                trav::trace_cpu(b.bvh, set.rays, set.query, ours);
-                rows.push_back(verify_ray_set(s, oracle, set, ours, trav::ray_type_name(t), b.structure, o->cc, g));
+                const std::vector<trav::Hit> ours = trace_on(b, set, o->device);
+                rows.push_back(verify_ray_set(s, oracle, set, ours, trav::ray_type_name(t), b.structure, o->cc, g,
+                                              o->device));
             }
         }
         if (!g.json) print_verify_header();

@@ -36,20 +36,54 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
     return b;
 }
 
-nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav::RaySet& set,
+const char* kernel_name(const std::string& device) {
+    return device == "gpu" ? "gpu-bvh2-stack-plain" : "cpu-bvh2-stack";
+}
+
+static trav::GpuBvh2& gpu_of(Built& built) {
+    if (!built.gpu) built.gpu = std::make_shared<trav::GpuBvh2>(built.bvh);
+    return *built.gpu;
+}
+
+std::vector<trav::Hit> trace_on(Built& built, const trav::RaySet& set, const std::string& device) {
+    std::vector<trav::Hit> hits;
+    if (device == "gpu") {
+        gpu_of(built).trace(set.rays, set.query, hits);
+    } else {
+        trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+    }
+    return hits;
+}
+
+void add_device_option(CLI::App& app, std::string& device) {
+    app.add_option("--device", device, "cpu (TBB, stack traversal) or gpu (CUDA, plain kernel)")
+        ->check(CLI::IsMember({"cpu", "gpu"}))
+        ->capture_default_str();
+}
+
+nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySet& set,
                              const std::string& ray_type, const BenchSettings& bs, const Globals& g,
                              std::vector<trav::Hit>* hits_out) {
     std::vector<trav::Hit> hits;
     std::vector<double> ms;
-    Stage st(g, "tracing " + std::to_string(set.rays.size()) + " " + ray_type + " rays (" +
+    const bool gpu = bs.device == "gpu";
+    Stage st(g, "tracing " + std::to_string(set.rays.size()) + " " + ray_type + " rays on " + bs.device + " (" +
                     std::to_string(bs.warmup) + " warm-up + " + std::to_string(bs.runs) + " runs)");
+    // GPU runs time the kernel alone (CUDA events); rays are uploaded once, outside the timing.
+    if (gpu) gpu_of(built).upload_rays(set.rays);
     for (int i = 0; i < bs.warmup + bs.runs; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        trav::trace_cpu(built.bvh, set.rays, set.query, hits);
-        const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        double t;
+        if (gpu) {
+            t = gpu_of(built).trace(set.query);
+        } else {
+            const auto t0 = std::chrono::steady_clock::now();
+            trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+            t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        }
         if (i >= bs.warmup) ms.push_back(t);
         st.progress(size_t(i + 1), size_t(bs.warmup + bs.runs));
     }
+    if (gpu) gpu_of(built).download_hits(hits);
     std::sort(ms.begin(), ms.end());
     const double median = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
     size_t nhit = 0;
@@ -63,11 +97,12 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav:
     j["median_ms"] = median;
     j["min_ms"] = ms.front();
     j["mrays_per_s"] = median > 0 ? double(set.rays.size()) / (median * 1e3) : 0.0;
-    j["device"] = "cpu";
-    j["gpu"] = nullptr;
-    j["driver"] = nullptr;
+    j["device"] = bs.device;
+    j["gpu"] = gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr);
+    j["driver"] = gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr);
     j["structure"] = built.structure;
-    j["kernel"] = "cpu-bvh2-stack";
+    j["kernel"] = kernel_name(bs.device);
+    j["timing"] = gpu ? "kernel only (CUDA events)" : "wall clock of the parallel trace";
     j["machine"] = machine_description();
     if (hits_out) *hits_out = std::move(hits);
     return j;
@@ -75,7 +110,8 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav:
 
 nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
                               const std::vector<trav::Hit>& ours, const std::string& ray_type,
-                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g) {
+                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g,
+                              const std::string& device) {
     std::vector<trav::Hit> ref;
     trav::CompareReport rep;
     {
@@ -92,7 +128,8 @@ nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& orac
     j["ray_type"] = ray_type;
     j["query"] = set.query == trav::Query::kAny ? "any" : "closest";
     j["structure"] = structure;
-    j["kernel"] = "cpu-bvh2-stack";
+    j["device"] = device;
+    j["kernel"] = structure == "hit-file" ? "hit-file" : kernel_name(device);
     j["rays"] = rep.rays;
     j["agree"] = rep.agree;
     j["ties"] = rep.ties;

@@ -8,6 +8,7 @@
 #include "accel/layouts/bvh2_node.h"
 #include "tools/bvhlab/context.h"
 #include "traversal/oracle/compare.h"
+#include "traversal/launch.h"
 #include "traversal/oracle/embree_oracle.h"
 
 namespace bvhlab::cli {
@@ -18,6 +19,7 @@ struct Built {
     accel::Bvh2 bvh;
     std::string structure;  ///< e.g. "bvh2/binned"
     nlohmann::json record;  ///< the "build" JSON line
+    std::shared_ptr<trav::GpuBvh2> gpu;  ///< uploaded on first GPU use
 };
 
 /// Builds, validates (throws on an invalid tree), computes statistics and converts to Bvh2.
@@ -26,11 +28,21 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
 struct BenchSettings {
     int runs = 5;
     int warmup = 1;
+    std::string device = "cpu";  ///< cpu or gpu
 };
+
+/// Traces a set once on `device` (cpu or gpu) and returns the hits.
+std::vector<trav::Hit> trace_on(Built& built, const trav::RaySet& set, const std::string& device);
+
+/// Name of the kernel a device runs, for the JSON records.
+const char* kernel_name(const std::string& device);
+
+/// Adds --device (cpu or gpu).
+void add_device_option(CLI::App& app, std::string& device);
 
 /// Times trace_cpu over the set; the record has mrays_per_s (from the median run) and the
 /// provenance keys. `hits` receives the last run's hits.
-nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav::RaySet& set,
+nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySet& set,
                              const std::string& ray_type, const BenchSettings& bs, const Globals& g,
                              std::vector<trav::Hit>* hits = nullptr);
 
@@ -38,7 +50,8 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, const trav:
 /// Prints the first mismatches on stderr.
 nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
                               const std::vector<trav::Hit>& ours, const std::string& ray_type,
-                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g);
+                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g,
+                              const std::string& device = "cpu");
 
 /// Adds --edge-eps and --t-tol.
 void add_compare_options(CLI::App& app, trav::CompareConfig& cc);
