@@ -2,6 +2,7 @@
 // GpuBvh2: device buffers, uploads, timed launches.
 #include <cuda_runtime.h>
 
+#include <cctype>
 #include <fstream>
 #include <sstream>
 
@@ -71,13 +72,12 @@ std::string gpu_driver() {
     std::ifstream in("/proc/driver/nvidia/version");
     std::string line;
     if (std::getline(in, line)) {
-        // "NVRM version: NVIDIA UNIX x86_64 Kernel Module  580.65.06  <date>": take the version.
-        const size_t k = line.find("Module");
-        if (k != std::string::npos) {
-            std::istringstream ss(line.substr(k + 6));
-            std::string v;
-            if (ss >> v) return v;
-        }
+        // "NVRM version: NVIDIA UNIX Open Kernel Module for x86_64  580.159.04  Release Build ...":
+        // the first token of the form digits.digits is the version.
+        std::istringstream ss(line);
+        for (std::string tok; ss >> tok;)
+            if (!tok.empty() && std::isdigit(static_cast<unsigned char>(tok[0])) && tok.find('.') != std::string::npos)
+                return tok;
     }
     int driver = 0;
     cudaDriverGetVersion(&driver);

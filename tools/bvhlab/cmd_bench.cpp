@@ -56,7 +56,12 @@ void register_bench(CLI::App& app, Globals& g) {
         const auto types = parse_ray_types(o->types);
         trav::EmbreeOracle oracle(s.mesh);
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
-        for (trav::RayType t : types) report(bench_ray_set(s, b, proto.make(t), trav::ray_type_name(t), o->bench, g));
+        const nlohmann::json protocol = protocol_json(o->rays.for_scene(s));
+        for (trav::RayType t : types) {
+            nlohmann::json j = bench_ray_set(s, b, proto.make(t), trav::ray_type_name(t), o->bench, g);
+            j["protocol"] = protocol;
+            report(j);
+        }
     });
 }
 

@@ -61,6 +61,7 @@ void register_run(CLI::App& app, Globals& g) {
                 nlohmann::json bj = bench_ray_set(s, b, set, trav::ray_type_name(t), o->bench, g, &hits);
                 nlohmann::json vj = verify_ray_set(s, oracle, set, hits, trav::ray_type_name(t), b.structure, o->cc, g,
                                                    o->bench.device);
+                bj["protocol"] = vj["protocol"] = protocol_json(o->rays.for_scene(s));
                 if (g.json) {
                     emit(bj);
                     emit(vj);

@@ -11,14 +11,15 @@
 namespace bvhlab::cli {
 
 void print_verify_header() {
-    std::printf("%-10s %12s %12s %8s %10s   %s\n", "rays", "count", "agree", "ties", "mismatches", "ties: shared-edge/near-edge/interval-end");
+    std::printf("%-10s %12s %12s %8s %10s   %s\n", "rays", "count", "agree", "ties", "mismatches", "ties: shared-edge/near-edge/interval-end/coincident");
 }
 
 void print_verify_row(const nlohmann::json& j) {
-    std::printf("%-10s %12zu %12zu %8zu %10zu   %zu/%zu/%zu\n", j["ray_type"].get<std::string>().c_str(),
+    std::printf("%-10s %12zu %12zu %8zu %10zu   %zu/%zu/%zu/%zu\n", j["ray_type"].get<std::string>().c_str(),
                 j["rays"].get<size_t>(), j["agree"].get<size_t>(), j["ties"].get<size_t>(),
                 j["mismatches"].get<size_t>(), j["ties_shared_edge"].get<size_t>(),
-                j["ties_near_edge"].get<size_t>(), j["ties_interval_end"].get<size_t>());
+                j["ties_near_edge"].get<size_t>(), j["ties_interval_end"].get<size_t>(),
+                j["ties_coincident"].get<size_t>());
 }
 
 void register_verify(CLI::App& app, Globals& g) {
@@ -74,6 +75,7 @@ void register_verify(CLI::App& app, Globals& g) {
                 const std::vector<trav::Hit> ours = trace_on(b, set, o->device);
                 rows.push_back(verify_ray_set(s, oracle, set, ours, trav::ray_type_name(t), b.structure, o->cc, g,
                                               o->device));
+                rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
             }
         }
         if (!g.json) print_verify_header();

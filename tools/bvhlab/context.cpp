@@ -224,6 +224,16 @@ trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
     return c;
 }
 
+nlohmann::json protocol_json(const trav::ProtocolConfig& c) {
+    return {{"width", c.primary.width}, {"height", c.primary.height}, {"spp", c.primary.samples},
+            {"tile", c.primary.tile},   {"ao_rays", c.ao_rays},        {"diffuse_rays", c.diffuse_rays},
+            {"ao_length", c.ao_length}, {"seed", c.seed},
+            {"camera", {{"eye", {c.camera.eye.x, c.camera.eye.y, c.camera.eye.z}},
+                        {"target", {c.camera.target.x, c.camera.target.y, c.camera.target.z}},
+                        {"up", {c.camera.up.x, c.camera.up.y, c.camera.up.z}},
+                        {"fov_y_deg", c.camera.fov_y_deg}}}};
+}
+
 std::vector<trav::RayType> parse_ray_types(const std::string& list) {
     if (list == "all")
         return {trav::RayType::kPrimary, trav::RayType::kAo, trav::RayType::kDiffuse, trav::RayType::kShadow};

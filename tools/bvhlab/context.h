@@ -83,6 +83,9 @@ struct RayOptions {
     trav::ProtocolConfig for_scene(const Scene& s) const;
 };
 
+/// The protocol settings as JSON, so a figure records how its rays were made.
+nlohmann::json protocol_json(const trav::ProtocolConfig& c);
+
 /// "primary,ao" -> types; "all" -> the four.
 std::vector<trav::RayType> parse_ray_types(const std::string& list);
 

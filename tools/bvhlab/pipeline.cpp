@@ -136,6 +136,7 @@ nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& orac
     j["ties_shared_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kSharedEdgeOrVertex)];
     j["ties_near_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kNearEdge)];
     j["ties_interval_end"] = rep.ties_by_kind[size_t(trav::TieKind::kIntervalEnd)];
+    j["ties_coincident"] = rep.ties_by_kind[size_t(trav::TieKind::kCoincident)];
     j["mismatches"] = rep.mismatches;
     j["max_rel_dt"] = rep.max_rel_dt;
     j["edge_eps"] = cc.edge_eps;

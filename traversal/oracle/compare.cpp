@@ -4,7 +4,9 @@
 //       common edge or vertex), or
 //   (b) the closer of the two hits lies within eps of its triangle's edge, so the other side
 //       may have slipped through the crack of a non-watertight test, or
-//   (c) the closer hit sits at the end of the ray's [tmin, tmax] interval.
+//   (c) the closer hit sits at the end of the ray's [tmin, tmax] interval, or
+//   (d) both hit at the same t and a double-precision test confirms that both triangles are
+//       hit by the ray at that same t (crossing or coincident triangles; either is closest).
 // Everything else is a real mismatch. An any-hit disagreement is a tie under (b) or (c).
 #include "traversal/oracle/compare.h"
 
@@ -15,6 +17,7 @@
 #include <mutex>
 
 #include "accel/core/check.h"
+#include "traversal/reference/ref_intersect.h"
 
 namespace bvhlab::trav {
 namespace {
@@ -70,6 +73,13 @@ public:
         const double tol = t_tolerance(r, std::max(ta, tb), mesh_.vertex(tri, 0), mesh_.vertex(tri, 1),
                                        mesh_.vertex(tri, 2), cfg_);
         return std::fabs(double(ta) - double(tb)) <= tol;
+    }
+    /// Both triangles hit by the ray in double precision, at t values within float error.
+    bool coincident(const Ray& r, int32_t s, int32_t t) const {
+        double ts, tt, u, v;
+        if (!intersect_reference(r, mesh_.vertex(s, 0), mesh_.vertex(s, 1), mesh_.vertex(s, 2), ts, u, v)) return false;
+        if (!intersect_reference(r, mesh_.vertex(t, 0), mesh_.vertex(t, 1), mesh_.vertex(t, 2), tt, u, v)) return false;
+        return std::fabs(ts - tt) <= t_tolerance(r, float(ts), mesh_.vertex(s, 0), mesh_.vertex(s, 1), mesh_.vertex(s, 2), cfg_);
     }
     /// Tie kind for the hit that the other side did not report, or -1 for a real mismatch.
     int tie_for(const Hit& h, const Ray& r) const {
@@ -129,11 +139,12 @@ CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ra
             } else if (query == Query::kClosest) {
                 const bool a_closer = a.is_hit() && (!b.is_hit() || a.t <= b.t);
                 const Hit& closer = a_closer ? a : b;
-                if (a.is_hit() && b.is_hit() && cls.same_t(a.t, b.t, r, a.tri) &&
-                    cls.share_vertex(a.tri, b.tri)) {
+                const bool same_t = a.is_hit() && b.is_hit() && cls.same_t(a.t, b.t, r, a.tri);
+                if (same_t && cls.share_vertex(a.tri, b.tri)) {
                     kind = int(TieKind::kSharedEdgeOrVertex);
                 } else {
                     kind = cls.tie_for(closer, r);
+                    if (kind < 0 && same_t && cls.coincident(r, a.tri, b.tri)) kind = int(TieKind::kCoincident);
                 }
                 d.reason = std::string(a_closer ? "ours" : "oracle") + " is closer: triangle " +
                            std::to_string(closer.tri) + " at t=" + std::to_string(closer.t);
@@ -163,7 +174,7 @@ CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ra
         rep.agree += local.agree;
         rep.ties += local.ties;
         rep.mismatches += local.mismatches;
-        for (size_t k = 0; k < 3; ++k) rep.ties_by_kind[k] += local.ties_by_kind[k];
+        for (size_t k = 0; k < size_t(kTieKinds); ++k) rep.ties_by_kind[k] += local.ties_by_kind[k];
         rep.max_rel_dt = std::max(rep.max_rel_dt, local.max_rel_dt);
         for (auto& d : found) {
             auto& list = d.tie ? rep.first_ties : rep.first_mismatches;

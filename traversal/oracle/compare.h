@@ -30,7 +30,14 @@ struct CompareConfig {
 double t_tolerance(const Ray& ray, float t, Vec3 v0, Vec3 v1, Vec3 v2, const CompareConfig& cfg = {});
 
 /// Why a disagreement is a tie.
-enum class TieKind { kSharedEdgeOrVertex = 0, kNearEdge = 1, kIntervalEnd = 2 };
+enum class TieKind {
+    kSharedEdgeOrVertex = 0,  ///< same t on triangles sharing a vertex: the ray crosses their seam
+    kNearEdge = 1,            ///< the missed hit is within eps of its triangle's edge
+    kIntervalEnd = 2,         ///< the missed hit sits at tmin or tmax
+    kCoincident = 3,          ///< both triangles are hit at the same t in double precision
+                              ///< (crossing or overlapping triangles: either answer is right)
+};
+constexpr int kTieKinds = 4;
 
 /// One disagreement, kept for the report.
 struct Disagreement {
@@ -46,7 +53,7 @@ struct CompareReport {
     size_t agree = 0;
     size_t ties = 0;
     size_t mismatches = 0;
-    std::array<size_t, 3> ties_by_kind{};       ///< indexed by TieKind
+    std::array<size_t, kTieKinds> ties_by_kind{};  ///< indexed by TieKind
     double max_rel_dt = 0.0;                    ///< over agreeing hits on the same triangle
     std::vector<Disagreement> first_mismatches;  ///< at most 16
     std::vector<Disagreement> first_ties;        ///< at most 4
