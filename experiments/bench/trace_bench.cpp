@@ -29,14 +29,7 @@ std::shared_ptr<Prepared> prepare(const BenchScene& scene) {
     p->bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, p->mesh, {}).tree, p->mesh);
     p->oracle = std::make_unique<trav::EmbreeOracle>(p->mesh);
     trav::ProtocolConfig cfg;
-    if (scene.has_camera) {
-        cfg.camera = scene.camera;
-    } else {
-        const AABB b = p->mesh.bounds();
-        const Vec3 c = b.center();
-        cfg.camera.target = {c.x, c.y, c.z};
-        cfg.camera.eye = cfg.camera.target + glm::vec3(0.4f, 0.6f, 1.0f) * (1.2f * length(b.extent()));
-    }
+    cfg.camera = scene.has_camera ? scene.camera : trav::framing_camera(p->mesh);
     cfg.ao_length = scene.ao_length;
     trav::RayProtocol proto(p->mesh, *p->oracle, cfg);
     for (int t = 0; t < 4; ++t) {

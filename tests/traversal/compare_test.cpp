@@ -52,6 +52,19 @@ TEST(CompareHits, NearEdgeMissIsTieButInteriorMissIsNot) {
     EXPECT_EQ(rep.mismatches, 1u);
 }
 
+TEST(CompareHits, EdgeWindowScalesWithSliverConditioning) {
+    // A sliver 0.05 long and 0.0016 wide, seen from 3.8 away (furball's proportions): a float
+    // kernel's barycentrics are off by ~1e-4 here, so a hit just outside the short edge in
+    // double precision is a tie, one clearly outside is not.
+    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 0.05f, 0, 0, 0.05f, 0.0016f, 0}});
+    auto ray_at = [](float x, float y) { return Ray{{x, y, 3.8f}, 0.0f, {0, 0, -1}, INFINITY}; };
+    // x = 0.05 + 2e-6 is outside the edge x = 0.05 by a barycentric of ~4e-5 of the long side.
+    CompareReport rep = one(m, ray_at(0.050002f, 0.0008f), Query::kClosest, {0, 3.8f, 0.5f, 0.5f}, Hit::miss());
+    EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kNearEdge)], 1u);
+    rep = one(m, ray_at(0.0505f, 0.0008f), Query::kClosest, {0, 3.8f, 0.5f, 0.5f}, Hit::miss());
+    EXPECT_EQ(rep.mismatches, 1u);
+}
+
 TEST(CompareHits, CoincidentTrianglesNeedADoublePrecisionProof) {
     // Two triangles crossing along the line y = 0.5 in the z = 0 plane's neighbourhood: the
     // first lies in z = 0, the second is tilted through z = 0 at y = 0.5.
@@ -77,6 +90,18 @@ TEST(CompareHits, AnyHitUsesLookupAndIntervalEnd) {
     EXPECT_EQ(rep.mismatches, 1u);
     rep = one(m, in, Query::kAny, {1, 3.0f, 0.1f, 0.1f}, {0, 0, 0, 0});
     EXPECT_EQ(rep.agree, 1u);  // any-hit: which triangle does not matter
+}
+
+TEST(CompareHits, HitAtTminZeroIsTie) {
+    // An origin lying on a triangle's plane (a secondary ray leaving through a crossing
+    // triangle): one side sees t = 2e-8, the other rounds t below tmin = 0.
+    accel::TriangleMesh m = square();
+    Ray r{{0.5f, 0.2f, 2e-8f}, 0.0f, {0, 0, -1}, INFINITY};
+    CompareReport rep = one(m, r, Query::kClosest, Hit::miss(), {0, 2e-8f, 0.3f, 0.2f});
+    EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kIntervalEnd)], 1u);
+    Ray away{{0.5f, 0.2f, 0.5f}, 0.0f, {0, 0, -1}, INFINITY};
+    rep = one(m, away, Query::kClosest, Hit::miss(), {0, 0.5f, 0.3f, 0.2f});
+    EXPECT_EQ(rep.mismatches, 1u);
 }
 
 }  // namespace bvhlab::trav

@@ -18,16 +18,6 @@
 namespace bvhlab::trav {
 namespace {
 
-Camera framing_camera(const accel::TriangleMesh& m) {
-    const AABB b = m.bounds();
-    const Vec3 c = b.center();
-    Camera cam;
-    cam.target = {c.x, c.y, c.z};
-    const float r = 0.5f * length(b.extent());
-    cam.eye = cam.target + glm::vec3(0.4f, 0.6f, 1.0f) * (2.2f * r);
-    return cam;
-}
-
 /// Traces all four ray types with the given builder and expects zero real mismatches.
 void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
                       accel::BuilderKind builder) {

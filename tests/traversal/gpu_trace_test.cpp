@@ -68,11 +68,7 @@ TEST(GpuTrace, GeneratedScenesMatchCpuAndEmbree) {
     BVHLAB_SKIP_WITHOUT_GPU();
     for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
         accel::TriangleMesh mesh = accel::make_procedural(kind, 100000, 7);
-        const Vec3 c = mesh.bounds().center();
-        Camera cam;
-        cam.target = {c.x, c.y, c.z};
-        cam.eye = cam.target + glm::vec3(0.4f, 0.6f, 1.0f) * 1.5f;
-        expect_gpu_matches(mesh, cam, 320, 240);
+        expect_gpu_matches(mesh, framing_camera(mesh), 320, 240);
     }
 }
 

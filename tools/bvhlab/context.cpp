@@ -81,21 +81,6 @@ std::vector<Catalogue> catalogues() {
 
 glm::vec3 vec3_of(const nlohmann::json& j) { return {j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()}; }
 
-/// Camera looking at the bounds' centre from a raised diagonal, fitting the bounding sphere.
-trav::Camera auto_camera(const accel::TriangleMesh& mesh) {
-    const AABB b = mesh.bounds();
-    const Vec3 c = b.center();
-    const float radius = 0.5f * length(b.extent());
-    trav::Camera cam;
-    cam.fov_y_deg = 45.0f;
-    const float dist = radius / std::sin(0.5f * 45.0f * 3.14159265f / 180.0f) * 1.05f;
-    const glm::vec3 dir = glm::normalize(glm::vec3(0.5f, 0.7f, 1.0f));
-    cam.target = {c.x, c.y, c.z};
-    cam.eye = cam.target + dir * dist;
-    cam.up = {0.0f, 1.0f, 0.0f};
-    return cam;
-}
-
 void apply_entry(Scene& s, const nlohmann::json& e) {
     if (e.contains("camera")) {
         const auto& c = e["camera"];
@@ -175,7 +160,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
             for (const auto& w : warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
     }
     if (entry) apply_entry(s, *entry);
-    if (!s.camera_from_catalogue) s.camera = auto_camera(s.mesh);
+    if (!s.camera_from_catalogue) s.camera = trav::framing_camera(s.mesh);
     if (s.ao_length <= 0.0f) s.ao_length = 0.05f * s.mesh.diagonal();
     s.hash = accel::scene_hash(s.mesh);
     if (!g.quiet) {
@@ -215,11 +200,19 @@ void RayOptions::add_to(CLI::App& app) {
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
     app.add_option("--seed", cfg.seed, "seed of every random choice")->capture_default_str();
+    app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")->expected(3);
+    app.add_option("--target", target, "camera target x y z")->expected(3);
+    app.add_option("--up", up, "camera up vector x y z")->expected(3);
+    app.add_option("--fov", fov, "vertical field of view in degrees")->check(CLI::Range(0.01, 179.0));
 }
 
 trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
     trav::ProtocolConfig c = cfg;
     c.camera = s.camera;
+    if (eye.size() == 3) c.camera.eye = {eye[0], eye[1], eye[2]};
+    if (target.size() == 3) c.camera.target = {target[0], target[1], target[2]};
+    if (up.size() == 3) c.camera.up = {up[0], up[1], up[2]};
+    if (fov > 0.0f) c.camera.fov_y_deg = fov;
     c.ao_length = s.ao_length;
     return c;
 }

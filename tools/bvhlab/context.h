@@ -78,6 +78,8 @@ struct BuildOptions {
 /// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.
 struct RayOptions {
     trav::ProtocolConfig cfg;
+    std::vector<float> eye, target, up;  ///< camera overrides (3 floats each), empty = scene's
+    float fov = 0.0f;                    ///< override of fov_y in degrees, 0 = scene's
     void add_to(CLI::App& app);
     /// The protocol config for a scene: its camera and AO length unless overridden.
     trav::ProtocolConfig for_scene(const Scene& s) const;

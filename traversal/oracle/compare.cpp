@@ -2,8 +2,9 @@
 // Tie rules. A closest-hit disagreement is a tie when
 //   (a) both hit at the same t triangles that share a vertex position (the ray crosses their
 //       common edge or vertex), or
-//   (b) the closer of the two hits lies within eps of its triangle's edge, so the other side
-//       may have slipped through the crack of a non-watertight test, or
+//   (b) the closer of the two hits lies within float error of its triangle's edge (judged on
+//       double-precision barycentrics), so the other side may have slipped through the crack
+//       of a non-watertight test, or
 //   (c) the closer hit sits at the end of the ray's [tmin, tmax] interval, or
 //   (d) both hit at the same t and a double-precision test confirms that both triangles are
 //       hit by the ray at that same t (crossing or coincident triangles; either is closest).
@@ -27,36 +28,33 @@ double rel_dt(float a, float b) {
     return m > 0 ? std::fabs(double(a) - double(b)) / m : 0.0;
 }
 
-/// Distance from p to segment ab.
-double seg_dist(const double* p, Vec3 a, Vec3 b) {
-    double ab[3], ap[3];
-    for (int k = 0; k < 3; ++k) {
-        ab[k] = double(b[k]) - a[k];
-        ap[k] = p[k] - a[k];
-    }
-    const double len2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-    double s = len2 > 0 ? (ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / len2 : 0.0;
-    s = std::min(1.0, std::max(0.0, s));
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k) d2 += (ap[k] - s * ab[k]) * (ap[k] - s * ab[k]);
-    return std::sqrt(d2);
-}
-
 class Classifier {
 public:
-    Classifier(const accel::TriangleMesh& mesh, const CompareConfig& cfg)
-        : mesh_(mesh), cfg_(cfg), edge_dist_(double(cfg.edge_dist_rel) * mesh.diagonal()) {}
+    Classifier(const accel::TriangleMesh& mesh, const CompareConfig& cfg) : mesh_(mesh), cfg_(cfg) {}
 
-    bool near_edge(const Hit& h) const {
-        const double w = 1.0 - double(h.u) - double(h.v);
-        if (std::min({double(h.u), double(h.v), w}) < cfg_.edge_eps) return true;
+    /// True when the ray passes within float error of an edge of h.tri. Decided on the double-
+    /// precision barycentrics, not the reported ones, so a float kernel's own error cannot
+    /// excuse itself.
+    bool near_edge(const Hit& h, const Ray& r) const {
         const Vec3 a = mesh_.vertex(h.tri, 0), b = mesh_.vertex(h.tri, 1), c = mesh_.vertex(h.tri, 2);
-        double p[3];
-        for (int k = 0; k < 3; ++k) p[k] = w * a[k] + double(h.u) * b[k] + double(h.v) * c[k];
-        return std::min({seg_dist(p, a, b), seg_dist(p, b, c), seg_dist(p, c, a)}) <= edge_dist_;
+        double t, u, v;
+        if (!plane_hit_reference(r, a, b, c, t, u, v)) return true;  // ray in the plane: all edge
+        const double m = std::min({u, v, 1.0 - u - v});
+        const Vec3 n = cross(b - a, c - a);
+        const double area2 = length(n);
+        const double longest = std::max({length(b - a), length(c - b), length(a - c)});
+        const double h_min = area2 / longest;
+        const double cosv = std::fabs(double(dot(n, r.dir))) / (area2 * double(length(r.dir)));
+        auto inf = [](Vec3 x) { return double(std::max({std::fabs(x.x), std::fabs(x.y), std::fabs(x.z)})); };
+        const double scale = inf(r.org) + inf(r.org + r.dir * float(t));
+        const double tol = cfg_.edge_eps + cfg_.edge_float_k * 5.9604645e-8 * scale / (h_min * std::max(cosv, 1e-6));
+        return std::fabs(m) <= tol;
     }
+    /// The hit lies at tmin or tmax within the float error of its t (an absolute bound: at
+    /// tmin = 0 a relative one would be meaningless).
     bool at_interval_end(const Hit& h, const Ray& r) const {
-        return rel_dt(h.t, r.tmax) <= cfg_.t_rel_tol || rel_dt(h.t, r.tmin) <= cfg_.t_rel_tol;
+        const double tol = t_tolerance(r, h.t, mesh_.vertex(h.tri, 0), mesh_.vertex(h.tri, 1), mesh_.vertex(h.tri, 2), cfg_);
+        return std::fabs(double(h.t) - double(r.tmax)) <= tol || std::fabs(double(h.t) - double(r.tmin)) <= tol;
     }
     bool share_vertex(int32_t s, int32_t t) const {
         for (int i = 0; i < 3; ++i) {
@@ -83,7 +81,7 @@ public:
     }
     /// Tie kind for the hit that the other side did not report, or -1 for a real mismatch.
     int tie_for(const Hit& h, const Ray& r) const {
-        if (near_edge(h)) return int(TieKind::kNearEdge);
+        if (near_edge(h, r)) return int(TieKind::kNearEdge);
         if (at_interval_end(h, r)) return int(TieKind::kIntervalEnd);
         return -1;
     }
@@ -91,7 +89,6 @@ public:
 private:
     const accel::TriangleMesh& mesh_;
     const CompareConfig& cfg_;
-    double edge_dist_;
 };
 
 }  // namespace

@@ -20,9 +20,12 @@ struct CompareConfig {
     /// which dominates for short rays leaving a surface and for grazing rays.
     float t_rel_tol = 1e-4f;
     float t_abs_rel = 1e-6f;
-    float edge_eps = 1e-4f;   ///< a barycentric below this is "on an edge"
-    /// Also "on an edge": closer to one than this times the scene diagonal.
-    float edge_dist_rel = 1e-6f;
+    /// A hit is "on an edge" when its smallest barycentric, computed in double precision,
+    /// lies within +-(edge_eps + edge_float_k * 2^-24 * (|o| + |p|) / (h_min * cos)) of 0:
+    /// a float kernel's barycentric error grows with the coordinates' magnitude, with
+    /// 1 / h_min (the triangle's smallest altitude) and with 1 / cos of the incidence angle.
+    float edge_eps = 1e-4f;
+    float edge_float_k = 32.0f;
 };
 
 /// Largest |dt| at which two hits of `ray` at about `t` on triangle (v0, v1, v2) still count

@@ -85,6 +85,19 @@ void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, 
     normal = dot(n, ray.dir) > 0.0f ? n * -1.0f : n;
 }
 
+Camera framing_camera(const accel::TriangleMesh& mesh) {
+    const AABB b = mesh.bounds();
+    const Vec3 c = b.center();
+    const float radius = 0.5f * length(b.extent());
+    Camera cam;
+    cam.fov_y_deg = 45.0f;
+    const float dist = radius / std::sin(glm::radians(0.5f * cam.fov_y_deg)) * 1.05f;
+    cam.target = {c.x, c.y, c.z};
+    cam.eye = cam.target + glm::normalize(glm::vec3(0.5f, 0.7f, 1.0f)) * dist;
+    cam.up = {0.0f, 1.0f, 0.0f};
+    return cam;
+}
+
 std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg) {
     BVHLAB_CHECK(cfg.width > 0 && cfg.height > 0, "image size must be at least 1x1");
     const auto grid = uint32_t(std::lround(std::sqrt(double(cfg.samples))));

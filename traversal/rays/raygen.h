@@ -21,6 +21,10 @@ struct Camera {
     float fov_y_deg = 45.0f;
 };
 
+/// A camera for scenes without one: looks at the bounds' centre from a raised diagonal
+/// (direction (0.5, 0.7, 1)), far enough that the bounding sphere fills the 45-degree view.
+Camera framing_camera(const accel::TriangleMesh& mesh);
+
 struct PrimaryConfig {
     uint32_t width = 1024;
     uint32_t height = 768;

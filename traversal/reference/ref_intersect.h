@@ -11,9 +11,9 @@
 
 namespace bvhlab::trav {
 
-/// Double-precision hit of `ray` with (v0, v1, v2) for t in (tmin, tmax); barycentrics in
-/// Embree's convention. Returns false for parallel rays.
-inline bool intersect_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u,
+/// Double-precision t and barycentrics (Embree's convention) of the point where `ray`'s line
+/// meets the plane of (v0, v1, v2), inside the triangle or not. Returns false for parallel rays.
+inline bool plane_hit_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u,
                                 double& v) {
     double o[3] = {ray.org.x, ray.org.y, ray.org.z}, d[3] = {ray.dir.x, ray.dir.y, ray.dir.z};
     double e1[3], e2[3], s[3];
@@ -30,7 +30,14 @@ inline bool intersect_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, doubl
     double q[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]};
     v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
     t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
-    return u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > ray.tmin && t < ray.tmax;
+    return true;
+}
+
+/// Double-precision hit of `ray` with (v0, v1, v2) for t in (tmin, tmax).
+inline bool intersect_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u,
+                                double& v) {
+    return plane_hit_reference(ray, v0, v1, v2, t, u, v) && u >= 0.0 && v >= 0.0 && u + v <= 1.0 &&
+           t > ray.tmin && t < ray.tmax;
 }
 
 /// Closest hit over every triangle of `mesh`, in double precision. O(triangles) per ray.
