@@ -6,7 +6,8 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$root/build}
 shift || true
-commit=$(git -C "$root" describe --always --dirty --abbrev=12 2>/dev/null || echo unknown)
+# Name results by the commit baked into the binaries, not by the working tree.
+commit=$("$build/tools/bvhlab" --version 2>/dev/null || echo unknown)
 host=$(hostname -s)
 mkdir -p "$root/experiments/results"
 for b in build_bench trace_bench; do
