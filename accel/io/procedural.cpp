@@ -6,19 +6,12 @@
 #include <cmath>
 
 #include "accel/core/check.h"
+#include "accel/core/random.h"
 
 namespace bvhlab::accel {
 namespace {
 
-uint64_t mix(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-float unit(uint64_t seed, uint64_t i, uint64_t k) {
-    return float(mix(seed ^ mix(i * 16 + k)) >> 40) * (1.0f / 16777216.0f);
-}
+float unit(uint64_t seed, uint64_t i, uint64_t k) { return unit_float(splitmix64(seed ^ splitmix64(i * 16 + k))); }
 
 /// Soup: each triangle is a random centre plus three random offsets. Generated triangles
 /// are non-degenerate with probability ~1; any that is not is regenerated with another stream.

@@ -62,11 +62,17 @@ inline std::vector<BenchScene> bench_scenes(bool with_procedural = true) {
     return out;
 }
 
-/// Records commit and build type in the benchmark JSON context.
-inline void add_provenance() {
+/// The main() of every benchmark program: records commit and build type in the JSON
+/// context, lets `register_scene` register its benchmarks for each scene, runs them.
+inline int bench_main(int argc, char** argv, const std::function<void(const BenchScene&)>& register_scene) {
+    benchmark::Initialize(&argc, argv);
     benchmark::AddCustomContext("git_commit", git_commit());
     benchmark::AddCustomContext("bvhlab_build_type", build_type());
     benchmark::AddCustomContext("device", "cpu");
+    for (const auto& scene : bench_scenes()) register_scene(scene);
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
 }
 
 }  // namespace bvhlab::bench

@@ -41,9 +41,7 @@ void bm_build(benchmark::State& state, accel::BuilderKind kind, std::shared_ptr<
 
 int main(int argc, char** argv) {
     using namespace bvhlab;
-    benchmark::Initialize(&argc, argv);
-    bench::add_provenance();
-    for (const auto& scene : bench::bench_scenes()) {
+    return bench::bench_main(argc, argv, [](const bench::BenchScene& scene) {
         // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
         auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
         auto load = scene.load;
@@ -54,8 +52,5 @@ int main(int argc, char** argv) {
                 bench::bm_build(st, kind, *holder);
             })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
         }
-    }
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-    return 0;
+    });
 }

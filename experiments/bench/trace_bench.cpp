@@ -50,9 +50,7 @@ std::shared_ptr<Prepared> prepare(const BenchScene& scene) {
 
 int main(int argc, char** argv) {
     using namespace bvhlab;
-    benchmark::Initialize(&argc, argv);
-    bench::add_provenance();
-    for (const auto& scene : bench::bench_scenes()) {
+    return bench::bench_main(argc, argv, [](const bench::BenchScene& scene) {
         auto holder = std::make_shared<std::shared_ptr<bench::Prepared>>();
         for (int t = 0; t < 4; ++t) {
             const std::string name = std::string("BM_Trace/bvh2/cpu-stack/") + scene.name + "/" +
@@ -76,8 +74,5 @@ int main(int argc, char** argv) {
                                                                 benchmark::Counter::kIsIterationInvariantRate);
             })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
         }
-    }
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-    return 0;
+    });
 }

@@ -10,20 +10,10 @@
 #include <cmath>
 
 #include "accel/core/check.h"
+#include "accel/core/random.h"
 
 namespace bvhlab::trav {
 namespace {
-
-/// SplitMix64 finaliser: a well-mixed 64-bit hash of a counter.
-uint64_t mix(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-/// Uniform float in [0, 1) from the top 24 bits.
-float uniform(uint64_t h) { return float(h >> 40) * (1.0f / 16777216.0f); }
 
 /// Orthonormal basis around unit n (Duff et al. 2017, "Building an orthonormal basis, revisited").
 void onb(Vec3 n, Vec3& t, Vec3& b) {
@@ -62,8 +52,8 @@ std::vector<Ray> hemisphere_rays(const accel::TriangleMesh& mesh, const std::vec
             onb(n, t, b);
             const Vec3 org = p + n * cfg.offset;
             for (uint32_t k = 0; k < cfg.per_hit; ++k) {
-                const uint64_t h = mix(cfg.seed ^ mix(i * 0x100000001b3ull + k));
-                const float phi = 6.2831853f * uniform(h), r2 = uniform(mix(h));
+                const uint64_t h = splitmix64(cfg.seed ^ splitmix64(i * 0x100000001b3ull + k));
+                const float phi = 6.2831853f * unit_float(h), r2 = unit_float(splitmix64(h));
                 const float rad = std::sqrt(r2), z = std::sqrt(std::max(0.0f, 1.0f - r2));
                 const Vec3 d = t * (rad * std::cos(phi)) + b * (rad * std::sin(phi)) + n * z;
                 out[off[i] + k] = {org, 0.0f, d, tmax};
