@@ -19,8 +19,6 @@
 namespace bvhlab::accel {
 namespace {
 
-constexpr int kMaxBins = 256;
-
 /// Bins of all three axes for one node, axis-major. Fixed capacity, so finding a split
 /// allocates nothing (a heap vector per node cost ~3% of a 1M-triangle build).
 struct BinSet {
@@ -209,35 +207,15 @@ private:
         } else {
             bin_range(b, e, map, set);
         }
-        // Candidates are ranked by A_L N_L + A_R N_R alone; the SAH cost (one division) is
-        // computed only for the winner.
         float best_weight = std::numeric_limits<float>::infinity();
         int best_axis = -1, best_bin = -1;
-        float right_area[kMaxBins];
-        uint32_t right_count[kMaxBins];
         for (int a = 0; a < 3; ++a) {
             if (!map.splittable(a)) continue;
-            const Bin* bins = &set.bins[a * nb];
-            AABB acc = AABB::empty();
-            uint32_t n = 0;
-            for (int i = nb - 1; i > 0; --i) {
-                acc.extend(bins[i].bounds);
-                n += bins[i].count;
-                right_area[i] = acc.half_area();
-                right_count[i] = n;
-            }
-            acc = AABB::empty();
-            n = 0;
-            for (int i = 0; i < nb - 1; ++i) {
-                acc.extend(bins[i].bounds);
-                n += bins[i].count;
-                if (n == 0 || right_count[i + 1] == 0) continue;
-                const float w = acc.half_area() * float(n) + right_area[i + 1] * float(right_count[i + 1]);
-                if (w < best_weight) {
-                    best_weight = w;
-                    best_axis = a;
-                    best_bin = i;
-                }
+            const BinSweep sw = sweep_bins(&set.bins[a * nb], nb);
+            if (sw.weight < best_weight) {
+                best_weight = sw.weight;
+                best_axis = a;
+                best_bin = sw.bin;
             }
         }
         Split best;

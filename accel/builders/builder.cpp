@@ -3,6 +3,7 @@
 
 #include <chrono>
 
+#include "accel/builders/sbvh.h"
 #include "accel/builders/sweep_sah.h"
 #include "accel/core/check.h"
 
@@ -11,10 +12,13 @@ namespace bvhlab::accel {
 BuilderKind parse_builder_kind(const std::string& name) {
     if (name == "binned") return BuilderKind::kBinned;
     if (name == "sweep") return BuilderKind::kSweep;
-    throw Error("unknown builder '" + name + "' (expected binned or sweep)");
+    if (name == "sbvh") return BuilderKind::kSbvh;
+    throw Error("unknown builder '" + name + "' (expected binned, sweep or sbvh)");
 }
 
-const char* builder_name(BuilderKind kind) { return kind == BuilderKind::kBinned ? "binned" : "sweep"; }
+const char* builder_name(BuilderKind kind) {
+    return kind == BuilderKind::kBinned ? "binned" : (kind == BuilderKind::kSweep ? "sweep" : "sbvh");
+}
 
 BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const BuilderOptions& options) {
     BuildResult r;
@@ -24,10 +28,17 @@ BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const Builde
         static_cast<BuildConfig&>(c) = options.config;
         c.num_bins = options.num_bins;
         r.tree = BinnedSahBuilder(c).build(mesh);
-    } else {
+    } else if (kind == BuilderKind::kSweep) {
         SweepSahBuilder::Config c;
         static_cast<BuildConfig&>(c) = options.config;
         r.tree = SweepSahBuilder(c).build(mesh);
+    } else {
+        SbvhBuilder::Config c;
+        static_cast<BuildConfig&>(c) = options.config;
+        c.object_bins = options.num_bins;
+        c.alpha = options.sbvh_alpha;
+        c.reference_budget = options.sbvh_budget;
+        r.tree = SbvhBuilder(c).build(mesh);
     }
     r.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return r;

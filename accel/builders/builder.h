@@ -10,16 +10,19 @@
 
 namespace bvhlab::accel {
 
-enum class BuilderKind { kBinned, kSweep };
+enum class BuilderKind { kBinned, kSweep, kSbvh };
 
-/// "binned" or "sweep"; throws bvhlab::Error otherwise.
+/// "binned", "sweep" or "sbvh"; throws bvhlab::Error otherwise.
 BuilderKind parse_builder_kind(const std::string& name);
 const char* builder_name(BuilderKind kind);
 
-/// Options of every builder; `num_bins` only matters for the binned one.
+/// Options of every builder; `num_bins` applies to binned and SBVH object bins, the sbvh_*
+/// fields to SBVH only.
 struct BuilderOptions {
     BuildConfig config;
     int num_bins = BinnedSahBuilder::Config{}.num_bins;
+    float sbvh_alpha = 1e-5f;
+    float sbvh_budget = 2.0f;
 };
 
 struct BuildResult {

@@ -55,14 +55,14 @@ TEST(EmbreeAgreement, CornellBox) {
     cam.eye = {278, 273, -800};
     cam.target = {278, 273, 0};
     cam.fov_y_deg = 39.3f;
-    for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep})
+    for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh})
         expect_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b);
 }
 
 TEST(EmbreeAgreement, GeneratedScenes) {
     for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
         accel::TriangleMesh mesh = accel::make_procedural(kind, 20000, 3);
-        for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep})
+        for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh})
             expect_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b);
     }
 }

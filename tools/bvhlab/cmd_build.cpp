@@ -14,8 +14,9 @@ void print_build_table(const Scene& s, const Built& b) {
     std::printf("builder      %s  build %.1f ms\n", r["builder"].get<std::string>().c_str(), b.result.build_ms);
     std::printf("nodes        %llu (%llu leaves), depth %u\n", (unsigned long long)b.stats.nodes,
                 (unsigned long long)b.stats.leaves, b.stats.depth);
-    std::printf("leaf size    mean %.2f, max %u; references %llu\n", b.stats.mean_leaf_size, b.stats.max_leaf_size,
-                (unsigned long long)b.stats.references);
+    std::printf("leaf size    mean %.2f, max %u; references %llu (%.3fx the triangles)\n", b.stats.mean_leaf_size,
+                b.stats.max_leaf_size, (unsigned long long)b.stats.references,
+                double(b.stats.references) / double(s.mesh.triangle_count()));
     std::printf("SAH          %.4f (Ct = Ci = 1, root-normalised)\n", b.stats.sah);
     if (b.stats.epo >= 0) std::printf("EPO          %.4f\n", b.stats.epo);
     std::printf("bytes        %llu (BuildTree), %zu (bvh2 layout + Woop triangles)\n",

@@ -172,8 +172,8 @@ Scene load_scene(const std::string& spec, const Globals& g) {
 }
 
 void BuildOptions::add_to(CLI::App& app) {
-    app.add_option("--builder", builder, "BVH builder: binned (binned SAH) or sweep (full-sweep SAH)")
-        ->check(CLI::IsMember({"binned", "sweep"}))
+    app.add_option("--builder", builder, "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits)")
+        ->check(CLI::IsMember({"binned", "sweep", "sbvh"}))
         ->capture_default_str();
     app.add_option("--bins", opts.num_bins, "bins per axis for the binned builder")
         ->check(CLI::Range(2, 256))
@@ -183,6 +183,12 @@ void BuildOptions::add_to(CLI::App& app) {
         ->capture_default_str();
     app.add_option("--min-leaf", opts.config.min_leaf_size, "nodes this small always become leaves")
         ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    app.add_option("--alpha", opts.sbvh_alpha, "SBVH: try spatial splits where child overlap exceeds alpha x root area")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
+    app.add_option("--budget", opts.sbvh_budget, "SBVH: at most this many references per triangle in all")
+        ->check(CLI::Range(1.0, 16.0))
         ->capture_default_str();
 }
 
@@ -274,6 +280,7 @@ nlohmann::json stats_json(const accel::TreeStats& s, const accel::BuildResult& r
     j["mean_leaf_size"] = s.mean_leaf_size;
     j["max_leaf_size"] = s.max_leaf_size;
     j["references"] = s.references;
+    j["duplication"] = mesh.triangle_count() ? double(s.references) / double(mesh.triangle_count()) : 0.0;
     j["bytes"] = s.bytes;
     j["sah"] = s.sah;
     j["epo"] = s.epo >= 0 ? nlohmann::json(s.epo) : nlohmann::json(nullptr);

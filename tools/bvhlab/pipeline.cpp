@@ -18,7 +18,9 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
         Stage st(g, "building " + builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
         b.result = accel::run_builder(opts.kind(), scene.mesh, opts.opts);
     }
-    const std::string err = accel::validate(b.result.tree, scene.mesh, opts.opts.config);
+    accel::ValidateOptions vo;
+    vo.allow_duplicates = opts.kind() == accel::BuilderKind::kSbvh;
+    const std::string err = accel::validate(b.result.tree, scene.mesh, opts.opts.config, vo);
     if (!err.empty()) throw Error("builder '" + builder + "' produced an invalid tree: " + err);
     {
         Stage st(g, opts.epo ? "computing SAH and EPO" : "computing SAH");
@@ -30,7 +32,11 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
     b.record.update(stats_json(b.stats, b.result, builder, scene.mesh));
     b.record["structure"] = b.structure;
     b.record["layout_bytes"] = b.bvh.bytes();
-    if (builder == "binned") b.record["bins"] = opts.opts.num_bins;
+    if (builder != "sweep") b.record["bins"] = opts.opts.num_bins;
+    if (builder == "sbvh") {
+        b.record["alpha"] = opts.opts.sbvh_alpha;
+        b.record["budget"] = opts.opts.sbvh_budget;
+    }
     b.record["max_leaf"] = opts.opts.config.max_leaf_size;
     b.record["machine"] = machine_description();
     return b;

@@ -1,0 +1,37 @@
+// SPDX-License-Identifier: MIT
+// Spatial-split BVH (Stich, Friedrich & Dietrich 2009): binned object splits plus spatial
+// splits that duplicate references, with exact clipped bounds and reference unsplitting.
+#pragma once
+
+#include "accel/core/build_tree.h"
+#include "accel/core/mesh.h"
+
+namespace bvhlab::accel {
+
+class SbvhBuilder {
+public:
+    struct Config : BuildConfig {
+        int object_bins = 32;          ///< bins per axis for object splits
+        int spatial_bins = 32;         ///< bins per axis for spatial splits (<= 256)
+        /// Spatial splits are tried only where the best object split's children overlap by
+        /// more than alpha times the root's surface area (Stich et al.'s alpha).
+        float alpha = 1e-5f;
+        /// At most this many references in all, as a multiple of the triangle count.
+        float reference_budget = 2.0f;
+        uint32_t task_threshold = 4096;  ///< subtrees at least this big become TBB tasks
+    };
+
+    SbvhBuilder() = default;
+    explicit SbvhBuilder(const Config& config) : config_(config) {}
+
+    /// Every triangle is referenced at least once; leaf bounds hold only the clipped parts.
+    /// Throws bvhlab::Error on an empty mesh or a bad config.
+    BuildTree build(const TriangleMesh& mesh) const;
+
+    const Config& config() const { return config_; }
+
+private:
+    Config config_;
+};
+
+}  // namespace bvhlab::accel
