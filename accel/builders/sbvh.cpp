@@ -61,7 +61,8 @@ public:
         if (n > c_.min_leaf_size) {
             obj = object_split(refs, cb);
             const AABB overlap{vmax(obj.left.lo, obj.right.lo), vmin(obj.left.hi, obj.right.hi)};
-            const float overlap_area = obj.axis < 0 ? INFINITY : overlap.half_area();
+            // Without an object split both "children" would be the whole node.
+            const float overlap_area = obj.axis < 0 ? bounds.half_area() : overlap.half_area();
             if (overlap_area > c_.alpha * root_area_ && budget_.load(std::memory_order_relaxed) > 0)
                 spa = spatial_split(refs, bounds);
         }
