@@ -211,8 +211,8 @@ private:
                 }
                 continue;
             }
-            const PrimRef lr{clipped_bounds(mesh_, r.prim_id, clamp_box(r.bounds, a, p, true)), r.prim_id};
-            const PrimRef rr{clipped_bounds(mesh_, r.prim_id, clamp_box(r.bounds, a, p, false)), r.prim_id};
+            PrimRef lr{AABB::empty(), r.prim_id}, rr{AABB::empty(), r.prim_id};
+            split_reference(mesh_, r, a, p, lr.bounds, rr.bounds);
             // Rounding can leave one side with nothing; then the reference is not duplicated.
             if (!lr.bounds.is_empty()) left.push_back(lr);
             if (!rr.bounds.is_empty()) right.push_back(rr);

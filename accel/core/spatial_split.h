@@ -7,7 +7,6 @@
 #include <cstdint>
 
 #include "accel/core/binning.h"
-#include "accel/core/clip.h"
 #include "accel/core/prim_ref.h"
 
 namespace bvhlab::accel {
@@ -19,9 +18,34 @@ inline AABB clamp_box(AABB box, int axis, float pos, bool keep_left) {
     return box;
 }
 
-/// Exact bounds of the part of triangle `tri` inside `box` (empty if none).
-inline AABB clipped_bounds(const TriangleMesh& mesh, uint32_t tri, const AABB& box) {
-    return clip_triangle(mesh.vertex(tri, 0), mesh.vertex(tri, 1), mesh.vertex(tri, 2), box).bounds;
+/// Splits a reference at the plane x[axis] = pos (Stich et al., section 4.4): the triangle's
+/// vertices and its edges' crossings of the plane go to the side(s) they lie on, and each side
+/// is intersected with the reference's current bounds. O(1) per plane, unlike a full polygon
+/// clip against a box; exact up to the reference's earlier splits. Either side may be empty.
+inline void split_reference(const TriangleMesh& mesh, const PrimRef& r, int axis, float pos, AABB& left,
+                            AABB& right) {
+    left = right = AABB::empty();
+    Vec3 v[3] = {mesh.vertex(r.prim_id, 0), mesh.vertex(r.prim_id, 1), mesh.vertex(r.prim_id, 2)};
+    for (int i = 0; i < 3; ++i) {
+        const Vec3 a = v[i], b = v[(i + 1) % 3];
+        if (a[axis] <= pos) left.extend(a);
+        if (a[axis] >= pos) right.extend(a);
+        if ((a[axis] < pos && b[axis] > pos) || (a[axis] > pos && b[axis] < pos)) {
+            const double t = (double(pos) - a[axis]) / (double(b[axis]) - a[axis]);
+            Vec3 p;
+            for (int k = 0; k < 3; ++k) p[k] = float(double(a[k]) + t * (double(b[k]) - a[k]));
+            p[axis] = pos;
+            left.extend(p);
+            right.extend(p);
+        }
+    }
+    auto intersect = [](AABB x, const AABB& y) {
+        x.lo = vmax(x.lo, y.lo);
+        x.hi = vmin(x.hi, y.hi);
+        return x.is_empty() ? AABB::empty() : x;
+    };
+    left = intersect(left, clamp_box(r.bounds, axis, pos, true));
+    right = intersect(right, clamp_box(r.bounds, axis, pos, false));
 }
 
 /// Equal-width bins over [lo, hi) of one axis of a node's bounds, with entry and exit counts.
@@ -56,12 +80,16 @@ struct SpatialBins {
             bins[first].bounds.extend(r.bounds);
             return;
         }
-        for (int i = first; i <= last; ++i) {
-            AABB slab = r.bounds;
-            if (i > first) slab.lo[axis] = max_f(slab.lo[axis], lo + width * float(i));
-            if (i < last) slab.hi[axis] = min_f(slab.hi[axis], plane(i));
-            bins[i].bounds.extend(clipped_bounds(mesh, r.prim_id, slab));
+        // Chop at each plane in turn: the left piece goes to bin i, the right piece goes on.
+        PrimRef rest = r;
+        for (int i = first; i < last; ++i) {
+            AABB l, rr;
+            split_reference(mesh, rest, axis, plane(i), l, rr);
+            bins[i].bounds.extend(l);
+            rest.bounds = rr;
+            if (rr.is_empty()) return;
         }
+        bins[last].bounds.extend(rest.bounds);
     }
 };
 

@@ -22,5 +22,6 @@ void register_bench(CLI::App& app, Globals& g);
 void register_verify(CLI::App& app, Globals& g);
 void register_gen(CLI::App& app, Globals& g);
 void register_run(CLI::App& app, Globals& g);
+void register_quality(CLI::App& app, Globals& g);
 
 }  // namespace bvhlab::cli
