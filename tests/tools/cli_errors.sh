@@ -59,6 +59,16 @@ expect_error bad-gen "procedural|generated" build gen:blobs:100
 expect_error gpu-unavailable "device gpu: (no|this bvhlab)" bench "$data/cornell_box.obj" --device gpu
 expect_error rays-needs-out "--out" rays "$data/cornell_box.obj"
 
+# Structure cache: stale (other triangles, other config), damaged, and a name not built yet.
+"$bin" -q build "$data/cornell_box.obj" --builder sbvh --out "$tmp/cb.tree" >/dev/null
+expect_error cache-other-scene "stale structure file.*other triangles" verify gen:soup:50 --structure "$tmp/cb.tree"
+expect_error cache-other-config "stale structure file.*asked for" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --max-leaf 2
+head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
+expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"
+expect_error cache-not-a-tree "not a bvhlab structure file" verify "$data/cornell_box.obj" --structure "$data/cornell_box.obj"
+expect_error kdtree-missing "kd-tree is not implemented" verify "$data/cornell_box.obj" --structure kdtree
+expect_error builder-and-structure "excludes" verify "$data/cornell_box.obj" --structure sbvh --builder binned
+
 # The good path still works and --json prints parseable lines.
 if "$bin" -q build "$data/cornell_box.obj" --json | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); assert j["triangles"]==32 and j["nodes"]>0 and "sah" in j and "epo" in j and j["builder"]=="binned"'; then
     pass=$((pass + 1))
@@ -71,6 +81,12 @@ if cmp -s "$tmp/a.rays" "$tmp/b.rays" && "$bin" -q verify "$data/cornell_box.obj
     pass=$((pass + 1))
 else
     fail=$((fail + 1)); echo "FAIL identical ray files / verify from file"
+fi
+
+if "$bin" -q verify "$data/cornell_box.obj" --structure "$tmp/cb.tree" --width 32 --height 24 --json | python3 -c 'import json,sys; rows=[json.loads(l) for l in sys.stdin]; assert len(rows)==4 and all(r["mismatches"]==0 and r["structure"]=="bvh2/sbvh" for r in rows)'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL verify from a structure file"
 fi
 
 echo "$pass passed, $fail failed"

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "accel/io/tree_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
 
@@ -25,7 +26,7 @@ void print_build_table(const Scene& s, const Built& b) {
 
 void register_build(CLI::App& app, Globals& g) {
     struct Opts {
-        std::string scene;
+        std::string scene, out;
         BuildOptions build;
     };
     auto o = std::make_shared<Opts>();
@@ -33,9 +34,19 @@ void register_build(CLI::App& app, Globals& g) {
     sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
     o->build.add_to(*sub);
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
+    sub->add_option("-o,--out", o->out, "write the tree to this structure file (load it with --structure FILE)");
     sub->callback([o, &g] {
         Scene s = load_scene(o->scene, g);
         Built b = build_scene(s, o->build, g);
+        if (!o->out.empty()) {
+            accel::TreeFileMeta meta{o->build.kind(), o->build.opts, s.mesh.triangle_count(), s.hash};
+            if (!o->build.structure_file().empty()) {  // re-saving a loaded file keeps its provenance
+                const accel::TreeFile f = accel::read_tree_file(o->build.structure_file());
+                meta = f.meta;
+            }
+            accel::write_tree_file(o->out, b.result.tree, meta);
+            b.record["structure_file"] = o->out;
+        }
         if (g.json) emit(b.record); else print_build_table(s, b);
     });
 }

@@ -172,24 +172,43 @@ Scene load_scene(const std::string& spec, const Globals& g) {
 }
 
 void BuildOptions::add_to(CLI::App& app) {
-    app.add_option("--builder", builder, "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits)")
-        ->check(CLI::IsMember({"binned", "sweep", "sbvh"}))
-        ->capture_default_str();
-    app.add_option("--bins", opts.num_bins, "bins per axis for the binned builder")
-        ->check(CLI::Range(2, 256))
-        ->capture_default_str();
-    app.add_option("--max-leaf", opts.config.max_leaf_size, "largest leaf (triangles)")
-        ->check(CLI::Range(1, 64))
-        ->capture_default_str();
-    app.add_option("--min-leaf", opts.config.min_leaf_size, "nodes this small always become leaves")
-        ->check(CLI::Range(1, 64))
-        ->capture_default_str();
-    app.add_option("--alpha", opts.sbvh_alpha, "SBVH: try spatial splits where child overlap exceeds alpha x root area")
-        ->check(CLI::Range(0.0, 1.0))
-        ->capture_default_str();
-    app.add_option("--budget", opts.sbvh_budget, "SBVH: at most this many references per triangle in all")
-        ->check(CLI::Range(1.0, 16.0))
-        ->capture_default_str();
+    builder_flag = app.add_option("--builder", builder,
+                                  "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits)")
+                       ->check(CLI::IsMember({"binned", "sweep", "sbvh"}))
+                       ->capture_default_str();
+    auto* st = app.add_option("--structure", structure,
+                              "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building");
+    st->excludes(builder_flag);
+    config_flags = {
+        app.add_option("--bins", opts.num_bins, "bins per axis (binned builder, SBVH object splits)")
+            ->check(CLI::Range(2, 256))
+            ->capture_default_str(),
+        app.add_option("--max-leaf", opts.config.max_leaf_size, "largest leaf (triangles)")
+            ->check(CLI::Range(1, 64))
+            ->capture_default_str(),
+        app.add_option("--min-leaf", opts.config.min_leaf_size, "nodes this small always become leaves")
+            ->check(CLI::Range(1, 64))
+            ->capture_default_str(),
+        app.add_option("--alpha", opts.sbvh_alpha, "SBVH: try spatial splits where child overlap exceeds alpha x root area")
+            ->check(CLI::Range(0.0, 1.0))
+            ->capture_default_str(),
+        app.add_option("--budget", opts.sbvh_budget, "SBVH: at most this many references per triangle in all")
+            ->check(CLI::Range(1.0, 16.0))
+            ->capture_default_str(),
+    };
+    // --structure NAME picks the builder; a path is checked when the command runs.
+    st->each([this](const std::string& v) {
+        if (v == "bvh" || v == "binned") builder = "binned";
+        else if (v == "sweep" || v == "sbvh") builder = v;
+        else if (v == "kdtree")
+            throw CLI::ValidationError("--structure kdtree: the SAH kd-tree is not implemented yet (issue 3)");
+    });
+}
+
+std::string BuildOptions::structure_file() const {
+    if (structure.empty() || structure == "bvh" || structure == "binned" || structure == "sweep" || structure == "sbvh")
+        return {};
+    return structure;
 }
 
 void RayOptions::add_to(CLI::App& app) {

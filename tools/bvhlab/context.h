@@ -66,13 +66,21 @@ std::string data_dir();
 /// Names of the scenes in $BVHLAB_SCENES/scenes.json (empty when unset).
 std::vector<std::string> catalogue_scene_names();
 
-/// Builder flags: --builder, --bins, --max-leaf, --min-leaf.
+/// Builder flags: --builder, --structure, --bins, --max-leaf, --min-leaf, --alpha, --budget.
 struct BuildOptions {
     std::string builder = "binned";
+    /// --structure: a builder name (bvh = binned, sweep, sbvh, kdtree) or a structure file
+    /// written by `bvhlab build --out`, which is then loaded instead of building.
+    std::string structure;
     accel::BuilderOptions opts;
     bool epo = true;
+    std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
+    CLI::Option* builder_flag = nullptr;
+
     void add_to(CLI::App& app);
     accel::BuilderKind kind() const { return accel::parse_builder_kind(builder); }
+    /// The structure file named by --structure, or "" when --structure names a builder.
+    std::string structure_file() const;
 };
 
 /// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.

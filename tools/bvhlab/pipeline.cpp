@@ -6,22 +6,56 @@
 
 #include "accel/core/check.h"
 #include "accel/core/validate.h"
+#include "accel/io/tree_file.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "traversal/cpu/cpu_trace.h"
 
 namespace bvhlab::cli {
 
-Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g) {
+/// Loads a structure file and checks that it belongs to this scene and to the options given
+/// explicitly on the command line.
+static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts, const std::string& file,
+                                   const Globals& g) {
+    Stage st(g, "loading structure " + file);
+    accel::TreeFile f = accel::read_tree_file(file);
+    const std::string stale = accel::stale_reason(f.meta, scene.mesh.triangle_count(), scene.hash);
+    if (!stale.empty()) throw Error("stale structure file '" + file + "': " + stale);
+    accel::BuilderOptions asked = f.meta.options;
+    const accel::BuilderOptions& given = opts.opts;
+    // Only what the user said explicitly must match; everything else comes from the file.
+    const CLI::Option* const* flags = opts.config_flags.data();
+    if (flags[0]->count()) asked.num_bins = given.num_bins;
+    if (flags[1]->count()) asked.config.max_leaf_size = given.config.max_leaf_size;
+    if (flags[2]->count()) asked.config.min_leaf_size = given.config.min_leaf_size;
+    if (flags[3]->count()) asked.sbvh_alpha = given.sbvh_alpha;
+    if (flags[4]->count()) asked.sbvh_budget = given.sbvh_budget;
+    const std::string have = accel::describe_config(f.meta.builder, f.meta.options);
+    const std::string want = accel::describe_config(f.meta.builder, asked);
+    if (have != want)
+        throw Error("stale structure file '" + file + "': it was built with " + have + ", but " + want + " was asked for");
+    return f;
+}
+
+Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
     Built b;
-    const std::string builder = opts.builder;
-    {
-        Stage st(g, "building " + builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
+    BuildOptions opts = opts_in;
+    const std::string file = opts.structure_file();
+    if (!file.empty()) {
+        accel::TreeFile f = load_cached(scene, opts, file, g);
+        opts.builder = accel::builder_name(f.meta.builder);
+        opts.opts = f.meta.options;
+        b.result.tree = std::move(f.tree);
+    } else {
+        Stage st(g, "building " + opts.builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
         b.result = accel::run_builder(opts.kind(), scene.mesh, opts.opts);
     }
+    const std::string builder = opts.builder;
     accel::ValidateOptions vo;
     vo.allow_duplicates = opts.kind() == accel::BuilderKind::kSbvh;
     const std::string err = accel::validate(b.result.tree, scene.mesh, opts.opts.config, vo);
-    if (!err.empty()) throw Error("builder '" + builder + "' produced an invalid tree: " + err);
+    if (!err.empty())
+        throw Error((file.empty() ? "builder '" + builder + "' produced" : "structure file '" + file + "' holds") +
+                    " an invalid tree: " + err);
     {
         Stage st(g, opts.epo ? "computing SAH and EPO" : "computing SAH");
         b.stats = accel::compute_stats(b.result.tree, scene.mesh, opts.opts.config, opts.epo);
@@ -38,6 +72,8 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
         b.record["budget"] = opts.opts.sbvh_budget;
     }
     b.record["max_leaf"] = opts.opts.config.max_leaf_size;
+    b.record["config"] = accel::describe_config(opts.kind(), opts.opts);
+    if (!file.empty()) b.record["structure_file"] = file;  // build_ms is then 0: nothing was built
     b.record["machine"] = machine_description();
     return b;
 }

@@ -1,0 +1,140 @@
+// SPDX-License-Identifier: MIT
+// Tree files: fixed little-endian header, the builder config, nodes, primitive indices and a
+// trailing FNV-1a checksum of everything before it.
+#include "accel/io/tree_file.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "accel/core/check.h"
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "tree files need a little-endian host");
+
+namespace bvhlab::accel {
+namespace {
+
+/// Fixed header, 88 bytes.
+struct Header {
+    char magic[8];           // "BVHLTREE"
+    uint32_t version;        // kTreeFileVersion
+    uint32_t builder;        // BuilderKind
+    uint64_t triangles;      // triangle count of the scene
+    uint64_t scene_hash;     // scene_hash() as a number
+    uint32_t num_bins, min_leaf, max_leaf, max_depth;
+    float traversal_cost, intersection_cost, sbvh_alpha, sbvh_budget;
+    uint64_t node_count;     // BuildNode records (32 bytes each) that follow
+    uint64_t index_count;    // uint32 primitive indices that follow the nodes
+    uint64_t reserved;       // 0
+};
+static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
+
+uint64_t fnv1a(const void* data, size_t n, uint64_t h = 1469598103934665603ull) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+}  // namespace
+
+std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
+    std::ostringstream s;
+    s << builder_name(kind) << " leaf=" << o.config.min_leaf_size << ".." << o.config.max_leaf_size
+      << " max_depth=" << o.config.max_depth << " Ct=" << o.config.traversal_cost
+      << " Ci=" << o.config.intersection_cost;
+    if (kind != BuilderKind::kSweep) s << " bins=" << o.num_bins;
+    if (kind == BuilderKind::kSbvh) s << " alpha=" << o.sbvh_alpha << " budget=" << o.sbvh_budget;
+    return s.str();
+}
+
+void write_tree_file(const std::string& path, const BuildTree& tree, const TreeFileMeta& meta) {
+    Header h{};
+    std::memcpy(h.magic, "BVHLTREE", 8);
+    h.version = kTreeFileVersion;
+    h.builder = uint32_t(meta.builder);
+    h.triangles = meta.triangles;
+    h.scene_hash = std::strtoull(meta.scene_hash.c_str(), nullptr, 16);
+    const BuildConfig& c = meta.options.config;
+    h.num_bins = uint32_t(meta.options.num_bins);
+    h.min_leaf = c.min_leaf_size;
+    h.max_leaf = c.max_leaf_size;
+    h.max_depth = c.max_depth;
+    h.traversal_cost = c.traversal_cost;
+    h.intersection_cost = c.intersection_cost;
+    h.sbvh_alpha = meta.options.sbvh_alpha;
+    h.sbvh_budget = meta.options.sbvh_budget;
+    h.node_count = tree.nodes.size();
+    h.index_count = tree.prim_indices.size();
+    uint64_t sum = fnv1a(&h, sizeof h);
+    sum = fnv1a(tree.nodes.data(), tree.nodes.size() * sizeof(BuildNode), sum);
+    sum = fnv1a(tree.prim_indices.data(), tree.prim_indices.size() * sizeof(uint32_t), sum);
+    std::ofstream out(path, std::ios::binary);
+    if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    out.write(reinterpret_cast<const char*>(&h), sizeof h);
+    out.write(reinterpret_cast<const char*>(tree.nodes.data()), std::streamsize(tree.nodes.size() * sizeof(BuildNode)));
+    out.write(reinterpret_cast<const char*>(tree.prim_indices.data()),
+              std::streamsize(tree.prim_indices.size() * sizeof(uint32_t)));
+    out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
+    if (!out.flush()) throw Error("cannot write '" + path + "': write failed");
+}
+
+TreeFile read_tree_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) throw Error("cannot open structure file '" + path + "': " + std::strerror(errno));
+    const auto size = uint64_t(in.tellg());
+    in.seekg(0);
+    Header h{};
+    if (size < sizeof h || !in.read(reinterpret_cast<char*>(&h), sizeof h))
+        throw Error("structure file '" + path + "' is truncated: shorter than its 88-byte header");
+    if (std::memcmp(h.magic, "BVHLTREE", 8) != 0)
+        throw Error("'" + path + "' is not a bvhlab structure file (magic is not BVHLTREE)");
+    if (h.version != kTreeFileVersion)
+        throw Error("structure file '" + path + "' has version " + std::to_string(h.version) +
+                    "; this build reads version " + std::to_string(kTreeFileVersion));
+    if (h.builder > uint32_t(BuilderKind::kSbvh))
+        throw Error("structure file '" + path + "' names an unknown builder (" + std::to_string(h.builder) + ")");
+    const uint64_t expect = sizeof h + h.node_count * sizeof(BuildNode) + h.index_count * 4 + 8;
+    if (h.node_count > (1ull << 34) || h.index_count > (1ull << 34) || size != expect)
+        throw Error("structure file '" + path + "' is truncated or has trailing bytes: expected " +
+                    std::to_string(expect) + " bytes, found " + std::to_string(size));
+    TreeFile f;
+    f.tree.nodes.resize(h.node_count);
+    f.tree.prim_indices.resize(h.index_count);
+    uint64_t stored = 0;
+    in.read(reinterpret_cast<char*>(f.tree.nodes.data()), std::streamsize(h.node_count * sizeof(BuildNode)));
+    in.read(reinterpret_cast<char*>(f.tree.prim_indices.data()), std::streamsize(h.index_count * 4));
+    in.read(reinterpret_cast<char*>(&stored), sizeof stored);
+    if (!in) throw Error("cannot read structure file '" + path + "'");
+    uint64_t sum = fnv1a(&h, sizeof h);
+    sum = fnv1a(f.tree.nodes.data(), f.tree.nodes.size() * sizeof(BuildNode), sum);
+    sum = fnv1a(f.tree.prim_indices.data(), f.tree.prim_indices.size() * 4, sum);
+    if (sum != stored) throw Error("structure file '" + path + "' is corrupt: checksum mismatch");
+    f.meta.builder = BuilderKind(h.builder);
+    f.meta.triangles = h.triangles;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h.scene_hash));
+    f.meta.scene_hash = hex;
+    BuilderOptions& o = f.meta.options;
+    o.num_bins = int(h.num_bins);
+    o.config.min_leaf_size = h.min_leaf;
+    o.config.max_leaf_size = h.max_leaf;
+    o.config.max_depth = h.max_depth;
+    o.config.traversal_cost = h.traversal_cost;
+    o.config.intersection_cost = h.intersection_cost;
+    o.sbvh_alpha = h.sbvh_alpha;
+    o.sbvh_budget = h.sbvh_budget;
+    return f;
+}
+
+std::string stale_reason(const TreeFileMeta& meta, uint64_t triangles, const std::string& scene_hash) {
+    if (meta.triangles != triangles || meta.scene_hash != scene_hash)
+        return "it was built over other triangles (" + std::to_string(meta.triangles) + " triangles, hash " +
+               meta.scene_hash + "; this scene has " + std::to_string(triangles) + ", hash " + scene_hash + ")";
+    return {};
+}
+
+}  // namespace bvhlab::accel

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: MIT
+// Structure cache files: round trip, staleness, and every kind of damaged file.
+#include "accel/io/tree_file.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "accel/core/check.h"
+#include "accel/io/procedural.h"
+#include "tests/support/test_support.h"
+
+namespace bvhlab::accel {
+namespace {
+
+std::string bytes_of(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void expect_read_error(const std::string& path, const std::string& what) {
+    try {
+        read_tree_file(path);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+}
+
+struct Fixture {
+    TriangleMesh mesh = make_procedural(ProceduralKind::kStructured, 2000, 3);
+    TreeFileMeta meta;
+    BuildTree tree;
+    Fixture() {
+        meta.builder = BuilderKind::kSbvh;
+        meta.options.sbvh_budget = 1.5f;
+        meta.options.config.max_leaf_size = 4;
+        meta.triangles = mesh.triangle_count();
+        meta.scene_hash = scene_hash(mesh);
+        tree = run_builder(meta.builder, mesh, meta.options).tree;
+    }
+};
+
+}  // namespace
+
+TEST(TreeFile, RoundTripKeepsTreeAndProvenance) {
+    Fixture fx;
+    test::TempFile f("cache.tree");
+    write_tree_file(f.path(), fx.tree, fx.meta);
+    TreeFile r = read_tree_file(f.path());
+    EXPECT_EQ(r.tree.prim_indices, fx.tree.prim_indices);
+    ASSERT_EQ(r.tree.nodes.size(), fx.tree.nodes.size());
+    EXPECT_EQ(std::memcmp(r.tree.nodes.data(), fx.tree.nodes.data(), fx.tree.nodes.size() * sizeof(BuildNode)), 0);
+    EXPECT_EQ(r.meta.builder, BuilderKind::kSbvh);
+    EXPECT_EQ(r.meta.scene_hash, fx.meta.scene_hash);
+    EXPECT_EQ(describe_config(r.meta.builder, r.meta.options), describe_config(fx.meta.builder, fx.meta.options));
+    EXPECT_EQ(stale_reason(r.meta, fx.mesh.triangle_count(), scene_hash(fx.mesh)), "");
+}
+
+TEST(TreeFile, StaleWhenTrianglesDiffer) {
+    Fixture fx;
+    TriangleMesh other = make_procedural(ProceduralKind::kStructured, 2000, 4);  // same count, other seed
+    EXPECT_NE(stale_reason(fx.meta, other.triangle_count(), scene_hash(other)), "");
+    EXPECT_NE(stale_reason(fx.meta, 1999, fx.meta.scene_hash), "");
+}
+
+TEST(TreeFile, DamagedFiles) {
+    Fixture fx;
+    test::TempFile f("damaged.tree");
+    write_tree_file(f.path(), fx.tree, fx.meta);
+    const std::string good = bytes_of(f.path());
+    auto write = [&](const std::string& b) { std::ofstream(f.path(), std::ios::binary) << b; };
+    expect_read_error("/nonexistent/x.tree", "cannot open");
+    write(good.substr(0, 40));
+    expect_read_error(f.path(), "truncated");
+    write(good.substr(0, good.size() - 9));
+    expect_read_error(f.path(), "truncated");
+    write(good + "junk");
+    expect_read_error(f.path(), "trailing");
+    std::string bad = good;
+    bad[3] = 'X';
+    write(bad);
+    expect_read_error(f.path(), "magic");
+    bad = good;
+    bad[8] = 9;
+    write(bad);
+    expect_read_error(f.path(), "version 9");
+    for (size_t pos : {size_t(100), good.size() / 2, good.size() - 20}) {
+        bad = good;
+        bad[pos] = char(bad[pos] ^ 0x40);
+        write(bad);
+        expect_read_error(f.path(), "corrupt");
+    }
+}
+
+}  // namespace bvhlab::accel
