@@ -66,7 +66,8 @@ expect_error cache-other-config "stale structure file.*asked for" bench "$data/c
 head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
 expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"
 expect_error cache-not-a-tree "not a bvhlab structure file" verify "$data/cornell_box.obj" --structure "$data/cornell_box.obj"
-expect_error kdtree-missing "kd-tree is not implemented" verify "$data/cornell_box.obj" --structure kdtree
+expect_error kdtree-no-cache "kd-trees cannot be saved" build "$data/cornell_box.obj" --structure kdtree --out "$tmp/kd.tree"
+expect_error kdtree-no-gpu-or-bad-stack "kd-stack" verify "$data/cornell_box.obj" --structure kdtree --kd-stack 9
 expect_error builder-and-structure "excludes" verify "$data/cornell_box.obj" --structure sbvh --builder binned
 
 # The good path still works and --json prints parseable lines.

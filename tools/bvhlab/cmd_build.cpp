@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "accel/core/check.h"
 #include "accel/io/tree_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
@@ -11,6 +12,19 @@ namespace bvhlab::cli {
 
 void print_build_table(const Scene& s, const Built& b) {
     const auto& r = b.record;
+    if (b.kd) {
+        std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
+        std::printf("builder      SAH kd-tree (Wald-Havran O(N log N))  build %.1f ms, depth %llu of %d\n",
+                    b.result.build_ms, (unsigned long long)r["depth"].get<uint64_t>(), r["max_depth"].get<int>());
+        std::printf("nodes        %zu (%llu leaves); references %zu (%.3fx the triangles)\n", r["nodes"].get<size_t>(),
+                    (unsigned long long)r["leaves"].get<uint64_t>(), r["references"].get<size_t>(),
+                    r["duplication"].get<double>());
+        std::printf("kd SAH       %.2f (Ct = %g, Ci = %g, empty bonus %g)\n", r["sah"].get<double>(),
+                    r["sah_constants"]["traversal"].get<double>(), r["sah_constants"]["intersection"].get<double>(),
+                    r["sah_constants"]["empty_bonus"].get<double>());
+        std::printf("bytes        %zu; traversal %s\n", r["bytes"].get<size_t>(), b.kernel.c_str());
+        return;
+    }
     std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
     std::printf("builder      %s  build %.1f ms\n", r["builder"].get<std::string>().c_str(), b.result.build_ms);
     std::printf("nodes        %llu (%llu leaves), depth %u\n", (unsigned long long)b.stats.nodes,
@@ -38,6 +52,7 @@ void register_build(CLI::App& app, Globals& g) {
     sub->callback([o, &g] {
         Scene s = load_scene(o->scene, g);
         Built b = build_scene(s, o->build, g);
+        if (!o->out.empty() && b.kd) throw bvhlab::Error("--out: kd-trees cannot be saved as structure files yet");
         if (!o->out.empty()) {
             accel::TreeFileMeta meta{o->build.kind(), o->build.opts, s.mesh.triangle_count(), s.hash};
             if (!o->build.structure_file().empty()) {  // re-saving a loaded file keeps its provenance

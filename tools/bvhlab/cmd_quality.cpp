@@ -57,7 +57,7 @@ void register_quality(CLI::App& app, Globals& g) {
             std::vector<trav::TraversalCounters> c;
             {
                 Stage st(g, std::string("counting traversal work of ") + trav::ray_type_name(t) + " rays");
-                trav::trace_cpu_counted(b.bvh, set.rays, set.query, hits, c);
+                trace_cpu_any(b, set, hits, &c);
             }
             std::vector<uint32_t> nodes(c.size()), leaves(c.size()), tris(c.size());
             for (size_t i = 0; i < c.size(); ++i) {
@@ -67,7 +67,7 @@ void register_quality(CLI::App& app, Globals& g) {
             }
             nlohmann::json j = base_record("ray_cost", s);
             j["structure"] = b.structure;
-            j["kernel"] = "cpu-bvh2-stack";
+            j["kernel"] = b.kernel;
             j["ray_type"] = trav::ray_type_name(t);
             j["rays"] = set.rays.size();
             j["nodes"] = distribution(std::move(nodes));
@@ -75,6 +75,7 @@ void register_quality(CLI::App& app, Globals& g) {
             j["tri_tests"] = distribution(std::move(tris));
             j["sah"] = b.stats.sah;
             j["epo"] = b.record["epo"];
+            if (b.kd) j["sah_constants"] = b.record["sah_constants"];
             j["protocol"] = protocol_json(o->rays.for_scene(s));
             if (g.json) {
                 emit(j);

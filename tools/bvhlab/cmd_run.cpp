@@ -60,7 +60,7 @@ void register_run(CLI::App& app, Globals& g) {
                 std::vector<trav::Hit> hits;
                 nlohmann::json bj = bench_ray_set(s, b, set, trav::ray_type_name(t), o->bench, g, &hits);
                 nlohmann::json vj = verify_ray_set(s, oracle, set, hits, trav::ray_type_name(t), b.structure, o->cc, g,
-                                                   o->bench.device);
+                                                   o->bench.device, b.kernel);
                 bj["protocol"] = vj["protocol"] = protocol_json(o->rays.for_scene(s));
                 if (g.json) {
                     emit(bj);

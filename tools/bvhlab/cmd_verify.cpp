@@ -51,7 +51,7 @@ void register_verify(CLI::App& app, Globals& g) {
         if (file->count()) {
             trav::RaySet set = trav::read_ray_file(o->rays_file);
             std::vector<trav::Hit> ours;
-            std::string structure = "hit-file";
+            std::string structure = "hit-file", kernel = "hit-file";
             if (!o->hits_file.empty()) {
                 trav::HitSet hs = trav::read_hit_file(o->hits_file);
                 if (hs.hits.size() != set.rays.size())
@@ -64,8 +64,9 @@ void register_verify(CLI::App& app, Globals& g) {
                 Built b = build_scene(s, o->build, g);
                 ours = trace_on(b, set, o->device);
                 structure = b.structure;
+                kernel = b.kernel;
             }
-            rows.push_back(verify_ray_set(s, oracle, set, ours, "file", structure, o->cc, g, o->device));
+            rows.push_back(verify_ray_set(s, oracle, set, ours, "file", structure, o->cc, g, o->device, kernel));
         } else {
             o->build.epo = false;
             Built b = build_scene(s, o->build, g);
@@ -74,7 +75,7 @@ void register_verify(CLI::App& app, Globals& g) {
                 trav::RaySet set = proto.make(t);
                 const std::vector<trav::Hit> ours = trace_on(b, set, o->device);
                 rows.push_back(verify_ray_set(s, oracle, set, ours, trav::ray_type_name(t), b.structure, o->cc, g,
-                                              o->device));
+                                              o->device, b.kernel));
                 rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
             }
         }

@@ -200,13 +200,15 @@ void BuildOptions::add_to(CLI::App& app) {
     st->each([this](const std::string& v) {
         if (v == "bvh" || v == "binned") builder = "binned";
         else if (v == "sweep" || v == "sbvh") builder = v;
-        else if (v == "kdtree")
-            throw CLI::ValidationError("--structure kdtree: the SAH kd-tree is not implemented yet (issue 3)");
     });
+    app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
+        ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
+        ->capture_default_str();
 }
 
 std::string BuildOptions::structure_file() const {
-    if (structure.empty() || structure == "bvh" || structure == "binned" || structure == "sweep" || structure == "sbvh")
+    if (structure.empty() || structure == "bvh" || structure == "binned" || structure == "sweep" ||
+        structure == "sbvh" || structure == "kdtree")
         return {};
     return structure;
 }

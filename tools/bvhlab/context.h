@@ -74,8 +74,11 @@ struct BuildOptions {
     std::string structure;
     accel::BuilderOptions opts;
     bool epo = true;
+    int kd_stack = 64;  ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
     std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
     CLI::Option* builder_flag = nullptr;
+
+    bool is_kdtree() const { return structure == "kdtree"; }
 
     void add_to(CLI::App& app);
     accel::BuilderKind kind() const { return accel::parse_builder_kind(builder); }

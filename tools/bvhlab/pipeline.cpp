@@ -5,6 +5,8 @@
 #include <cstdio>
 
 #include "accel/core/check.h"
+#include "accel/builders/kdtree.h"
+#include "traversal/device/kd_traverse.h"
 #include "accel/core/validate.h"
 #include "accel/io/tree_file.h"
 #include "accel/layouts/bvh2_convert.h"
@@ -36,8 +38,63 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     return f;
 }
 
-Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
+/// The kd-tree path of build_scene: kd SAH and sizes (no EPO: it is a BVH figure).
+static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Globals& g) {
     Built b;
+    accel::KdTreeBuilder builder;
+    accel::KdTree tree;
+    {
+        Stage st(g, "building SAH kd-tree over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
+        const auto t0 = std::chrono::steady_clock::now();
+        tree = builder.build(scene.mesh);
+        b.result.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    }
+    uint64_t leaves = 0, depth = 0, max_leaf = 0;
+    std::vector<std::pair<uint32_t, uint32_t>> stack{{0, 0}};
+    while (!stack.empty()) {
+        auto [i, d] = stack.back();
+        stack.pop_back();
+        const accel::KdNode& n = tree.nodes[i];
+        if (n.is_leaf()) {
+            ++leaves;
+            depth = std::max<uint64_t>(depth, d);
+            max_leaf = std::max<uint64_t>(max_leaf, n.count);
+        } else {
+            stack.push_back({n.child, d + 1});
+            stack.push_back({n.child + 1, d + 1});
+        }
+    }
+    b.structure = "kdtree";
+    b.record = base_record("build", scene);
+    b.record["builder"] = "kdtree";
+    b.record["structure"] = "kdtree";
+    b.record["nodes"] = tree.nodes.size();
+    b.record["leaves"] = leaves;
+    b.record["depth"] = depth;
+    b.record["max_depth"] = builder.max_depth_for(scene.mesh.triangle_count());
+    b.record["references"] = tree.prim_indices.size();
+    b.record["mean_leaf_size"] = leaves ? double(tree.prim_indices.size()) / double(leaves) : 0.0;
+    b.record["max_leaf_size"] = max_leaf;
+    b.record["duplication"] = double(tree.prim_indices.size()) / double(scene.mesh.triangle_count());
+    b.record["bytes"] = tree.bytes();
+    b.record["sah"] = accel::kd_sah(tree, builder.config());
+    b.record["sah_constants"] = {{"traversal", builder.config().traversal_cost},
+                                 {"intersection", builder.config().intersection_cost},
+                                 {"empty_bonus", builder.config().empty_bonus}};
+    b.record["epo"] = nullptr;
+    b.record["build_ms"] = b.result.build_ms;
+    b.record["machine"] = machine_description();
+    b.stats.sah = b.record["sah"].get<double>();
+    b.kd = std::make_shared<trav::KdTracer>(std::move(tree), scene.mesh, opts.kd_stack);
+    b.kernel = opts.kd_stack == trav::kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(opts.kd_stack);
+    b.record["kernel"] = b.kernel;
+    return b;
+}
+
+Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
+    if (opts_in.is_kdtree()) return build_kdtree(scene, opts_in, g);
+    Built b;
+    b.kernel = "cpu-bvh2-stack";
     BuildOptions opts = opts_in;
     const std::string file = opts.structure_file();
     if (!file.empty()) {
@@ -78,11 +135,23 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
     return b;
 }
 
-const char* kernel_name(const std::string& device) {
-    return device == "gpu" ? "gpu-bvh2-stack-plain" : "cpu-bvh2-stack";
+std::string kernel_name(const Built& built, const std::string& device) {
+    return device == "gpu" ? "gpu-bvh2-stack-plain" : built.kernel;
+}
+
+void trace_cpu_any(const Built& built, const trav::RaySet& set, std::vector<trav::Hit>& hits,
+                   std::vector<trav::TraversalCounters>* counters) {
+    if (built.kd) {
+        trav::trace_kd_cpu(*built.kd, set.rays, set.query, hits, counters);
+    } else if (counters) {
+        trav::trace_cpu_counted(built.bvh, set.rays, set.query, hits, *counters);
+    } else {
+        trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+    }
 }
 
 static trav::GpuBvh2& gpu_of(Built& built) {
+    if (built.kd) throw Error("--device gpu: kd-trees have no GPU kernel yet; use --device cpu");
     if (!built.gpu) built.gpu = std::make_shared<trav::GpuBvh2>(built.bvh);
     return *built.gpu;
 }
@@ -92,7 +161,7 @@ std::vector<trav::Hit> trace_on(Built& built, const trav::RaySet& set, const std
     if (device == "gpu") {
         gpu_of(built).trace(set.rays, set.query, hits);
     } else {
-        trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+        trace_cpu_any(built, set, hits);
     }
     return hits;
 }
@@ -119,7 +188,7 @@ nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySe
             t = gpu_of(built).trace(set.query);
         } else {
             const auto t0 = std::chrono::steady_clock::now();
-            trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+            trace_cpu_any(built, set, hits);
             t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         }
         if (i >= bs.warmup) ms.push_back(t);
@@ -143,7 +212,7 @@ nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySe
     j["gpu"] = gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr);
     j["driver"] = gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr);
     j["structure"] = built.structure;
-    j["kernel"] = kernel_name(bs.device);
+    j["kernel"] = kernel_name(built, bs.device);
     j["timing"] = gpu ? "kernel only (CUDA events)" : "wall clock of the parallel trace";
     j["machine"] = machine_description();
     if (hits_out) *hits_out = std::move(hits);
@@ -153,7 +222,7 @@ nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySe
 nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
                               const std::vector<trav::Hit>& ours, const std::string& ray_type,
                               const std::string& structure, const trav::CompareConfig& cc, const Globals& g,
-                              const std::string& device) {
+                              const std::string& device, const std::string& kernel) {
     std::vector<trav::Hit> ref;
     trav::CompareReport rep;
     {
@@ -171,7 +240,7 @@ nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& orac
     j["query"] = set.query == trav::Query::kAny ? "any" : "closest";
     j["structure"] = structure;
     j["device"] = device;
-    j["kernel"] = structure == "hit-file" ? "hit-file" : kernel_name(device);
+    j["kernel"] = structure == "hit-file" ? "hit-file" : (device == "gpu" ? "gpu-bvh2-stack-plain" : kernel);
     j["rays"] = rep.rays;
     j["agree"] = rep.agree;
     j["ties"] = rep.ties;

@@ -8,6 +8,7 @@
 #include "accel/layouts/bvh2_node.h"
 #include "tools/bvhlab/context.h"
 #include "traversal/oracle/compare.h"
+#include "traversal/cpu/kd_trace.h"
 #include "traversal/launch.h"
 #include "traversal/oracle/embree_oracle.h"
 
@@ -20,7 +21,13 @@ struct Built {
     std::string structure;  ///< e.g. "bvh2/binned"
     nlohmann::json record;  ///< the "build" JSON line
     std::shared_ptr<trav::GpuBvh2> gpu;  ///< uploaded on first GPU use
+    std::shared_ptr<trav::KdTracer> kd;  ///< set instead of bvh for --structure kdtree
+    std::string kernel;                  ///< CPU kernel name, e.g. cpu-bvh2-stack
 };
+
+/// Traces a set on the CPU with whatever structure `built` holds; fills counters if non-null.
+void trace_cpu_any(const Built& built, const trav::RaySet& set, std::vector<trav::Hit>& hits,
+                   std::vector<trav::TraversalCounters>* counters = nullptr);
 
 /// Builds, validates (throws on an invalid tree), computes statistics and converts to Bvh2.
 Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g);
@@ -34,8 +41,8 @@ struct BenchSettings {
 /// Traces a set once on `device` (cpu or gpu) and returns the hits.
 std::vector<trav::Hit> trace_on(Built& built, const trav::RaySet& set, const std::string& device);
 
-/// Name of the kernel a device runs, for the JSON records.
-const char* kernel_name(const std::string& device);
+/// Name of the kernel that traces `built` on a device, for the JSON records.
+std::string kernel_name(const Built& built, const std::string& device);
 
 /// Adds --device (cpu or gpu).
 void add_device_option(CLI::App& app, std::string& device);
@@ -51,7 +58,7 @@ nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySe
 nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
                               const std::vector<trav::Hit>& ours, const std::string& ray_type,
                               const std::string& structure, const trav::CompareConfig& cc, const Globals& g,
-                              const std::string& device = "cpu");
+                              const std::string& device = "cpu", const std::string& kernel = "cpu-bvh2-stack");
 
 /// Adds --edge-eps and --t-tol.
 void add_compare_options(CLI::App& app, trav::CompareConfig& cc);

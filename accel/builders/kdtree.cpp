@@ -1,0 +1,286 @@
+// SPDX-License-Identifier: MIT
+// O(N log N) SAH kd-tree build (Wald & Havran 2006). Each node keeps its events sorted by
+// (position, axis, type); one sweep finds the best plane on all three axes; triangles are
+// then classified left / right / both, only the straddling ones are clipped to each child's
+// voxel ("perfect splits"), and their few new events are sorted and merged into the already
+// sorted lists of the others. Node events refer to node-local triangle slots, so concurrent
+// subtrees never share state.
+#include "accel/builders/kdtree.h"
+
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "accel/core/check.h"
+#include "accel/core/clip.h"
+
+namespace bvhlab::accel {
+namespace {
+
+enum : uint8_t { kEnd = 0, kPlanar = 1, kStart = 2 };
+
+struct Event {
+    float pos;
+    uint32_t slot;  // node-local triangle slot
+    uint8_t axis;
+    uint8_t type;
+};
+
+bool event_less(const Event& a, const Event& b) {
+    if (a.pos != b.pos) return a.pos < b.pos;
+    if (a.axis != b.axis) return a.axis < b.axis;
+    if (a.type != b.type) return a.type < b.type;
+    return a.slot < b.slot;
+}
+
+void add_events(std::vector<Event>& out, const AABB& b, uint32_t slot) {
+    for (uint8_t k = 0; k < 3; ++k) {
+        if (b.lo[k] == b.hi[k]) {
+            out.push_back({b.lo[k], slot, k, kPlanar});
+        } else {
+            out.push_back({b.lo[k], slot, k, kStart});
+            out.push_back({b.hi[k], slot, k, kEnd});
+        }
+    }
+}
+
+struct KNode {
+    uint32_t axis = 3;
+    float split = 0.0f;
+    std::unique_ptr<KNode> child[2];
+    std::vector<uint32_t> prims;
+};
+
+/// A node's work: its voxel, its triangles (global ids) and their sorted events.
+struct Work {
+    AABB voxel;
+    std::vector<uint32_t> tris;
+    std::vector<Event> events;
+};
+
+struct Plane {
+    float cost = INFINITY;
+    int axis = -1;
+    float pos = 0.0f;
+    bool planar_left = true;
+};
+
+class Recursion {
+public:
+    Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
+        : c_(c), mesh_(mesh), max_depth_(max_depth) {}
+
+    std::unique_ptr<KNode> build(Work w, int depth) {
+        auto node = std::make_unique<KNode>();
+        const auto n = uint32_t(w.tris.size());
+        const Plane p = depth < max_depth_ ? find_plane(w) : Plane{};
+        if (!(p.cost < c_.intersection_cost * float(n))) {
+            node->prims = std::move(w.tris);
+            return node;
+        }
+        Work left, right;
+        split(w, p, left, right);
+        w = Work{};
+        node->axis = uint32_t(p.axis);
+        node->split = p.pos;
+        auto l = [&] { node->child[0] = build(std::move(left), depth + 1); };
+        auto r = [&] { node->child[1] = build(std::move(right), depth + 1); };
+        if (n >= c_.task_threshold) tbb::parallel_invoke(l, r); else { l(); r(); }
+        return node;
+    }
+
+private:
+    float sah(const AABB& v, int k, float pos, uint32_t nl, uint32_t nr, float inv_area) const {
+        AABB vl = v, vr = v;
+        vl.hi[k] = pos;
+        vr.lo[k] = pos;
+        const float cost = c_.traversal_cost +
+                           c_.intersection_cost * (vl.area() * inv_area * float(nl) + vr.area() * inv_area * float(nr));
+        return (nl == 0 || nr == 0) ? cost * (1.0f - c_.empty_bonus) : cost;
+    }
+
+    /// One sweep over the sorted events finds the cheapest plane on all axes.
+    Plane find_plane(const Work& w) const {
+        Plane best;
+        const float area = w.voxel.area();
+        if (!(area > 0.0f) || w.tris.empty()) return best;
+        const float inv_area = 1.0f / area;
+        const auto n = uint32_t(w.tris.size());
+        uint32_t nl[3] = {0, 0, 0}, nr[3] = {n, n, n};
+        const std::vector<Event>& e = w.events;
+        for (size_t i = 0; i < e.size();) {
+            const float pos = e[i].pos;
+            const int k = e[i].axis;
+            uint32_t ends = 0, planars = 0, starts = 0;
+            while (i < e.size() && e[i].axis == k && e[i].pos == pos && e[i].type == kEnd) ++ends, ++i;
+            while (i < e.size() && e[i].axis == k && e[i].pos == pos && e[i].type == kPlanar) ++planars, ++i;
+            while (i < e.size() && e[i].axis == k && e[i].pos == pos && e[i].type == kStart) ++starts, ++i;
+            nr[k] -= planars + ends;
+            // Planes on the voxel's boundary would leave an empty, flat child: skip them.
+            if (pos > w.voxel.lo[k] && pos < w.voxel.hi[k]) {
+                const float cl = sah(w.voxel, k, pos, nl[k] + planars, nr[k], inv_area);
+                const float cr = sah(w.voxel, k, pos, nl[k], nr[k] + planars, inv_area);
+                if (cl < best.cost) best = {cl, k, pos, true};
+                if (cr < best.cost) best = {cr, k, pos, false};
+            }
+            nl[k] += starts + planars;
+        }
+        return best;
+    }
+
+    void split(const Work& w, const Plane& p, Work& left, Work& right) const {
+        enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
+        const size_t n = w.tris.size();
+        std::vector<uint8_t> side(n, kBoth);
+        for (const Event& e : w.events) {
+            if (e.axis != p.axis) continue;
+            if (e.type == kEnd && e.pos <= p.pos) side[e.slot] = kLeftOnly;
+            else if (e.type == kStart && e.pos >= p.pos) side[e.slot] = kRightOnly;
+            else if (e.type == kPlanar) {
+                if (e.pos < p.pos || (e.pos == p.pos && p.planar_left)) side[e.slot] = kLeftOnly;
+                else side[e.slot] = kRightOnly;
+            }
+        }
+        left.voxel = right.voxel = w.voxel;
+        left.voxel.hi[p.axis] = p.pos;
+        right.voxel.lo[p.axis] = p.pos;
+        // Slots of the one-sided triangles in each child, in their old order.
+        constexpr uint32_t kNone = ~0u;
+        std::vector<uint32_t> to_left(n, kNone), to_right(n, kNone);
+        for (size_t s = 0; s < n; ++s) {
+            if (side[s] == kLeftOnly) {
+                to_left[s] = uint32_t(left.tris.size());
+                left.tris.push_back(w.tris[s]);
+            } else if (side[s] == kRightOnly) {
+                to_right[s] = uint32_t(right.tris.size());
+                right.tris.push_back(w.tris[s]);
+            }
+        }
+        // Their events stay sorted: filter and renumber.
+        std::vector<Event> el, er;
+        el.reserve(w.events.size() / 2 + 16);
+        er.reserve(w.events.size() / 2 + 16);
+        for (const Event& e : w.events) {
+            if (side[e.slot] == kLeftOnly) el.push_back({e.pos, to_left[e.slot], e.axis, e.type});
+            else if (side[e.slot] == kRightOnly) er.push_back({e.pos, to_right[e.slot], e.axis, e.type});
+        }
+        // Straddling triangles: clip to each child's voxel, new events, sort, merge.
+        std::vector<Event> nl, nr;
+        for (size_t s = 0; s < n; ++s) {
+            if (side[s] != kBoth) continue;
+            const uint32_t t = w.tris[s];
+            const Vec3 a = mesh_.vertex(t, 0), b = mesh_.vertex(t, 1), c = mesh_.vertex(t, 2);
+            const AABB bl = clip_triangle(a, b, c, left.voxel).bounds;
+            const AABB br = clip_triangle(a, b, c, right.voxel).bounds;
+            if (!bl.is_empty()) {
+                add_events(nl, bl, uint32_t(left.tris.size()));
+                left.tris.push_back(t);
+            }
+            if (!br.is_empty()) {
+                add_events(nr, br, uint32_t(right.tris.size()));
+                right.tris.push_back(t);
+            }
+        }
+        std::sort(nl.begin(), nl.end(), event_less);
+        std::sort(nr.begin(), nr.end(), event_less);
+        left.events.resize(el.size() + nl.size());
+        std::merge(el.begin(), el.end(), nl.begin(), nl.end(), left.events.begin(), event_less);
+        right.events.resize(er.size() + nr.size());
+        std::merge(er.begin(), er.end(), nr.begin(), nr.end(), right.events.begin(), event_less);
+    }
+
+    const KdTreeBuilder::Config& c_;
+    const TriangleMesh& mesh_;
+    const int max_depth_;
+};
+
+KdTree flatten(const KNode& root, const AABB& bounds) {
+    KdTree t;
+    t.bounds = bounds;
+    t.nodes.push_back({});
+    std::vector<std::pair<const KNode*, uint32_t>> stack{{&root, 0}};
+    while (!stack.empty()) {
+        auto [n, d] = stack.back();
+        stack.pop_back();
+        if (n->axis == 3) {
+            t.nodes[d] = {0.0f, 3, uint32_t(t.prim_indices.size()), uint32_t(n->prims.size())};
+            t.prim_indices.insert(t.prim_indices.end(), n->prims.begin(), n->prims.end());
+            continue;
+        }
+        const auto k = uint32_t(t.nodes.size());
+        t.nodes.resize(k + 2);
+        t.nodes[d] = {n->split, n->axis, k, 0};
+        stack.push_back({n->child[1].get(), k + 1});
+        stack.push_back({n->child[0].get(), k});
+    }
+    return t;
+}
+
+void free_tree(std::unique_ptr<KNode> root) {
+    std::vector<std::unique_ptr<KNode>> drop;
+    drop.push_back(std::move(root));
+    while (!drop.empty()) {
+        std::unique_ptr<KNode> n = std::move(drop.back());
+        drop.pop_back();
+        for (auto& c : n->child)
+            if (c) drop.push_back(std::move(c));
+    }
+}
+
+}  // namespace
+
+int KdTreeBuilder::max_depth_for(size_t n) const {
+    if (config_.max_depth >= 0) return std::min(config_.max_depth, 64);
+    return std::min(64, int(8.0 + 1.3 * std::log2(double(std::max<size_t>(n, 1)))));
+}
+
+KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
+    BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
+    BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");
+    BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
+    Work root;
+    root.voxel = mesh.bounds();
+    const size_t n = mesh.triangle_count();
+    root.tris.resize(n);
+    root.events.reserve(6 * n);
+    for (uint32_t t = 0; t < n; ++t) {
+        root.tris[t] = t;
+        add_events(root.events, mesh.triangle_bounds(t), t);
+    }
+    tbb::parallel_sort(root.events.begin(), root.events.end(), event_less);
+    Recursion rec(config_, mesh, max_depth_for(n));
+    const AABB bounds = root.voxel;
+    std::unique_ptr<KNode> tree = rec.build(std::move(root), 0);
+    KdTree out = flatten(*tree, bounds);
+    free_tree(std::move(tree));
+    return out;
+}
+
+double kd_sah(const KdTree& tree, const KdTreeBuilder::Config& c) {
+    if (tree.nodes.empty()) return 0.0;
+    const double root = tree.bounds.area();
+    double sum = 0.0;
+    std::vector<std::pair<uint32_t, AABB>> stack{{0, tree.bounds}};
+    while (!stack.empty()) {
+        auto [i, v] = stack.back();
+        stack.pop_back();
+        const KdNode& n = tree.nodes[i];
+        const double rel = root > 0 ? double(v.area()) / root : 0.0;
+        if (n.is_leaf()) {
+            sum += rel * c.intersection_cost * n.count;
+            continue;
+        }
+        sum += rel * c.traversal_cost;
+        AABB l = v, r = v;
+        l.hi[int(n.axis)] = n.split;
+        r.lo[int(n.axis)] = n.split;
+        stack.push_back({n.child, l});
+        stack.push_back({n.child + 1, r});
+    }
+    return sum;
+}
+
+}  // namespace bvhlab::accel

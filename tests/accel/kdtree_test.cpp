@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: MIT
+// SAH kd-tree: leaves hold every triangle that overlaps their cell, the depth limit holds,
+// short-stack traversal equals full-stack traversal, and hits agree with Embree.
+#include "accel/builders/kdtree.h"
+
+#include <gtest/gtest.h>
+
+#include "accel/core/check.h"
+#include "accel/core/clip.h"
+#include "accel/io/obj_loader.h"
+#include "accel/io/procedural.h"
+#include "tests/support/test_support.h"
+#include "traversal/cpu/kd_trace.h"
+#include "traversal/oracle/compare.h"
+#include "traversal/rays/protocol.h"
+
+namespace bvhlab::accel {
+namespace {
+
+/// Visits every leaf with its cell.
+template <typename F>
+void for_each_leaf(const KdTree& t, F&& f) {
+    std::vector<std::pair<uint32_t, AABB>> stack{{0, t.bounds}};
+    while (!stack.empty()) {
+        auto [i, cell] = stack.back();
+        stack.pop_back();
+        const KdNode& n = t.nodes[i];
+        if (n.is_leaf()) {
+            f(n, cell);
+            continue;
+        }
+        AABB l = cell, r = cell;
+        l.hi[int(n.axis)] = n.split;
+        r.lo[int(n.axis)] = n.split;
+        ASSERT_GE(n.split, cell.lo[int(n.axis)]);
+        ASSERT_LE(n.split, cell.hi[int(n.axis)]);
+        stack.push_back({n.child, l});
+        stack.push_back({n.child + 1, r});
+    }
+}
+
+}  // namespace
+
+TEST(KdTreeBuilder, EveryOverlappingTriangleIsInTheLeaf) {
+    // A soup has no axis-aligned triangles, so "overlaps the cell" is unambiguous.
+    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 1500, 9);
+    KdTree t = KdTreeBuilder().build(m);
+    size_t leaves = 0, checked = 0;
+    std::vector<uint8_t> referenced(m.triangle_count(), 0);
+    for_each_leaf(t, [&](const KdNode& leaf, const AABB& cell) {
+        ++leaves;
+        std::vector<uint8_t> in_leaf(m.triangle_count(), 0);
+        for (uint32_t k = leaf.child; k < leaf.child + leaf.count; ++k) in_leaf[t.prim_indices[k]] = referenced[t.prim_indices[k]] = 1;
+        for (uint32_t i = 0; i < m.triangle_count(); ++i) {
+            if (!m.triangle_bounds(i).overlaps(cell)) continue;
+            const double area = clip_triangle(m.vertex(i, 0), m.vertex(i, 1), m.vertex(i, 2), cell).area;
+            if (area > 1e-12) {
+                ++checked;
+                ASSERT_TRUE(in_leaf[i]) << "triangle " << i << " overlaps a leaf cell (area " << area << ") but is not in it";
+            }
+        }
+    });
+    EXPECT_GT(leaves, 100u);
+    EXPECT_GT(checked, m.triangle_count());
+    for (uint8_t r : referenced) EXPECT_TRUE(r);
+}
+
+TEST(KdTreeBuilder, DepthLimitAndConfig) {
+    TriangleMesh m = make_procedural(ProceduralKind::kStructured, 5000, 2);
+    KdTreeBuilder::Config c;
+    c.max_depth = 6;
+    KdTree t = KdTreeBuilder(c).build(m);
+    int max_depth = 0;
+    std::vector<std::pair<uint32_t, int>> stack{{0, 0}};
+    while (!stack.empty()) {
+        auto [i, d] = stack.back();
+        stack.pop_back();
+        max_depth = std::max(max_depth, d);
+        if (!t.nodes[i].is_leaf()) {
+            stack.push_back({t.nodes[i].child, d + 1});
+            stack.push_back({t.nodes[i].child + 1, d + 1});
+        }
+    }
+    EXPECT_LE(max_depth, 6);
+    EXPECT_EQ(KdTreeBuilder().max_depth_for(1 << 20), 8 + int(1.3 * 20));
+    c = {};
+    c.empty_bonus = 1.0f;
+    EXPECT_THROW(KdTreeBuilder(c).build(m), Error);
+    EXPECT_THROW(KdTreeBuilder().build(TriangleMesh{}), Error);
+    // A single triangle (a flat scene) becomes one leaf.
+    EXPECT_EQ(KdTreeBuilder().build(test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}})).nodes.size(), 1u);
+}
+
+class KdTraversal : public ::testing::TestWithParam<ProceduralKind> {};
+
+TEST_P(KdTraversal, ShortStackEqualsFullStackAndEmbree) {
+    TriangleMesh m = make_procedural(GetParam(), 30000, 4);
+    KdTree t = KdTreeBuilder().build(m);
+    trav::EmbreeOracle oracle(m);
+    trav::ProtocolConfig pc;
+    pc.camera = trav::framing_camera(m);
+    pc.primary = {160, 120, 1, 0};
+    trav::RayProtocol proto(m, oracle, pc);
+    const trav::KdTracer full(t, m, 64);
+    for (int type = 0; type < 4; ++type) {
+        SCOPED_TRACE(trav::ray_type_name(trav::RayType(type)));
+        const trav::RaySet set = proto.make(trav::RayType(type));
+        std::vector<trav::Hit> ref, ours;
+        trace_kd_cpu(full, set.rays, set.query, ours);
+        oracle.trace(set.rays, set.query, ref);
+        const trav::CompareReport rep = trav::compare_hits(m, set.rays, set.query, ours, ref,
+                                                           [&](const trav::Ray& r) { return oracle.intersect(r); });
+        EXPECT_EQ(rep.mismatches, 0u);
+        for (int k = 1; k <= 8; ++k) {
+            const trav::KdTracer shorty(t, m, k);
+            std::vector<trav::Hit> h;
+            trace_kd_cpu(shorty, set.rays, set.query, h);
+            size_t differ = 0;
+            for (size_t i = 0; i < h.size(); ++i)
+                differ += h[i].tri != ours[i].tri || (h[i].is_hit() && h[i].t != ours[i].t);
+            EXPECT_EQ(differ, 0u) << "stack " << k;
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, KdTraversal, ::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured));
+
+TEST(KdTraversal, CornellBoxAgreesWithEmbree) {
+    TriangleMesh m = load_obj(test::data_dir() + "/cornell_box.obj");
+    trav::EmbreeOracle oracle(m);
+    trav::ProtocolConfig pc;
+    pc.camera.eye = {278, 273, -800};
+    pc.camera.target = {278, 273, 0};
+    pc.camera.fov_y_deg = 39.3f;
+    pc.primary = {160, 120, 1, 0};
+    trav::RayProtocol proto(m, oracle, pc);
+    for (int k : {1, 64}) {
+        const trav::KdTracer kd(KdTreeBuilder().build(m), m, k);
+        for (int type = 0; type < 4; ++type) {
+            const trav::RaySet set = proto.make(trav::RayType(type));
+            std::vector<trav::Hit> ours, ref;
+            trace_kd_cpu(kd, set.rays, set.query, ours);
+            oracle.trace(set.rays, set.query, ref);
+            EXPECT_EQ(trav::compare_hits(m, set.rays, set.query, ours, ref,
+                                         [&](const trav::Ray& r) { return oracle.intersect(r); })
+                          .mismatches,
+                      0u);
+        }
+    }
+}
+
+}  // namespace bvhlab::accel
