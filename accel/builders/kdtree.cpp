@@ -29,12 +29,17 @@ struct Event {
     uint8_t type;
 };
 
-bool event_less(const Event& a, const Event& b) {
-    if (a.pos != b.pos) return a.pos < b.pos;
-    if (a.axis != b.axis) return a.axis < b.axis;
-    if (a.type != b.type) return a.type < b.type;
-    return a.slot < b.slot;
-}
+/// Event order: position, axis, type (end < planar < start), slot. A functor, so sort and
+/// merge inline it (as a function pointer it cost ~10% of the build).
+struct EventLess {
+    bool operator()(const Event& a, const Event& b) const {
+        if (a.pos != b.pos) return a.pos < b.pos;
+        if (a.axis != b.axis) return a.axis < b.axis;
+        if (a.type != b.type) return a.type < b.type;
+        return a.slot < b.slot;
+    }
+};
+constexpr EventLess event_less{};
 
 void add_events(std::vector<Event>& out, const AABB& b, uint32_t slot) {
     for (uint8_t k = 0; k < 3; ++k) {
@@ -169,6 +174,9 @@ private:
         }
         // Straddling triangles: clip to each child's voxel, new events, sort, merge.
         std::vector<Event> nl, nr;
+        const size_t both = n - left.tris.size() - right.tris.size();
+        nl.reserve(6 * both);
+        nr.reserve(6 * both);
         for (size_t s = 0; s < n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
