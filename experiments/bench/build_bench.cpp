@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "accel/builders/builder.h"
+#include "accel/builders/kdtree.h"
 #include "accel/core/stats.h"
 #include "accel/core/validate.h"
 #include "experiments/bench/bench_common.h"
@@ -19,7 +20,9 @@ void bm_build(benchmark::State& state, accel::BuilderKind kind, std::shared_ptr<
         benchmark::DoNotOptimize(last.tree.nodes.data());
     }
     // Check the result before trusting the time; then the quality figures (untimed).
-    const std::string err = accel::validate(last.tree, *mesh, opts.config);
+    accel::ValidateOptions vo;
+    vo.allow_duplicates = kind == accel::BuilderKind::kSbvh;
+    const std::string err = accel::validate(last.tree, *mesh, opts.config, vo);
     if (!err.empty()) {
         state.SkipWithError(("invalid tree: " + err).c_str());
         return;
@@ -34,6 +37,24 @@ void bm_build(benchmark::State& state, accel::BuilderKind kind, std::shared_ptr<
     state.counters["references"] = double(s.references);
     state.counters["bytes"] = double(s.bytes);
     state.counters["depth"] = double(s.depth);
+    state.counters["duplication"] = double(s.references) / double(mesh->triangle_count());
+}
+
+/// kd-tree builds: kd SAH with the kd constants, nodes, references, bytes.
+void bm_build_kd(benchmark::State& state, std::shared_ptr<accel::TriangleMesh> mesh) {
+    accel::KdTreeBuilder builder;
+    accel::KdTree last;
+    for (auto _ : state) {
+        last = builder.build(*mesh);
+        benchmark::DoNotOptimize(last.nodes.data());
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(mesh->triangle_count()));
+    state.counters["triangles"] = double(mesh->triangle_count());
+    state.counters["kd_sah"] = accel::kd_sah(last, builder.config());
+    state.counters["nodes"] = double(last.nodes.size());
+    state.counters["references"] = double(last.prim_indices.size());
+    state.counters["bytes"] = double(last.bytes());
+    state.counters["duplication"] = double(last.prim_indices.size()) / double(mesh->triangle_count());
 }
 
 }  // namespace
@@ -45,12 +66,16 @@ int main(int argc, char** argv) {
         // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
         auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
         auto load = scene.load;
-        for (auto kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep}) {
+        for (auto kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh}) {
             const std::string name = std::string("BM_Build/") + accel::builder_name(kind) + "/" + scene.name;
             benchmark::RegisterBenchmark(name.c_str(), [holder, load, kind](benchmark::State& st) {
                 if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
                 bench::bm_build(st, kind, *holder);
             })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
         }
+        benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(), [holder, load](benchmark::State& st) {
+            if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+            bench::bm_build_kd(st, *holder);
+        })->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
     });
 }
