@@ -14,6 +14,7 @@
 #include <cmath>
 #include <memory>
 
+#include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
 
@@ -227,17 +228,6 @@ KdTree flatten(const KNode& root, const AABB& bounds) {
     return t;
 }
 
-void free_tree(std::unique_ptr<KNode> root) {
-    std::vector<std::unique_ptr<KNode>> drop;
-    drop.push_back(std::move(root));
-    while (!drop.empty()) {
-        std::unique_ptr<KNode> n = std::move(drop.back());
-        drop.pop_back();
-        for (auto& c : n->child)
-            if (c) drop.push_back(std::move(c));
-    }
-}
-
 }  // namespace
 
 int KdTreeBuilder::max_depth_for(size_t n) const {
@@ -263,7 +253,7 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     const AABB bounds = root.voxel;
     std::unique_ptr<KNode> tree = rec.build(std::move(root), 0);
     KdTree out = flatten(*tree, bounds);
-    free_tree(std::move(tree));
+    destroy_iteratively(std::move(tree));
     return out;
 }
 

@@ -276,15 +276,7 @@ BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
     Recursion rec(config_, mesh, bounds.half_area());
     std::unique_ptr<TNode> root = rec.build(std::move(refs), bounds, 0);
     BuildTree t = flatten(*root);
-    // Free the pointer tree iteratively: a recursive destructor could overflow on deep trees.
-    std::vector<std::unique_ptr<TNode>> drop;
-    drop.push_back(std::move(root));
-    while (!drop.empty()) {
-        std::unique_ptr<TNode> n = std::move(drop.back());
-        drop.pop_back();
-        for (auto& c : n->child)
-            if (c) drop.push_back(std::move(c));
-    }
+    destroy_iteratively(std::move(root));
     return t;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "accel/core/build_tree.h"
@@ -41,5 +42,19 @@ enum class SplitDecision { kLeaf, kSplit, kMedian };
 /// The leaf policy both SAH builders use. `best_split_cost` is +inf when no split separates
 /// the references. Forces a median split when SAH splits could push the tree past max_depth.
 SplitDecision decide_split(const BuildConfig& c, uint32_t count, uint32_t depth, float best_split_cost);
+
+/// Frees a pointer tree (nodes with `std::unique_ptr<Node> child[2]`) without recursion: the
+/// recursive destructor could overflow the stack on a deep tree.
+template <typename Node>
+void destroy_iteratively(std::unique_ptr<Node> root) {
+    std::vector<std::unique_ptr<Node>> drop;
+    drop.push_back(std::move(root));
+    while (!drop.empty()) {
+        std::unique_ptr<Node> n = std::move(drop.back());
+        drop.pop_back();
+        for (auto& c : n->child)
+            if (c) drop.push_back(std::move(c));
+    }
+}
 
 }  // namespace bvhlab::accel
