@@ -38,6 +38,7 @@ BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const Builde
         c.object_bins = options.num_bins;
         c.alpha = options.sbvh_alpha;
         c.reference_budget = options.sbvh_budget;
+        c.spatial_bins = options.sbvh_spatial_bins;
         r.tree = SbvhBuilder(c).build(mesh);
     }
     r.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

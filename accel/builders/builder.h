@@ -23,6 +23,7 @@ struct BuilderOptions {
     int num_bins = BinnedSahBuilder::Config{}.num_bins;
     float sbvh_alpha = 1e-5f;
     float sbvh_budget = 2.0f;
+    int sbvh_spatial_bins = 32;
 };
 
 struct BuildResult {

@@ -29,7 +29,8 @@ struct Header {
     float traversal_cost, intersection_cost, sbvh_alpha, sbvh_budget;
     uint64_t node_count;     // BuildNode records (32 bytes each) that follow
     uint64_t index_count;    // uint32 primitive indices that follow the nodes
-    uint64_t reserved;       // 0
+    uint32_t spatial_bins;   // SBVH spatial bins
+    uint32_t reserved;       // 0
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
@@ -47,7 +48,8 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
       << " max_depth=" << o.config.max_depth << " Ct=" << o.config.traversal_cost
       << " Ci=" << o.config.intersection_cost;
     if (kind != BuilderKind::kSweep) s << " bins=" << o.num_bins;
-    if (kind == BuilderKind::kSbvh) s << " alpha=" << o.sbvh_alpha << " budget=" << o.sbvh_budget;
+    if (kind == BuilderKind::kSbvh)
+        s << " alpha=" << o.sbvh_alpha << " budget=" << o.sbvh_budget << " spatial_bins=" << o.sbvh_spatial_bins;
     return s.str();
 }
 
@@ -67,6 +69,7 @@ void write_tree_file(const std::string& path, const BuildTree& tree, const TreeF
     h.intersection_cost = c.intersection_cost;
     h.sbvh_alpha = meta.options.sbvh_alpha;
     h.sbvh_budget = meta.options.sbvh_budget;
+    h.spatial_bins = uint32_t(meta.options.sbvh_spatial_bins);
     h.node_count = tree.nodes.size();
     h.index_count = tree.prim_indices.size();
     uint64_t sum = fnv1a(&h, sizeof h);
@@ -127,6 +130,7 @@ TreeFile read_tree_file(const std::string& path) {
     o.config.intersection_cost = h.intersection_cost;
     o.sbvh_alpha = h.sbvh_alpha;
     o.sbvh_budget = h.sbvh_budget;
+    o.sbvh_spatial_bins = int(h.spatial_bins);
     return f;
 }
 

@@ -195,6 +195,9 @@ void BuildOptions::add_to(CLI::App& app) {
         app.add_option("--budget", opts.sbvh_budget, "SBVH: at most this many references per triangle in all")
             ->check(CLI::Range(1.0, 16.0))
             ->capture_default_str(),
+        app.add_option("--spatial-bins", opts.sbvh_spatial_bins, "SBVH: bins per axis for spatial splits")
+            ->check(CLI::Range(2, 256))
+            ->capture_default_str(),
     };
     // --structure NAME picks the builder; a path is checked when the command runs.
     st->each([this](const std::string& v) {

@@ -31,6 +31,7 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     if (flags[2]->count()) asked.config.min_leaf_size = given.config.min_leaf_size;
     if (flags[3]->count()) asked.sbvh_alpha = given.sbvh_alpha;
     if (flags[4]->count()) asked.sbvh_budget = given.sbvh_budget;
+    if (flags[5]->count()) asked.sbvh_spatial_bins = given.sbvh_spatial_bins;
     const std::string have = accel::describe_config(f.meta.builder, f.meta.options);
     const std::string want = accel::describe_config(f.meta.builder, asked);
     if (have != want)
