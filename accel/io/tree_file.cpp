@@ -22,7 +22,7 @@ namespace {
 struct Header {
     char magic[8];           // "BVHLTREE"
     uint32_t version;        // kTreeFileVersion
-    uint32_t builder;        // BuilderKind
+    uint32_t builder;        // BuilderKind, or kKdTreeCode
     uint64_t triangles;      // triangle count of the scene
     uint64_t scene_hash;     // scene_hash() as a number
     uint32_t num_bins, min_leaf, max_leaf, max_depth;
@@ -34,9 +34,37 @@ struct Header {
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
+constexpr uint32_t kKdTreeCode = 3;  // builder field of kd-tree files
+
 uint64_t fnv1a(const void* data, size_t n, uint64_t h = 1469598103934665603ull) {
     const auto* p = static_cast<const unsigned char*>(data);
     for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+/// Header, node records, indices, checksum; shared by BVH and kd-tree files.
+template <typename Node>
+void write_file(const std::string& path, Header h, const std::vector<Node>& nodes, const std::vector<uint32_t>& indices) {
+    std::memcpy(h.magic, "BVHLTREE", 8);
+    h.version = kTreeFileVersion;
+    h.node_count = nodes.size();
+    h.index_count = indices.size();
+    uint64_t sum = fnv1a(&h, sizeof h);
+    sum = fnv1a(nodes.data(), nodes.size() * sizeof(Node), sum);
+    sum = fnv1a(indices.data(), indices.size() * sizeof(uint32_t), sum);
+    std::ofstream out(path, std::ios::binary);
+    if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    out.write(reinterpret_cast<const char*>(&h), sizeof h);
+    out.write(reinterpret_cast<const char*>(nodes.data()), std::streamsize(nodes.size() * sizeof(Node)));
+    out.write(reinterpret_cast<const char*>(indices.data()), std::streamsize(indices.size() * sizeof(uint32_t)));
+    out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
+    if (!out.flush()) throw Error("cannot write '" + path + "': write failed");
+}
+
+Header provenance(const TreeFileMeta& meta) {
+    Header h{};
+    h.triangles = meta.triangles;
+    h.scene_hash = std::strtoull(meta.scene_hash.c_str(), nullptr, 16);
     return h;
 }
 
@@ -54,12 +82,8 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
 }
 
 void write_tree_file(const std::string& path, const BuildTree& tree, const TreeFileMeta& meta) {
-    Header h{};
-    std::memcpy(h.magic, "BVHLTREE", 8);
-    h.version = kTreeFileVersion;
+    Header h = provenance(meta);
     h.builder = uint32_t(meta.builder);
-    h.triangles = meta.triangles;
-    h.scene_hash = std::strtoull(meta.scene_hash.c_str(), nullptr, 16);
     const BuildConfig& c = meta.options.config;
     h.num_bins = uint32_t(meta.options.num_bins);
     h.min_leaf = c.min_leaf_size;
@@ -70,19 +94,19 @@ void write_tree_file(const std::string& path, const BuildTree& tree, const TreeF
     h.sbvh_alpha = meta.options.sbvh_alpha;
     h.sbvh_budget = meta.options.sbvh_budget;
     h.spatial_bins = uint32_t(meta.options.sbvh_spatial_bins);
-    h.node_count = tree.nodes.size();
-    h.index_count = tree.prim_indices.size();
-    uint64_t sum = fnv1a(&h, sizeof h);
-    sum = fnv1a(tree.nodes.data(), tree.nodes.size() * sizeof(BuildNode), sum);
-    sum = fnv1a(tree.prim_indices.data(), tree.prim_indices.size() * sizeof(uint32_t), sum);
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
-    out.write(reinterpret_cast<const char*>(&h), sizeof h);
-    out.write(reinterpret_cast<const char*>(tree.nodes.data()), std::streamsize(tree.nodes.size() * sizeof(BuildNode)));
-    out.write(reinterpret_cast<const char*>(tree.prim_indices.data()),
-              std::streamsize(tree.prim_indices.size() * sizeof(uint32_t)));
-    out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
-    if (!out.flush()) throw Error("cannot write '" + path + "': write failed");
+    write_file(path, h, tree.nodes, tree.prim_indices);
+}
+
+void write_kd_file(const std::string& path, const KdTree& tree, const TreeFileMeta& meta) {
+    BVHLAB_CHECK(meta.kdtree, "write_kd_file needs kd-tree metadata");
+    Header h = provenance(meta);
+    h.builder = kKdTreeCode;
+    // kd-tree files reuse the cost fields for the kd constants and alpha's for the bonus.
+    h.traversal_cost = meta.kd.traversal_cost;
+    h.intersection_cost = meta.kd.intersection_cost;
+    h.sbvh_alpha = meta.kd.empty_bonus;
+    h.max_depth = uint32_t(meta.kd.max_depth);
+    write_file(path, h, tree.nodes, tree.prim_indices);
 }
 
 TreeFile read_tree_file(const std::string& path) {
@@ -98,24 +122,41 @@ TreeFile read_tree_file(const std::string& path) {
     if (h.version != kTreeFileVersion)
         throw Error("structure file '" + path + "' has version " + std::to_string(h.version) +
                     "; this build reads version " + std::to_string(kTreeFileVersion));
-    if (h.builder > uint32_t(BuilderKind::kSbvh))
+    if (h.builder > uint32_t(BuilderKind::kSbvh) && h.builder != kKdTreeCode)
         throw Error("structure file '" + path + "' names an unknown builder (" + std::to_string(h.builder) + ")");
-    const uint64_t expect = sizeof h + h.node_count * sizeof(BuildNode) + h.index_count * 4 + 8;
+    const bool kd = h.builder == kKdTreeCode;
+    const uint64_t node_bytes = kd ? sizeof(KdNode) : sizeof(BuildNode);
+    const uint64_t expect = sizeof h + h.node_count * node_bytes + h.index_count * 4 + 8;
     if (h.node_count > (1ull << 34) || h.index_count > (1ull << 34) || size != expect)
         throw Error("structure file '" + path + "' is truncated or has trailing bytes: expected " +
                     std::to_string(expect) + " bytes, found " + std::to_string(size));
     TreeFile f;
-    f.tree.nodes.resize(h.node_count);
-    f.tree.prim_indices.resize(h.index_count);
+    void* nodes = nullptr;
+    std::vector<uint32_t>& indices = kd ? f.kd.prim_indices : f.tree.prim_indices;
+    if (kd) {
+        f.kd.nodes.resize(h.node_count);
+        nodes = f.kd.nodes.data();
+    } else {
+        f.tree.nodes.resize(h.node_count);
+        nodes = f.tree.nodes.data();
+    }
+    indices.resize(h.index_count);
     uint64_t stored = 0;
-    in.read(reinterpret_cast<char*>(f.tree.nodes.data()), std::streamsize(h.node_count * sizeof(BuildNode)));
-    in.read(reinterpret_cast<char*>(f.tree.prim_indices.data()), std::streamsize(h.index_count * 4));
+    in.read(static_cast<char*>(nodes), std::streamsize(h.node_count * node_bytes));
+    in.read(reinterpret_cast<char*>(indices.data()), std::streamsize(h.index_count * 4));
     in.read(reinterpret_cast<char*>(&stored), sizeof stored);
     if (!in) throw Error("cannot read structure file '" + path + "'");
     uint64_t sum = fnv1a(&h, sizeof h);
-    sum = fnv1a(f.tree.nodes.data(), f.tree.nodes.size() * sizeof(BuildNode), sum);
-    sum = fnv1a(f.tree.prim_indices.data(), f.tree.prim_indices.size() * 4, sum);
+    sum = fnv1a(nodes, h.node_count * node_bytes, sum);
+    sum = fnv1a(indices.data(), indices.size() * 4, sum);
     if (sum != stored) throw Error("structure file '" + path + "' is corrupt: checksum mismatch");
+    if (kd) {
+        f.meta.kdtree = true;
+        f.meta.kd.traversal_cost = h.traversal_cost;
+        f.meta.kd.intersection_cost = h.intersection_cost;
+        f.meta.kd.empty_bonus = h.sbvh_alpha;
+        f.meta.kd.max_depth = int(h.max_depth);
+    }
     f.meta.builder = BuilderKind(h.builder);
     f.meta.triangles = h.triangles;
     char hex[17];
@@ -132,6 +173,14 @@ TreeFile read_tree_file(const std::string& path) {
     o.sbvh_budget = h.sbvh_budget;
     o.sbvh_spatial_bins = int(h.spatial_bins);
     return f;
+}
+
+std::string describe_config(const TreeFileMeta& meta) {
+    if (!meta.kdtree) return describe_config(meta.builder, meta.options);
+    std::ostringstream s;
+    s << "kdtree Ct=" << meta.kd.traversal_cost << " Ci=" << meta.kd.intersection_cost
+      << " empty_bonus=" << meta.kd.empty_bonus << " max_depth=" << meta.kd.max_depth;
+    return s.str();
 }
 
 std::string stale_reason(const TreeFileMeta& meta, uint64_t triangles, const std::string& scene_hash) {

@@ -94,4 +94,29 @@ TEST(TreeFile, DamagedFiles) {
     }
 }
 
+TEST(TreeFile, KdTreeRoundTripAndCorruption) {
+    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 3000, 8);
+    KdTreeBuilder::Config c;
+    c.empty_bonus = 0.3f;
+    KdTree kd = KdTreeBuilder(c).build(m);
+    TreeFileMeta meta;
+    meta.kdtree = true;
+    meta.kd = c;
+    meta.triangles = m.triangle_count();
+    meta.scene_hash = scene_hash(m);
+    test::TempFile f("kd.tree");
+    write_kd_file(f.path(), kd, meta);
+    TreeFile r = read_tree_file(f.path());
+    ASSERT_TRUE(r.meta.kdtree);
+    EXPECT_EQ(r.meta.kd.empty_bonus, 0.3f);
+    EXPECT_EQ(describe_config(r.meta), describe_config(meta));
+    EXPECT_EQ(r.kd.prim_indices, kd.prim_indices);
+    ASSERT_EQ(r.kd.nodes.size(), kd.nodes.size());
+    EXPECT_EQ(std::memcmp(r.kd.nodes.data(), kd.nodes.data(), kd.nodes.size() * sizeof(KdNode)), 0);
+    std::string bad = bytes_of(f.path());
+    bad[bad.size() / 2] = char(bad[bad.size() / 2] ^ 1);
+    std::ofstream(f.path(), std::ios::binary) << bad;
+    expect_read_error(f.path(), "corrupt");
+}
+
 }  // namespace bvhlab::accel

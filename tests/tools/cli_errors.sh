@@ -66,7 +66,8 @@ expect_error cache-other-config "stale structure file.*asked for" bench "$data/c
 head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
 expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"
 expect_error cache-not-a-tree "not a bvhlab structure file" verify "$data/cornell_box.obj" --structure "$data/cornell_box.obj"
-expect_error kdtree-no-cache "kd-trees cannot be saved" build "$data/cornell_box.obj" --structure kdtree --out "$tmp/kd.tree"
+"$bin" -q build "$data/cornell_box.obj" --structure kdtree --out "$tmp/kd.tree" >/dev/null
+expect_error kd-cache-bvh-option "holds a kdtree.*--bins" verify "$data/cornell_box.obj" --structure "$tmp/kd.tree" --bins 8
 expect_error kdtree-no-gpu-or-bad-stack "kd-stack" verify "$data/cornell_box.obj" --structure kdtree --kd-stack 9
 expect_error builder-and-structure "excludes" verify "$data/cornell_box.obj" --structure sbvh --builder binned
 
@@ -88,6 +89,12 @@ if "$bin" -q verify "$data/cornell_box.obj" --structure "$tmp/cb.tree" --width 3
     pass=$((pass + 1))
 else
     fail=$((fail + 1)); echo "FAIL verify from a structure file"
+fi
+
+if "$bin" -q verify "$data/cornell_box.obj" --structure "$tmp/kd.tree" --kd-stack 1 --width 32 --height 24 --json | python3 -c 'import json,sys; rows=[json.loads(l) for l in sys.stdin]; assert len(rows)==4 and all(r["mismatches"]==0 and r["kernel"]=="cpu-kd-shortstack-1" for r in rows)'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL verify from a kd-tree structure file"
 fi
 
 echo "$pass passed, $fail failed"

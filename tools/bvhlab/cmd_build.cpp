@@ -52,14 +52,21 @@ void register_build(CLI::App& app, Globals& g) {
     sub->callback([o, &g] {
         Scene s = load_scene(o->scene, g);
         Built b = build_scene(s, o->build, g);
-        if (!o->out.empty() && b.kd) throw bvhlab::Error("--out: kd-trees cannot be saved as structure files yet");
         if (!o->out.empty()) {
-            accel::TreeFileMeta meta{o->build.kind(), o->build.opts, s.mesh.triangle_count(), s.hash};
+            accel::TreeFileMeta meta;
+            meta.triangles = s.mesh.triangle_count();
+            meta.scene_hash = s.hash;
             if (!o->build.structure_file().empty()) {  // re-saving a loaded file keeps its provenance
-                const accel::TreeFile f = accel::read_tree_file(o->build.structure_file());
-                meta = f.meta;
+                meta = accel::read_tree_file(o->build.structure_file()).meta;
+            } else if (b.kd) {
+                meta.kdtree = true;
+                meta.kd = accel::KdTreeBuilder::Config{};
+            } else {
+                meta.builder = o->build.kind();
+                meta.options = o->build.opts;
             }
-            accel::write_tree_file(o->out, b.result.tree, meta);
+            if (b.kd) accel::write_kd_file(o->out, b.kd->tree, meta);
+            else accel::write_tree_file(o->out, b.result.tree, meta);
             b.record["structure_file"] = o->out;
         }
         if (g.json) emit(b.record); else print_build_table(s, b);

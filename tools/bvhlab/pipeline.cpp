@@ -22,6 +22,13 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     accel::TreeFile f = accel::read_tree_file(file);
     const std::string stale = accel::stale_reason(f.meta, scene.mesh.triangle_count(), scene.hash);
     if (!stale.empty()) throw Error("stale structure file '" + file + "': " + stale);
+    if (f.meta.kdtree) {
+        for (const CLI::Option* flag : opts.config_flags)
+            if (flag->count())
+                throw Error("stale structure file '" + file + "': it holds a " + accel::describe_config(f.meta) +
+                            ", but BVH option " + flag->get_name() + " was given");
+        return f;
+    }
     accel::BuilderOptions asked = f.meta.options;
     const accel::BuilderOptions& given = opts.opts;
     // Only what the user said explicitly must match; everything else comes from the file.
@@ -39,17 +46,31 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     return f;
 }
 
-/// The kd-tree path of build_scene: kd SAH and sizes (no EPO: it is a BVH figure).
-static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Globals& g) {
+/// The kd-tree path of build_scene: kd SAH and sizes (no EPO: it is a BVH figure). Uses the
+/// tree of a loaded structure file when `cached` is given.
+static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Globals& g, accel::TreeFile* cached,
+                          const std::string& file) {
     Built b;
-    accel::KdTreeBuilder builder;
+    accel::KdTreeBuilder builder(cached ? cached->meta.kd : accel::KdTreeBuilder::Config{});
     accel::KdTree tree;
-    {
+    if (cached) {
+        tree = std::move(cached->kd);
+        tree.bounds = scene.mesh.bounds();  // not stored: the scene hash guarantees the same box
+    } else {
         Stage st(g, "building SAH kd-tree over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
         const auto t0 = std::chrono::steady_clock::now();
         tree = builder.build(scene.mesh);
         b.result.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     }
+    // A loaded file is checked before use: indices in range, children inside the array.
+    for (const accel::KdNode& n : tree.nodes) {
+        const bool ok = n.is_leaf() ? size_t(n.child) + n.count <= tree.prim_indices.size()
+                                    : (n.axis < 3 && size_t(n.child) + 1 < tree.nodes.size());
+        if (!ok) throw Error("structure file '" + file + "' holds an invalid kd-tree (node out of range)");
+    }
+    for (uint32_t id : tree.prim_indices)
+        if (id >= scene.mesh.triangle_count())
+            throw Error("structure file '" + file + "' holds an invalid kd-tree (triangle id out of range)");
     uint64_t leaves = 0, depth = 0, max_leaf = 0;
     std::vector<std::pair<uint32_t, uint32_t>> stack{{0, 0}};
     while (!stack.empty()) {
@@ -89,17 +110,19 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
     b.kd = std::make_shared<trav::KdTracer>(std::move(tree), scene.mesh, opts.kd_stack);
     b.kernel = opts.kd_stack == trav::kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(opts.kd_stack);
     b.record["kernel"] = b.kernel;
+    if (cached) b.record["structure_file"] = file;
     return b;
 }
 
 Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
-    if (opts_in.is_kdtree()) return build_kdtree(scene, opts_in, g);
+    if (opts_in.is_kdtree()) return build_kdtree(scene, opts_in, g, nullptr, "");
     Built b;
     b.kernel = "cpu-bvh2-stack";
     BuildOptions opts = opts_in;
     const std::string file = opts.structure_file();
     if (!file.empty()) {
         accel::TreeFile f = load_cached(scene, opts, file, g);
+        if (f.meta.kdtree) return build_kdtree(scene, opts, g, &f, file);
         opts.builder = accel::builder_name(f.meta.builder);
         opts.opts = f.meta.options;
         b.result.tree = std::move(f.tree);
