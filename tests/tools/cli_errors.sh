@@ -68,6 +68,8 @@ expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --struct
 expect_error cache-not-a-tree "not a bvhlab structure file" verify "$data/cornell_box.obj" --structure "$data/cornell_box.obj"
 "$bin" -q build "$data/cornell_box.obj" --structure kdtree --out "$tmp/kd.tree" >/dev/null
 expect_error kd-cache-bvh-option "holds a kdtree.*--bins" verify "$data/cornell_box.obj" --structure "$tmp/kd.tree" --bins 8
+expect_error kd-cache-other-ci "stale structure file.*Ci=5" verify "$data/cornell_box.obj" --structure "$tmp/kd.tree" --kd-ci 5
+expect_error kd-bad-bonus "kd-bonus" build "$data/cornell_box.obj" --structure kdtree --kd-bonus 1.5
 expect_error kdtree-no-gpu-or-bad-stack "kd-stack" verify "$data/cornell_box.obj" --structure kdtree --kd-stack 9
 expect_error builder-and-structure "excludes" verify "$data/cornell_box.obj" --structure sbvh --builder binned
 

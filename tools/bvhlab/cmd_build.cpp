@@ -60,7 +60,7 @@ void register_build(CLI::App& app, Globals& g) {
                 meta = accel::read_tree_file(o->build.structure_file()).meta;
             } else if (b.kd) {
                 meta.kdtree = true;
-                meta.kd = accel::KdTreeBuilder::Config{};
+                meta.kd = o->build.kd;
             } else {
                 meta.builder = o->build.kind();
                 meta.options = o->build.opts;

@@ -207,6 +207,20 @@ void BuildOptions::add_to(CLI::App& app) {
     app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
         ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
         ->capture_default_str();
+    kd_flags = {
+        app.add_option("--kd-ct", kd.traversal_cost, "kd-tree SAH: cost of a traversal step (Wald-Havran K_T)")
+            ->check(CLI::Range(0.001, 1e6))
+            ->capture_default_str(),
+        app.add_option("--kd-ci", kd.intersection_cost, "kd-tree SAH: cost of a triangle test (K_I)")
+            ->check(CLI::Range(0.001, 1e6))
+            ->capture_default_str(),
+        app.add_option("--kd-bonus", kd.empty_bonus, "kd-tree SAH: cost reduction for a split with an empty side")
+            ->check(CLI::Range(0.0, 0.99))
+            ->capture_default_str(),
+        app.add_option("--kd-max-depth", kd.max_depth, "kd-tree depth limit; -1 = 8 + 1.3 log2(N), at most 64")
+            ->check(CLI::Range(-1, 64))
+            ->capture_default_str(),
+    };
 }
 
 std::string BuildOptions::structure_file() const {

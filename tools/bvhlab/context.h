@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "accel/builders/builder.h"
+#include "accel/builders/kdtree.h"
 #include "accel/core/mesh.h"
 #include "accel/core/stats.h"
 #include "traversal/rays/protocol.h"
@@ -75,6 +76,8 @@ struct BuildOptions {
     accel::BuilderOptions opts;
     bool epo = true;
     int kd_stack = 64;  ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
+    accel::KdTreeBuilder::Config kd;            ///< kd-tree build constants (--kd-*)
+    std::vector<CLI::Option*> kd_flags;         ///< kd flags whose explicit values a cache must match
     std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
     CLI::Option* builder_flag = nullptr;
 

@@ -27,6 +27,14 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
             if (flag->count())
                 throw Error("stale structure file '" + file + "': it holds a " + accel::describe_config(f.meta) +
                             ", but BVH option " + flag->get_name() + " was given");
+        accel::TreeFileMeta asked = f.meta;
+        if (opts.kd_flags[0]->count()) asked.kd.traversal_cost = opts.kd.traversal_cost;
+        if (opts.kd_flags[1]->count()) asked.kd.intersection_cost = opts.kd.intersection_cost;
+        if (opts.kd_flags[2]->count()) asked.kd.empty_bonus = opts.kd.empty_bonus;
+        if (opts.kd_flags[3]->count()) asked.kd.max_depth = opts.kd.max_depth;
+        if (accel::describe_config(asked) != accel::describe_config(f.meta))
+            throw Error("stale structure file '" + file + "': it was built with " + accel::describe_config(f.meta) +
+                        ", but " + accel::describe_config(asked) + " was asked for");
         return f;
     }
     accel::BuilderOptions asked = f.meta.options;
@@ -51,7 +59,7 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
 static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Globals& g, accel::TreeFile* cached,
                           const std::string& file) {
     Built b;
-    accel::KdTreeBuilder builder(cached ? cached->meta.kd : accel::KdTreeBuilder::Config{});
+    accel::KdTreeBuilder builder(cached ? cached->meta.kd : opts.kd);
     accel::KdTree tree;
     if (cached) {
         tree = std::move(cached->kd);
