@@ -4,24 +4,28 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "accel/builders/builder.h"
+#include "accel/builders/kdtree.h"
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
+#include "traversal/cpu/kd_trace.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
 
 namespace bvhlab::trav {
 namespace {
 
-/// Traces all four ray types with the given builder and expects zero real mismatches.
-void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
-                      accel::BuilderKind builder) {
-    accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
+using Tracer = std::function<void(const RaySet&, std::vector<Hit>&)>;
+
+/// Traces all four ray types with `trace` and expects zero real mismatches.
+void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w,
+                           uint32_t h, const Tracer& trace) {
     EmbreeOracle oracle(mesh);
     ProtocolConfig cfg;
     cfg.camera = cam;
@@ -32,7 +36,7 @@ void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float 
         SCOPED_TRACE(ray_type_name(t));
         RaySet set = proto.make(t);
         std::vector<Hit> ours, ref;
-        trace_cpu(bvh, set.rays, set.query, ours);
+        trace(set, ours);
         oracle.trace(set.rays, set.query, ref);
         CompareReport rep = compare_hits(mesh, set.rays, set.query, ours, ref,
                                          [&](const Ray& r) { return oracle.intersect(r); });
@@ -45,6 +49,14 @@ void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float 
         EXPECT_LE(rep.ties, set.rays.size() / 1000 + 5);
         EXPECT_EQ(rep.agree + rep.ties + rep.mismatches, rep.rays);
     }
+}
+
+/// The same with a BVH from `builder`.
+void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+                      accel::BuilderKind builder) {
+    const accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
+    expect_agreement_with(mesh, cam, ao_length, w, h,
+                          [&](const RaySet& set, std::vector<Hit>& hits) { trace_cpu(bvh, set.rays, set.query, hits); });
 }
 
 }  // namespace
@@ -102,7 +114,20 @@ TEST(EmbreeAgreement, BenchmarkScenes) {
         cam.target = {c["target"][0], c["target"][1], c["target"][2]};
         cam.up = {c["up"][0], c["up"][1], c["up"][2]};
         cam.fov_y_deg = c["fov_y_deg"];
-        expect_agreement(mesh, cam, e["ao_length"].get<float>(), 160, 120, accel::BuilderKind::kBinned);
+        // Every structure: binned and SBVH BVHs, and the kd-tree with a full and a short stack.
+        for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
+            SCOPED_TRACE(accel::builder_name(b));
+            expect_agreement(mesh, cam, e["ao_length"].get<float>(), 160, 120, b);
+        }
+        const accel::KdTree kd = accel::KdTreeBuilder().build(mesh);
+        for (int stack : {64, 2}) {
+            SCOPED_TRACE("kdtree stack " + std::to_string(stack));
+            const KdTracer tracer(kd, mesh, stack);
+            expect_agreement_with(mesh, cam, e["ao_length"].get<float>(), 160, 120,
+                                  [&](const RaySet& set, std::vector<Hit>& hits) {
+                                      trace_kd_cpu(tracer, set.rays, set.query, hits);
+                                  });
+        }
     }
 }
 

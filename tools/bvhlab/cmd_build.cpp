@@ -44,7 +44,7 @@ void register_build(CLI::App& app, Globals& g) {
         BuildOptions build;
     };
     auto o = std::make_shared<Opts>();
-    CLI::App* sub = app.add_subcommand("build", "build a BVH from a scene and print its quality figures");
+    CLI::App* sub = app.add_subcommand("build", "build a BVH or kd-tree from a scene and print its quality figures");
     sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
     o->build.add_to(*sub);
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
