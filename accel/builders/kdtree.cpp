@@ -137,10 +137,20 @@ private:
         return best;
     }
 
+    /// Per-thread temporaries of split(), reused across nodes (the children's own vectors
+    /// must be fresh; these need not be).
+    struct Scratch {
+        std::vector<uint8_t> side;
+        std::vector<uint32_t> to_left, to_right;
+        std::vector<Event> nl, nr;
+    };
+
     void split(const Work& w, const Plane& p, Work& left, Work& right) const {
         enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
+        static thread_local Scratch scratch;  // used only between here and the merges below
         const size_t n = w.tris.size();
-        std::vector<uint8_t> side(n, kBoth);
+        std::vector<uint8_t>& side = scratch.side;
+        side.assign(n, kBoth);
         for (const Event& e : w.events) {
             if (e.axis != p.axis) continue;
             if (e.type == kEnd && e.pos <= p.pos) side[e.slot] = kLeftOnly;
@@ -155,7 +165,10 @@ private:
         right.voxel.lo[p.axis] = p.pos;
         // Slots of the one-sided triangles in each child, in their old order.
         constexpr uint32_t kNone = ~0u;
-        std::vector<uint32_t> to_left(n, kNone), to_right(n, kNone);
+        std::vector<uint32_t>& to_left = scratch.to_left;
+        std::vector<uint32_t>& to_right = scratch.to_right;
+        to_left.assign(n, kNone);
+        to_right.assign(n, kNone);
         for (size_t s = 0; s < n; ++s) {
             if (side[s] == kLeftOnly) {
                 to_left[s] = uint32_t(left.tris.size());
@@ -174,10 +187,10 @@ private:
             else if (side[e.slot] == kRightOnly) er.push_back({e.pos, to_right[e.slot], e.axis, e.type});
         }
         // Straddling triangles: clip to each child's voxel, new events, sort, merge.
-        std::vector<Event> nl, nr;
-        const size_t both = n - left.tris.size() - right.tris.size();
-        nl.reserve(6 * both);
-        nr.reserve(6 * both);
+        std::vector<Event>& nl = scratch.nl;
+        std::vector<Event>& nr = scratch.nr;
+        nl.clear();
+        nr.clear();
         for (size_t s = 0; s < n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
