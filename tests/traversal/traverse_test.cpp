@@ -90,7 +90,7 @@ TEST(Traverse, CountersCountWork) {
     std::vector<Hit> a, b;
     std::vector<TraversalCounters> c;
     trace_cpu(bvh, rays, Query::kClosest, a);
-    trace_cpu_counted(bvh, rays, Query::kClosest, b, c);
+    trace_cpu(bvh, rays, Query::kClosest, b, &c);
     uint64_t tests = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         EXPECT_EQ(a[i].tri, b[i].tri);

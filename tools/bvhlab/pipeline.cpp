@@ -175,10 +175,8 @@ void trace_cpu_any(const Built& built, const trav::RaySet& set, std::vector<trav
                    std::vector<trav::TraversalCounters>* counters) {
     if (built.kd) {
         trav::trace_kd_cpu(*built.kd, set.rays, set.query, hits, counters);
-    } else if (counters) {
-        trav::trace_cpu_counted(built.bvh, set.rays, set.query, hits, *counters);
     } else {
-        trav::trace_cpu(built.bvh, set.rays, set.query, hits);
+        trav::trace_cpu(built.bvh, set.rays, set.query, hits, counters);
     }
 }
 

@@ -2,7 +2,6 @@
 // CPU tracer: the shared BVH2 traversal run over a ray set in parallel with TBB.
 #pragma once
 
-#include <functional>
 #include <vector>
 
 #include "accel/layouts/bvh2_node.h"
@@ -11,15 +10,9 @@
 
 namespace bvhlab::trav {
 
-/// Called now and then with the number of rays finished so far; may be empty.
-using ProgressFn = std::function<void(size_t done, size_t total)>;
-
-/// Traces every ray (closest or any hit) into `hits`, which is resized to rays.size().
-void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query,
-               std::vector<Hit>& hits, const ProgressFn& progress = {});
-
-/// Like trace_cpu, and also returns the per-ray work counters.
-void trace_cpu_counted(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query,
-                       std::vector<Hit>& hits, std::vector<TraversalCounters>& counters);
+/// Traces every ray (closest or any hit) into `hits`, resized to rays.size(). With a non-null
+/// `counters`, also records each ray's work (nodes, leaves, triangle tests).
+void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
+               std::vector<TraversalCounters>* counters = nullptr);
 
 }  // namespace bvhlab::trav
