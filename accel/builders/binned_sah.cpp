@@ -178,16 +178,7 @@ public:
 
 private:
     void bin_range(uint32_t b, uint32_t e, const BinMapping& map, BinSet& set) const {
-        const int nb = c_.num_bins;
-        for (uint32_t i = b; i < e; ++i) {
-            const PrimRef& r = refs_[i];
-            Vec3 c = r.centroid();
-            for (int a = 0; a < 3; ++a) {
-                Bin& bin = set.bins[a * nb + map.bin(c[a], a)];
-                bin.bounds.extend(r.bounds);
-                ++bin.count;
-            }
-        }
+        bin_centroids(&refs_[b], e - b, map, set.bins);
     }
 
     Split find_split(uint32_t b, uint32_t e, const AABB& bounds, const BinMapping& map) const {
@@ -207,23 +198,13 @@ private:
         } else {
             bin_range(b, e, map, set);
         }
-        float best_weight = std::numeric_limits<float>::infinity();
-        int best_axis = -1, best_bin = -1;
-        for (int a = 0; a < 3; ++a) {
-            if (!map.splittable(a)) continue;
-            const BinSweep sw = sweep_bins(&set.bins[a * nb], nb);
-            if (sw.weight < best_weight) {
-                best_weight = sw.weight;
-                best_axis = a;
-                best_bin = sw.bin;
-            }
-        }
+        const AxisSplit s = best_bin_split(set.bins, map);
         Split best;
-        if (best_axis < 0) return best;
+        if (s.axis < 0) return best;
         const float parent_area = bounds.half_area();
-        best.cost = c_.traversal_cost + c_.intersection_cost * (parent_area > 0.0f ? best_weight / parent_area : 0.0f);
-        best.axis = best_axis;
-        best.bin = best_bin;
+        best.cost = c_.traversal_cost + c_.intersection_cost * (parent_area > 0.0f ? s.weight / parent_area : 0.0f);
+        best.axis = s.axis;
+        best.bin = s.bin;
         return best;
     }
 

@@ -101,24 +101,12 @@ private:
         const int nb = c_.object_bins;
         const BinMapping map(cb, nb);
         std::vector<Bin> bins(3 * size_t(nb), Bin::empty());
-        for (const PrimRef& r : refs) {
-            const Vec3 c = r.centroid();
-            for (int a = 0; a < 3; ++a) {
-                Bin& b = bins[size_t(a) * nb + map.bin(c[a], a)];
-                b.bounds.extend(r.bounds);
-                ++b.count;
-            }
-        }
+        bin_centroids(refs.data(), refs.size(), map, bins.data());
+        const AxisSplit s = best_bin_split(bins.data(), map);
         Candidate best;
-        for (int a = 0; a < 3; ++a) {
-            if (!map.splittable(a)) continue;
-            const BinSweep sw = sweep_bins(&bins[size_t(a) * nb], nb);
-            if (sw.weight < best.weight) {
-                best.weight = sw.weight;
-                best.axis = a;
-                best.bin = sw.bin;
-            }
-        }
+        best.weight = s.weight;
+        best.axis = s.axis;
+        best.bin = s.bin;
         if (best.axis >= 0) collect(&bins[size_t(best.axis) * nb], nb, best, nullptr, nullptr);
         return best;
     }

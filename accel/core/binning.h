@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "accel/core/aabb.h"
+#include "accel/core/prim_ref.h"
 
 namespace bvhlab::accel {
 
@@ -73,6 +74,37 @@ inline BinSweep sweep_bins(const Bin* bins, int count, const uint32_t* left_coun
         if (n == 0 || right_n[i + 1] == 0) continue;
         const float w = acc.half_area() * float(n) + right_area[i + 1] * float(right_n[i + 1]);
         if (w < best.weight) best = {w, i};
+    }
+    return best;
+}
+
+/// Object binning: adds each of `count` references to the bin of its centroid on every axis.
+/// `bins` holds 3 * map.num_bins bins, axis-major.
+inline void bin_centroids(const PrimRef* refs, size_t count, const BinMapping& map, Bin* bins) {
+    const int nb = map.num_bins;
+    for (size_t i = 0; i < count; ++i) {
+        const Vec3 c = refs[i].centroid();
+        for (int a = 0; a < 3; ++a) {
+            Bin& b = bins[a * nb + map.bin(c[a], a)];
+            b.bounds.extend(refs[i].bounds);
+            ++b.count;
+        }
+    }
+}
+
+/// The best object split over every splittable axis of axis-major `bins`.
+struct AxisSplit {
+    float weight = std::numeric_limits<float>::infinity();  ///< A_L N_L + A_R N_R
+    int axis = -1;                                          ///< -1: nothing separates the refs
+    int bin = -1;                                           ///< references in bins <= bin go left
+};
+
+inline AxisSplit best_bin_split(const Bin* bins, const BinMapping& map) {
+    AxisSplit best;
+    for (int a = 0; a < 3; ++a) {
+        if (!map.splittable(a)) continue;
+        const BinSweep sw = sweep_bins(&bins[a * map.num_bins], map.num_bins);
+        if (sw.weight < best.weight) best = {sw.weight, a, sw.bin};
     }
     return best;
 }
