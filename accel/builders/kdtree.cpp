@@ -270,28 +270,73 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     return out;
 }
 
-double kd_sah(const KdTree& tree, const KdTreeBuilder::Config& c) {
-    if (tree.nodes.empty()) return 0.0;
-    const double root = tree.bounds.area();
-    double sum = 0.0;
-    std::vector<std::pair<uint32_t, AABB>> stack{{0, tree.bounds}};
+namespace {
+
+/// Visits every node with its cell and depth (children after their parent).
+template <typename F>
+void walk_cells(const KdTree& tree, F&& visit) {
+    struct Item {
+        uint32_t node;
+        AABB cell;
+        uint32_t depth;
+    };
+    std::vector<Item> stack{{0, tree.bounds, 0}};
     while (!stack.empty()) {
-        auto [i, v] = stack.back();
+        const Item it = stack.back();
         stack.pop_back();
-        const KdNode& n = tree.nodes[i];
-        const double rel = root > 0 ? double(v.area()) / root : 0.0;
-        if (n.is_leaf()) {
-            sum += rel * c.intersection_cost * n.count;
-            continue;
-        }
-        sum += rel * c.traversal_cost;
-        AABB l = v, r = v;
+        const KdNode& n = tree.nodes[it.node];
+        if (!visit(it.node, n, it.cell, it.depth) || n.is_leaf()) continue;
+        AABB l = it.cell, r = it.cell;
         l.hi[int(n.axis)] = n.split;
         r.lo[int(n.axis)] = n.split;
-        stack.push_back({n.child, l});
-        stack.push_back({n.child + 1, r});
+        stack.push_back({n.child, l, it.depth + 1});
+        stack.push_back({n.child + 1, r, it.depth + 1});
     }
-    return sum;
+}
+
+}  // namespace
+
+KdTreeStats compute_kd_stats(const KdTree& tree, const KdTreeBuilder::Config& c) {
+    KdTreeStats s;
+    if (tree.nodes.empty()) return s;
+    s.nodes = tree.nodes.size();
+    const double root = tree.bounds.area();
+    walk_cells(tree, [&](uint32_t, const KdNode& n, const AABB& cell, uint32_t depth) {
+        const double rel = root > 0 ? double(cell.area()) / root : 0.0;
+        if (n.is_leaf()) {
+            ++s.leaves;
+            s.references += n.count;
+            s.depth = std::max(s.depth, depth);
+            s.max_leaf_size = std::max(s.max_leaf_size, n.count);
+            s.sah += rel * c.intersection_cost * n.count;
+        } else {
+            s.sah += rel * c.traversal_cost;
+        }
+        return true;
+    });
+    return s;
+}
+
+std::string validate_kd(const KdTree& tree, size_t triangles) {
+    if (tree.nodes.empty()) return "kd-tree has no nodes";
+    std::vector<uint8_t> seen(tree.nodes.size(), 0);
+    std::string err;
+    walk_cells(tree, [&](uint32_t i, const KdNode& n, const AABB& cell, uint32_t) {
+        const std::string where = "kd node " + std::to_string(i) + ": ";
+        if (seen[i]++) err = where + "reached twice";
+        else if (n.axis > 3) err = where + "axis out of range";
+        else if (n.is_leaf() && size_t(n.child) + n.count > tree.prim_indices.size()) err = where + "leaf range out of range";
+        else if (!n.is_leaf() && size_t(n.child) + 1 >= tree.nodes.size()) err = where + "child out of range";
+        else if (!n.is_leaf() && !(n.split >= cell.lo[int(n.axis)] && n.split <= cell.hi[int(n.axis)]))
+            err = where + "split outside its cell";
+        return err.empty();  // stop descending once something is wrong
+    });
+    if (!err.empty()) return err;
+    for (size_t i = 0; i < seen.size(); ++i)
+        if (!seen[i]) return "kd node " + std::to_string(i) + " is unreachable";
+    for (uint32_t id : tree.prim_indices)
+        if (id >= triangles) return "triangle id " + std::to_string(id) + " out of range";
+    return {};
 }
 
 }  // namespace bvhlab::accel

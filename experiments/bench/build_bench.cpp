@@ -50,11 +50,17 @@ void bm_build_kd(benchmark::State& state, std::shared_ptr<accel::TriangleMesh> m
     }
     state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(mesh->triangle_count()));
     state.counters["triangles"] = double(mesh->triangle_count());
-    state.counters["kd_sah"] = accel::kd_sah(last, builder.config());
-    state.counters["nodes"] = double(last.nodes.size());
-    state.counters["references"] = double(last.prim_indices.size());
+    if (const std::string err = accel::validate_kd(last, mesh->triangle_count()); !err.empty()) {
+        state.SkipWithError(("invalid kd-tree: " + err).c_str());
+        return;
+    }
+    const accel::KdTreeStats s = accel::compute_kd_stats(last, builder.config());
+    state.counters["kd_sah"] = s.sah;
+    state.counters["nodes"] = double(s.nodes);
+    state.counters["references"] = double(s.references);
     state.counters["bytes"] = double(last.bytes());
-    state.counters["duplication"] = double(last.prim_indices.size()) / double(mesh->triangle_count());
+    state.counters["depth"] = double(s.depth);
+    state.counters["duplication"] = double(s.references) / double(mesh->triangle_count());
 }
 
 }  // namespace

@@ -91,6 +91,30 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
     EXPECT_EQ(KdTreeBuilder().build(test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}})).nodes.size(), 1u);
 }
 
+TEST(KdTreeBuilder, ValidateAndStats) {
+    TriangleMesh m = make_procedural(ProceduralKind::kStructured, 4000, 6);
+    KdTree t = KdTreeBuilder().build(m);
+    EXPECT_EQ(validate_kd(t, m.triangle_count()), "");
+    const KdTreeStats s = compute_kd_stats(t, KdTreeBuilder::Config{});
+    EXPECT_EQ(s.nodes, t.nodes.size());
+    EXPECT_EQ(s.nodes, 2 * s.leaves - 1);
+    EXPECT_EQ(s.references, t.prim_indices.size());
+    EXPECT_GT(s.sah, 0.0);
+    // Damaged trees, as a tampered structure file could hold them.
+    KdTree cycle = t;
+    uint32_t interior = 0;
+    while (cycle.nodes[interior].is_leaf()) ++interior;
+    cycle.nodes[cycle.nodes[interior].child].axis = 0;       // turn a child into an interior node
+    cycle.nodes[cycle.nodes[interior].child].child = interior;  // whose children lead back up
+    EXPECT_NE(validate_kd(cycle, m.triangle_count()), "");
+    KdTree bad_id = t;
+    bad_id.prim_indices.back() = uint32_t(m.triangle_count());
+    EXPECT_NE(validate_kd(bad_id, m.triangle_count()), "");
+    KdTree bad_split = t;
+    bad_split.nodes[0].split = t.bounds.hi[int(t.nodes[0].axis)] + 1.0f;
+    EXPECT_NE(validate_kd(bad_split, m.triangle_count()), "");
+}
+
 class KdTraversal : public ::testing::TestWithParam<ProceduralKind> {};
 
 TEST_P(KdTraversal, ShortStackEqualsFullStackAndEmbree) {

@@ -70,51 +70,32 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
         tree = builder.build(scene.mesh);
         b.result.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     }
-    // A loaded file is checked before use: indices in range, children inside the array.
-    for (const accel::KdNode& n : tree.nodes) {
-        const bool ok = n.is_leaf() ? size_t(n.child) + n.count <= tree.prim_indices.size()
-                                    : (n.axis < 3 && size_t(n.child) + 1 < tree.nodes.size());
-        if (!ok) throw Error("structure file '" + file + "' holds an invalid kd-tree (node out of range)");
-    }
-    for (uint32_t id : tree.prim_indices)
-        if (id >= scene.mesh.triangle_count())
-            throw Error("structure file '" + file + "' holds an invalid kd-tree (triangle id out of range)");
-    uint64_t leaves = 0, depth = 0, max_leaf = 0;
-    std::vector<std::pair<uint32_t, uint32_t>> stack{{0, 0}};
-    while (!stack.empty()) {
-        auto [i, d] = stack.back();
-        stack.pop_back();
-        const accel::KdNode& n = tree.nodes[i];
-        if (n.is_leaf()) {
-            ++leaves;
-            depth = std::max<uint64_t>(depth, d);
-            max_leaf = std::max<uint64_t>(max_leaf, n.count);
-        } else {
-            stack.push_back({n.child, d + 1});
-            stack.push_back({n.child + 1, d + 1});
-        }
-    }
+    const std::string err = accel::validate_kd(tree, scene.mesh.triangle_count());
+    if (!err.empty())
+        throw Error((cached ? "structure file '" + file + "' holds" : std::string("the kd-tree builder produced")) +
+                    " an invalid kd-tree: " + err);
+    const accel::KdTreeStats ks = accel::compute_kd_stats(tree, builder.config());
     b.structure = "kdtree";
     b.record = base_record("build", scene);
     b.record["builder"] = "kdtree";
     b.record["structure"] = "kdtree";
-    b.record["nodes"] = tree.nodes.size();
-    b.record["leaves"] = leaves;
-    b.record["depth"] = depth;
+    b.record["nodes"] = ks.nodes;
+    b.record["leaves"] = ks.leaves;
+    b.record["depth"] = ks.depth;
     b.record["max_depth"] = builder.max_depth_for(scene.mesh.triangle_count());
-    b.record["references"] = tree.prim_indices.size();
-    b.record["mean_leaf_size"] = leaves ? double(tree.prim_indices.size()) / double(leaves) : 0.0;
-    b.record["max_leaf_size"] = max_leaf;
-    b.record["duplication"] = double(tree.prim_indices.size()) / double(scene.mesh.triangle_count());
+    b.record["references"] = ks.references;
+    b.record["mean_leaf_size"] = ks.leaves ? double(ks.references) / double(ks.leaves) : 0.0;
+    b.record["max_leaf_size"] = ks.max_leaf_size;
+    b.record["duplication"] = double(ks.references) / double(scene.mesh.triangle_count());
     b.record["bytes"] = tree.bytes();
-    b.record["sah"] = accel::kd_sah(tree, builder.config());
+    b.record["sah"] = ks.sah;
     b.record["sah_constants"] = {{"traversal", builder.config().traversal_cost},
                                  {"intersection", builder.config().intersection_cost},
                                  {"empty_bonus", builder.config().empty_bonus}};
     b.record["epo"] = nullptr;
     b.record["build_ms"] = b.result.build_ms;
     b.record["machine"] = machine_description();
-    b.stats.sah = b.record["sah"].get<double>();
+    b.stats.sah = ks.sah;
     b.kd = std::make_shared<trav::KdTracer>(std::move(tree), scene.mesh, opts.kd_stack);
     b.kernel = opts.kd_stack == trav::kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(opts.kd_stack);
     b.record["kernel"] = b.kernel;
