@@ -6,10 +6,8 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -17,6 +15,7 @@
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "traversal/rays/raygen.h"
+#include "traversal/rays/scene_catalogue.h"
 
 namespace bvhlab {
 const char* git_commit();
@@ -42,21 +41,13 @@ inline std::vector<BenchScene> bench_scenes(bool with_procedural = true) {
     }
     const char* dir = std::getenv("BVHLAB_SCENES");
     if (!dir || !*dir) return out;
-    std::ifstream in(std::string(dir) + "/scenes.json");
-    if (!in) return out;
-    nlohmann::json cat = nlohmann::json::parse(in)["scenes"];
-    for (const auto& [name, e] : cat.items()) {
+    for (const trav::CatalogueEntry& e : trav::read_catalogue(dir)) {
         BenchScene s;
-        s.name = name;
-        const std::string file = std::string(dir) + "/" + e["file"].get<std::string>();
-        s.load = [file] { return accel::load_obj(file); };
-        const auto& c = e["camera"];
-        s.camera.eye = {c["eye"][0], c["eye"][1], c["eye"][2]};
-        s.camera.target = {c["target"][0], c["target"][1], c["target"][2]};
-        s.camera.up = {c["up"][0], c["up"][1], c["up"][2]};
-        s.camera.fov_y_deg = c["fov_y_deg"];
-        s.has_camera = true;
-        s.ao_length = e["ao_length"];
+        s.name = e.name;
+        s.load = [file = e.file] { return accel::load_obj(file); };
+        s.has_camera = e.camera.has_value();
+        if (e.camera) s.camera = *e.camera;
+        s.ao_length = e.ao_length;
         out.push_back(s);
     }
     return out;

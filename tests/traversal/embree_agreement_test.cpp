@@ -3,9 +3,7 @@
 // scenes, and every scene in $BVHLAB_SCENES. Zero real mismatches allowed.
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <functional>
-#include <nlohmann/json.hpp>
 
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
@@ -17,6 +15,7 @@
 #include "traversal/cpu/kd_trace.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
+#include "traversal/rays/scene_catalogue.h"
 
 namespace bvhlab::trav {
 namespace {
@@ -100,30 +99,24 @@ TEST(EmbreeAgreement, DetectsABrokenTracer) {
 TEST(EmbreeAgreement, BenchmarkScenes) {
     const std::string dir = test::scenes_dir();
     if (dir.empty()) GTEST_SKIP() << "BVHLAB_SCENES is not set: skipping the benchmark scenes";
-    std::ifstream in(dir + "/scenes.json");
-    ASSERT_TRUE(in) << "no scenes.json in " << dir;
-    nlohmann::json cat = nlohmann::json::parse(in)["scenes"];
-    ASSERT_FALSE(cat.empty());
-    for (const auto& [name, e] : cat.items()) {
-        SCOPED_TRACE(name);
-        accel::TriangleMesh mesh = accel::load_obj(dir + "/" + e["file"].get<std::string>());
-        EXPECT_EQ(mesh.triangle_count(), e["triangles"].get<size_t>());
-        const auto& c = e["camera"];
-        Camera cam;
-        cam.eye = {c["eye"][0], c["eye"][1], c["eye"][2]};
-        cam.target = {c["target"][0], c["target"][1], c["target"][2]};
-        cam.up = {c["up"][0], c["up"][1], c["up"][2]};
-        cam.fov_y_deg = c["fov_y_deg"];
+    const std::vector<CatalogueEntry> cat = read_catalogue(dir);
+    ASSERT_FALSE(cat.empty()) << "no scenes in " << dir << "/scenes.json";
+    for (const CatalogueEntry& e : cat) {
+        SCOPED_TRACE(e.name);
+        accel::TriangleMesh mesh = accel::load_obj(e.file);
+        EXPECT_EQ(mesh.triangle_count(), e.triangles);
+        ASSERT_TRUE(e.camera.has_value());
+        const Camera cam = *e.camera;
         // Every structure: binned and SBVH BVHs, and the kd-tree with a full and a short stack.
         for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
             SCOPED_TRACE(accel::builder_name(b));
-            expect_agreement(mesh, cam, e["ao_length"].get<float>(), 160, 120, b);
+            expect_agreement(mesh, cam, e.ao_length, 160, 120, b);
         }
         const accel::KdTree kd = accel::KdTreeBuilder().build(mesh);
         for (int stack : {64, 2}) {
             SCOPED_TRACE("kdtree stack " + std::to_string(stack));
             const KdTracer tracer(kd, mesh, stack);
-            expect_agreement_with(mesh, cam, e["ao_length"].get<float>(), 160, 120,
+            expect_agreement_with(mesh, cam, e.ao_length, 160, 120,
                                   [&](const RaySet& set, std::vector<Hit>& hits) {
                                       trace_kd_cpu(tracer, set.rays, set.query, hits);
                                   });

@@ -16,6 +16,7 @@
 #include "accel/core/check.h"
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
+#include "traversal/rays/scene_catalogue.h"
 
 namespace fs = std::filesystem;
 
@@ -44,7 +45,7 @@ namespace {
 /// A catalogue: scenes.json of the shared benchmark scenes or of data/.
 struct Catalogue {
     fs::path dir;
-    nlohmann::json scenes;
+    std::vector<trav::CatalogueEntry> entries;
 };
 
 }  // namespace
@@ -65,32 +66,16 @@ std::vector<Catalogue> catalogues() {
     std::vector<fs::path> dirs;
     if (const char* env = std::getenv("BVHLAB_SCENES"); env && *env) dirs.emplace_back(env);
     dirs.emplace_back(data_dir());
-    for (const auto& d : dirs) {
-        const fs::path file = d / "scenes.json";
-        std::ifstream in(file);
-        if (!in) continue;
-        try {
-            nlohmann::json j = nlohmann::json::parse(in);
-            if (j.contains("scenes")) out.push_back({d, j["scenes"]});
-        } catch (const std::exception& e) {
-            throw Error("cannot parse '" + file.string() + "': " + e.what());
-        }
-    }
+    for (const auto& d : dirs) out.push_back({d, trav::read_catalogue(d.string())});
     return out;
 }
 
-glm::vec3 vec3_of(const nlohmann::json& j) { return {j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()}; }
-
-void apply_entry(Scene& s, const nlohmann::json& e) {
-    if (e.contains("camera")) {
-        const auto& c = e["camera"];
-        s.camera.eye = vec3_of(c.at("eye"));
-        s.camera.target = vec3_of(c.at("target"));
-        s.camera.up = vec3_of(c.at("up"));
-        s.camera.fov_y_deg = c.at("fov_y_deg").get<float>();
+void apply_entry(Scene& s, const trav::CatalogueEntry& e) {
+    if (e.camera) {
+        s.camera = *e.camera;
         s.camera_from_catalogue = true;
     }
-    if (e.contains("ao_length")) s.ao_length = e["ao_length"].get<float>();
+    if (e.ao_length > 0.0f) s.ao_length = e.ao_length;
 }
 
 }  // namespace
@@ -99,16 +84,14 @@ std::vector<std::string> catalogue_scene_names() {
     std::vector<std::string> names;
     const char* env = std::getenv("BVHLAB_SCENES");
     if (!env || !*env) return names;
-    for (const auto& c : catalogues())
-        if (c.dir == fs::path(env))
-            for (const auto& [name, _] : c.scenes.items()) names.push_back(name);
+    for (const auto& e : trav::read_catalogue(env)) names.push_back(e.name);
     return names;
 }
 
 Scene load_scene(const std::string& spec, const Globals& g) {
     Scene s;
     s.source = spec;
-    const nlohmann::json* entry = nullptr;
+    const trav::CatalogueEntry* entry = nullptr;
     fs::path file;
     std::vector<Catalogue> cats = catalogues();
     if (spec.rfind("gen:", 0) == 0) {
@@ -130,12 +113,14 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         s.name = spec;
     } else {
         for (const auto& c : cats) {
-            if (c.scenes.contains(spec)) {
-                entry = &c.scenes[spec];
-                file = c.dir / entry->at("file").get<std::string>();
-                s.name = spec;
-                break;
-            }
+            for (const auto& e : c.entries)
+                if (e.name == spec) {
+                    entry = &e;
+                    file = e.file;
+                    s.name = spec;
+                    break;
+                }
+            if (entry) break;
         }
         if (!entry) {
             file = spec;
@@ -147,10 +132,10 @@ Scene load_scene(const std::string& spec, const Globals& g) {
             // A path inside a catalogue's folder picks up that entry's camera.
             std::error_code ec;
             for (const auto& c : cats)
-                for (const auto& [name, e] : c.scenes.items())
-                    if (fs::equivalent(c.dir / e.at("file").get<std::string>(), file, ec)) {
+                for (const auto& e : c.entries)
+                    if (fs::equivalent(e.file, file, ec)) {
                         entry = &e;
-                        s.name = name;
+                        s.name = e.name;
                     }
         }
         Stage st(g, "loading " + file.string());
