@@ -56,8 +56,8 @@ void register_build(CLI::App& app, Globals& g) {
             accel::TreeFileMeta meta;
             meta.triangles = s.mesh.triangle_count();
             meta.scene_hash = s.hash;
-            if (!o->build.structure_file().empty()) {  // re-saving a loaded file keeps its provenance
-                meta = accel::read_tree_file(o->build.structure_file()).meta;
+            if (b.loaded_meta) {  // re-saving a loaded file keeps its provenance
+                meta = *b.loaded_meta;
             } else if (b.kd) {
                 meta.kdtree = true;
                 meta.kd = o->build.kd;

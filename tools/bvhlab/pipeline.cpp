@@ -99,7 +99,10 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
     b.kd = std::make_shared<trav::KdTracer>(std::move(tree), scene.mesh, opts.kd_stack);
     b.kernel = opts.kd_stack == trav::kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(opts.kd_stack);
     b.record["kernel"] = b.kernel;
-    if (cached) b.record["structure_file"] = file;
+    if (cached) {
+        b.record["structure_file"] = file;
+        b.loaded_meta = cached->meta;
+    }
     return b;
 }
 
@@ -112,6 +115,7 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
     if (!file.empty()) {
         accel::TreeFile f = load_cached(scene, opts, file, g);
         if (f.meta.kdtree) return build_kdtree(scene, opts, g, &f, file);
+        b.loaded_meta = f.meta;
         opts.builder = accel::builder_name(f.meta.builder);
         opts.opts = f.meta.options;
         b.result.tree = std::move(f.tree);

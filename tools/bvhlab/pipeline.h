@@ -5,6 +5,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
+
+#include "accel/io/tree_file.h"
+
 #include "accel/layouts/bvh2_node.h"
 #include "tools/bvhlab/context.h"
 #include "traversal/oracle/compare.h"
@@ -23,6 +27,7 @@ struct Built {
     std::shared_ptr<trav::GpuBvh2> gpu;  ///< uploaded on first GPU use
     std::shared_ptr<trav::KdTracer> kd;  ///< set instead of bvh for --structure kdtree
     std::string kernel;                  ///< CPU kernel name, e.g. cpu-bvh2-stack
+    std::optional<accel::TreeFileMeta> loaded_meta;  ///< provenance when loaded from a structure file
 };
 
 /// Traces a set on the CPU with whatever structure `built` holds; fills counters if non-null.
