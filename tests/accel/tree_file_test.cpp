@@ -14,11 +14,6 @@
 namespace bvhlab::accel {
 namespace {
 
-std::string bytes_of(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-}
-
 void expect_read_error(const std::string& path, const std::string& what) {
     try {
         read_tree_file(path);
@@ -69,7 +64,7 @@ TEST(TreeFile, DamagedFiles) {
     Fixture fx;
     test::TempFile f("damaged.tree");
     write_tree_file(f.path(), fx.tree, fx.meta);
-    const std::string good = bytes_of(f.path());
+    const std::string good = test::read_file_bytes(f.path());
     auto write = [&](const std::string& b) { std::ofstream(f.path(), std::ios::binary) << b; };
     expect_read_error("/nonexistent/x.tree", "cannot open");
     write(good.substr(0, 40));
@@ -113,7 +108,7 @@ TEST(TreeFile, KdTreeRoundTripAndCorruption) {
     EXPECT_EQ(r.kd.prim_indices, kd.prim_indices);
     ASSERT_EQ(r.kd.nodes.size(), kd.nodes.size());
     EXPECT_EQ(std::memcmp(r.kd.nodes.data(), kd.nodes.data(), kd.nodes.size() * sizeof(KdNode)), 0);
-    std::string bad = bytes_of(f.path());
+    std::string bad = test::read_file_bytes(f.path());
     bad[bad.size() / 2] = char(bad[bad.size() / 2] ^ 1);
     std::ofstream(f.path(), std::ios::binary) << bad;
     expect_read_error(f.path(), "corrupt");

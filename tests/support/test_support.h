@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <unistd.h>
 
@@ -41,6 +42,12 @@ public:
 private:
     std::string path_;
 };
+
+/// The whole content of a file, as bytes.
+inline std::string read_file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
 
 /// One triangle per entry of `tris` (9 floats each), no materials.
 inline accel::TriangleMesh mesh_of(std::initializer_list<std::array<float, 9>> tris) {

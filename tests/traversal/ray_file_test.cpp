@@ -13,11 +13,6 @@
 namespace bvhlab::trav {
 namespace {
 
-std::string read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-}
-
 void expect_error(const std::string& path, const std::string& what) {
     try {
         read_ray_file(path);
@@ -40,7 +35,7 @@ TEST(RayFile, RoundTripIsByteExact) {
     test::TempFile f("rays.bin");
     RaySet a = sample_set();
     write_ray_file(f.path(), a);
-    const std::string bytes = read_bytes(f.path());
+    const std::string bytes = test::read_file_bytes(f.path());
     ASSERT_EQ(bytes.size(), 24u + 2 * 32u);
     EXPECT_EQ(bytes.substr(0, 8), "BVHLRAYS");
     uint32_t version, flags;
@@ -66,7 +61,7 @@ TEST(RayFile, EmptySetRoundTrips) {
 TEST(RayFile, BadFiles) {
     test::TempFile f("bad_rays.bin");
     write_ray_file(f.path(), sample_set());
-    const std::string good = read_bytes(f.path());
+    const std::string good = test::read_file_bytes(f.path());
     auto write = [&](const std::string& bytes) { std::ofstream(f.path(), std::ios::binary) << bytes; };
 
     expect_error("/nonexistent/rays.bin", "cannot open");
@@ -97,7 +92,7 @@ TEST(HitFile, RoundTrip) {
     test::TempFile f("hits.bin");
     HitSet a{{{5, 1.5f, 0.25f, 0.5f}, Hit::miss()}, Query::kClosest};
     write_hit_file(f.path(), a);
-    EXPECT_EQ(read_bytes(f.path()).substr(0, 8), "BVHLHITS");
+    EXPECT_EQ(test::read_file_bytes(f.path()).substr(0, 8), "BVHLHITS");
     HitSet b = read_hit_file(f.path());
     ASSERT_EQ(b.hits.size(), 2u);
     EXPECT_EQ(b.hits[0].tri, 5);
