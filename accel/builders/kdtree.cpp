@@ -7,11 +7,13 @@
 // subtrees never share state.
 #include "accel/builders/kdtree.h"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 
 #include "accel/builders/top_down.h"
@@ -21,50 +23,93 @@
 namespace bvhlab::accel {
 namespace {
 
-enum : uint8_t { kEnd = 0, kPlanar = 1, kStart = 2 };
+enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
+constexpr uint32_t kSlotBits = 30;
+constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
+/// Nodes with at most this many triangles keep no events: their planes are found by counting
+/// directly, which costs less than keeping sorted lists for so few.
+constexpr uint32_t kSmallNode = 8;
 
+/// One event on one axis, 8 bytes: the plane position, and the event type (end < planar <
+/// start) above a node-local triangle slot. Each axis has its own sorted list, so sorting by
+/// (pos, code) orders by position, then type, then slot.
 struct Event {
     float pos;
-    uint32_t slot;  // node-local triangle slot
-    uint8_t axis;
-    uint8_t type;
+    uint32_t code;
+
+    uint32_t type() const { return code >> kSlotBits; }
+    uint32_t slot() const { return code & kSlotMask; }
 };
 
-/// Event order: position, axis, type (end < planar < start), slot. A functor, so sort and
-/// merge inline it (as a function pointer it cost ~10% of the build).
 struct EventLess {
     bool operator()(const Event& a, const Event& b) const {
-        if (a.pos != b.pos) return a.pos < b.pos;
-        if (a.axis != b.axis) return a.axis < b.axis;
-        if (a.type != b.type) return a.type < b.type;
-        return a.slot < b.slot;
+        return a.pos < b.pos || (a.pos == b.pos && a.code < b.code);
     }
 };
 constexpr EventLess event_less{};
 
-void add_events(std::vector<Event>& out, const AABB& b, uint32_t slot) {
-    for (uint8_t k = 0; k < 3; ++k) {
+/// A node's work: its voxel, and per triangle slot the global id and the bounds of the
+/// triangle clipped to the voxel; per axis, the events of those bounds, sorted.
+struct Work {
+    AABB voxel;
+    std::vector<uint32_t> tris;
+    std::vector<AABB> boxes;
+    std::vector<Event> events[3];
+
+    void clear() {
+        tris.clear();
+        boxes.clear();
+        for (auto& e : events) e.clear();
+    }
+};
+
+/// Events carry +0 for -0 (x + 0 is +0 for x = -0), so that equal positions have equal bits and
+/// the radix sort below orders them as the comparison does.
+void add_events(std::vector<Event>* ev, const AABB& b, uint32_t slot) {
+    for (int k = 0; k < 3; ++k) {
         if (b.lo[k] == b.hi[k]) {
-            out.push_back({b.lo[k], slot, k, kPlanar});
+            ev[k].push_back({b.lo[k] + 0.0f, (kPlanar << kSlotBits) | slot});
         } else {
-            out.push_back({b.lo[k], slot, k, kStart});
-            out.push_back({b.hi[k], slot, k, kEnd});
+            ev[k].push_back({b.lo[k] + 0.0f, (kStart << kSlotBits) | slot});
+            ev[k].push_back({b.hi[k] + 0.0f, (kEnd << kSlotBits) | slot});
         }
     }
 }
 
-struct KNode {
-    uint32_t axis = 3;
-    float split = 0.0f;
-    std::unique_ptr<KNode> child[2];
+/// A float's bits mapped so that unsigned order is float order.
+inline uint32_t sort_key(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+/// Stable LSD radix sort by position (3 passes of 11 bits). Events that arrive in code order
+/// leave sorted by (position, code), the order of EventLess.
+void radix_sort_by_pos(std::vector<Event>& ev) {
+    std::vector<Event> tmp(ev.size());
+    for (int shift = 0; shift < 32; shift += 11) {
+        uint32_t count[2049] = {};
+        for (const Event& e : ev) ++count[((sort_key(e.pos) >> shift) & 2047u) + 1];
+        for (int b = 0; b < 2048; ++b) count[b + 1] += count[b];
+        for (const Event& e : ev) tmp[count[(sort_key(e.pos) >> shift) & 2047u]++] = e;
+        ev.swap(tmp);
+    }
+}
+
+/// A subtree built by one thread, in the final layout (children of a node side by side) but
+/// with fragment-local node and triangle-list indices; node 0 is its root.
+struct Fragment {
+    std::vector<KdNode> nodes;
     std::vector<uint32_t> prims;
 };
 
-/// A node's work: its voxel, its triangles (global ids) and their sorted events.
-struct Work {
-    AABB voxel;
-    std::vector<uint32_t> tris;
-    std::vector<Event> events;
+/// The few nodes above the fragments, built in parallel. A node is either a split with two
+/// children or a fragment.
+struct TopNode {
+    uint32_t axis = 3;
+    float split = 0.0f;
+    std::unique_ptr<TopNode> child[2];
+    Fragment frag;
 };
 
 struct Plane {
@@ -74,162 +119,287 @@ struct Plane {
     bool planar_left = true;
 };
 
+/// Per-thread reusable storage: free Work objects (their vectors keep their capacity) and the
+/// temporaries of split(). A node's vectors are taken from here and given back once the node
+/// is split, so after warm-up the build allocates almost nothing per node.
+struct ThreadState {
+    std::vector<std::unique_ptr<Work>> free_work;
+    std::vector<uint8_t> side;
+    std::vector<uint32_t> remap;
+    std::vector<Event> filtered[2], fresh[2][3];
+};
+
 class Recursion {
 public:
     Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
         : c_(c), mesh_(mesh), max_depth_(max_depth) {}
 
-    std::unique_ptr<KNode> build(Work w, int depth) {
-        auto node = std::make_unique<KNode>();
-        const auto n = uint32_t(w.tris.size());
-        const Plane p = depth < max_depth_ ? find_plane(w) : Plane{};
-        if (!(p.cost < c_.intersection_cost * float(n))) {
-            node->prims = std::move(w.tris);
+    std::unique_ptr<Work> acquire() {
+        auto& pool = state_.local().free_work;
+        if (pool.empty()) return std::make_unique<Work>();
+        std::unique_ptr<Work> w = std::move(pool.back());
+        pool.pop_back();
+        w->clear();
+        return w;
+    }
+    void release(std::unique_ptr<Work> w) { state_.local().free_work.push_back(std::move(w)); }
+
+    /// Splits in parallel while nodes are large, then hands each subtree to one thread.
+    std::unique_ptr<TopNode> build_top(std::unique_ptr<Work> w, int depth) {
+        auto node = std::make_unique<TopNode>();
+        if (w->tris.size() < c_.task_threshold) {
+            node->frag.nodes.resize(1);
+            build_fragment(std::move(w), depth, node->frag, 0);
             return node;
         }
-        Work left, right;
-        split(w, p, left, right);
-        w = Work{};
+        const Plane p = depth < max_depth_ ? choose_plane(*w) : Plane{};
+        if (!(p.cost < c_.intersection_cost * float(w->tris.size()))) {
+            node->frag.nodes.push_back({0.0f, 3, 0, uint32_t(w->tris.size())});
+            node->frag.prims = w->tris;
+            release(std::move(w));
+            return node;
+        }
+        std::unique_ptr<Work> left = acquire(), right = acquire();
+        split(*w, p, *left, *right);
+        release(std::move(w));
         node->axis = uint32_t(p.axis);
         node->split = p.pos;
-        auto l = [&] { node->child[0] = build(std::move(left), depth + 1); };
-        auto r = [&] { node->child[1] = build(std::move(right), depth + 1); };
-        if (n >= c_.task_threshold) tbb::parallel_invoke(l, r); else { l(); r(); }
+        tbb::parallel_invoke([&] { node->child[0] = build_top(std::move(left), depth + 1); },
+                             [&] { node->child[1] = build_top(std::move(right), depth + 1); });
         return node;
     }
 
 private:
-    float sah(const AABB& v, int k, float pos, uint32_t nl, uint32_t nr, float inv_area) const {
-        AABB vl = v, vr = v;
-        vl.hi[k] = pos;
-        vr.lo[k] = pos;
-        const float cost = c_.traversal_cost +
-                           c_.intersection_cost * (vl.area() * inv_area * float(nl) + vr.area() * inv_area * float(nr));
-        return (nl == 0 || nr == 0) ? cost * (1.0f - c_.empty_bonus) : cost;
+    /// Builds the subtree of `w` into `f`, its root at f.nodes[at].
+    void build_fragment(std::unique_ptr<Work> w, int depth, Fragment& f, uint32_t at) {
+        const auto n = uint32_t(w->tris.size());
+        const Plane p = depth < max_depth_ ? choose_plane(*w) : Plane{};
+        if (!(p.cost < c_.intersection_cost * float(n))) {
+            f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), n};
+            f.prims.insert(f.prims.end(), w->tris.begin(), w->tris.end());
+            release(std::move(w));
+            return;
+        }
+        std::unique_ptr<Work> left = acquire(), right = acquire();
+        split(*w, p, *left, *right);
+        release(std::move(w));
+        const auto k = uint32_t(f.nodes.size());
+        f.nodes.resize(k + 2);
+        f.nodes[at] = {p.pos, uint32_t(p.axis), k, 0};
+        build_fragment(std::move(left), depth + 1, f, k);
+        build_fragment(std::move(right), depth + 1, f, k + 1);
     }
 
-    /// One sweep over the sorted events finds the cheapest plane on all axes.
+    Plane choose_plane(const Work& w) const {
+        return w.tris.size() <= kSmallNode ? find_plane_small(w) : find_plane(w);
+    }
+
+    /// One sweep per axis over the sorted events finds the cheapest plane. A child's area is
+    /// linear in the plane position: 2 (a b + (a + b) d) for the other two extents a, b and
+    /// the child's extent d along the axis.
     Plane find_plane(const Work& w) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.tris.empty()) return best;
         const float inv_area = 1.0f / area;
         const auto n = uint32_t(w.tris.size());
-        uint32_t nl[3] = {0, 0, 0}, nr[3] = {n, n, n};
-        const std::vector<Event>& e = w.events;
-        for (size_t i = 0; i < e.size();) {
-            const float pos = e[i].pos;
-            const int k = e[i].axis;
-            uint32_t ends = 0, planars = 0, starts = 0;
-            while (i < e.size() && e[i].axis == k && e[i].pos == pos && e[i].type == kEnd) ++ends, ++i;
-            while (i < e.size() && e[i].axis == k && e[i].pos == pos && e[i].type == kPlanar) ++planars, ++i;
-            while (i < e.size() && e[i].axis == k && e[i].pos == pos && e[i].type == kStart) ++starts, ++i;
-            nr[k] -= planars + ends;
-            // Planes on the voxel's boundary would leave an empty, flat child: skip them.
-            if (pos > w.voxel.lo[k] && pos < w.voxel.hi[k]) {
-                const float cl = sah(w.voxel, k, pos, nl[k] + planars, nr[k], inv_area);
-                const float cr = sah(w.voxel, k, pos, nl[k], nr[k] + planars, inv_area);
-                if (cl < best.cost) best = {cl, k, pos, true};
-                if (cr < best.cost) best = {cr, k, pos, false};
+        const Vec3 ext = w.voxel.hi - w.voxel.lo;
+        const float ct = c_.traversal_cost, ci = c_.intersection_cost, bonus = 1.0f - c_.empty_bonus;
+        for (int k = 0; k < 3; ++k) {
+            const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
+            const float face = 2.0f * a * b * inv_area, side = 2.0f * (a + b) * inv_area;
+            const float lo = w.voxel.lo[k], hi = w.voxel.hi[k];
+            const std::vector<Event>& e = w.events[k];
+            const size_t m = e.size();
+            // One event at a time, without data-dependent branches (event types are random,
+            // so a loop per type mispredicts about once per event). Within a position the
+            // order is ends, planars, starts. A plane is evaluated once per position: after
+            // its last end or planar, or before its first start when it has neither.
+            // `planars` counts the planars at the current position; nl includes them.
+            uint32_t nl = 0, nr = n, planars = 0;
+            float prev = -INFINITY;
+            for (size_t i = 0; i < m; ++i) {
+                const float pos = e[i].pos;
+                const uint32_t type = e[i].type();
+                const bool first = pos != prev;
+                prev = pos;
+                planars = first ? 0u : planars;
+                const bool start = type == kStart, planar = type == kPlanar;
+                nr -= uint32_t(!start);
+                planars += uint32_t(planar);
+                nl += uint32_t(planar);
+                const bool last_before_starts =
+                    i + 1 == m || e[i + 1].pos != pos || e[i + 1].type() == kStart;
+                const bool eval = start ? first : last_before_starts;
+                nl += uint32_t(start);  // after the evaluation below; it reads nl - start
+                if (!eval || !(pos > lo && pos < hi)) continue;  // rarely mispredicted
+                const uint32_t l = nl - uint32_t(start);
+                const float pl = face + side * (pos - lo), pr = face + side * (hi - pos);
+                const auto cost = [&](uint32_t cl, uint32_t cr) {
+                    const float c = ct + ci * (pl * float(cl) + pr * float(cr));
+                    return (cl == 0 || cr == 0) ? c * bonus : c;
+                };
+                const float left = cost(l, nr), right = cost(l - planars, nr + planars);
+                if (left < best.cost) best = {left, k, pos, true};
+                if (right < best.cost) best = {right, k, pos, false};
             }
-            nl[k] += starts + planars;
         }
         return best;
     }
 
-    /// Per-thread temporaries of split(), reused across nodes (the children's own vectors
-    /// must be fresh; these need not be).
-    struct Scratch {
-        std::vector<uint8_t> side;
-        std::vector<uint32_t> to_left, to_right;
-        std::vector<Event> nl, nr;
-    };
-
-    void split(const Work& w, const Plane& p, Work& left, Work& right) const {
+    void split(const Work& w, const Plane& p, Work& left, Work& right) {
         enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
-        static thread_local Scratch scratch;  // used only between here and the merges below
+        ThreadState& ts = state_.local();
         const size_t n = w.tris.size();
-        std::vector<uint8_t>& side = scratch.side;
-        side.assign(n, kBoth);
-        for (const Event& e : w.events) {
-            if (e.axis != p.axis) continue;
-            if (e.type == kEnd && e.pos <= p.pos) side[e.slot] = kLeftOnly;
-            else if (e.type == kStart && e.pos >= p.pos) side[e.slot] = kRightOnly;
-            else if (e.type == kPlanar) {
-                if (e.pos < p.pos || (e.pos == p.pos && p.planar_left)) side[e.slot] = kLeftOnly;
-                else side[e.slot] = kRightOnly;
-            }
+        const int axis = p.axis;
+        // Classify by the clipped bounds, with the same rule the sweep counted by.
+        std::vector<uint8_t>& side = ts.side;
+        side.resize(n);
+        for (size_t s = 0; s < n; ++s) {
+            const float lo = w.boxes[s].lo[axis], hi = w.boxes[s].hi[axis];
+            if (lo == p.pos && hi == p.pos) side[s] = p.planar_left ? kLeftOnly : kRightOnly;
+            else if (hi <= p.pos) side[s] = kLeftOnly;
+            else if (lo >= p.pos) side[s] = kRightOnly;
+            else side[s] = kBoth;
         }
         left.voxel = right.voxel = w.voxel;
-        left.voxel.hi[p.axis] = p.pos;
-        right.voxel.lo[p.axis] = p.pos;
-        // Slots of the one-sided triangles in each child, in their old order.
-        constexpr uint32_t kNone = ~0u;
-        std::vector<uint32_t>& to_left = scratch.to_left;
-        std::vector<uint32_t>& to_right = scratch.to_right;
-        to_left.assign(n, kNone);
-        to_right.assign(n, kNone);
+        left.voxel.hi[axis] = p.pos;
+        right.voxel.lo[axis] = p.pos;
+        // One-sided triangles keep their bounds; their slots are renumbered in order.
+        std::vector<uint32_t>& remap = ts.remap;
+        remap.resize(n);
         for (size_t s = 0; s < n; ++s) {
-            if (side[s] == kLeftOnly) {
-                to_left[s] = uint32_t(left.tris.size());
-                left.tris.push_back(w.tris[s]);
-            } else if (side[s] == kRightOnly) {
-                to_right[s] = uint32_t(right.tris.size());
-                right.tris.push_back(w.tris[s]);
-            }
+            Work* to = side[s] == kLeftOnly ? &left : side[s] == kRightOnly ? &right : nullptr;
+            if (!to) continue;
+            remap[s] = uint32_t(to->tris.size());
+            to->tris.push_back(w.tris[s]);
+            to->boxes.push_back(w.boxes[s]);
         }
-        // Their events stay sorted: filter and renumber.
-        std::vector<Event> el, er;
-        el.reserve(w.events.size() / 2 + 16);
-        er.reserve(w.events.size() / 2 + 16);
-        for (const Event& e : w.events) {
-            if (side[e.slot] == kLeftOnly) el.push_back({e.pos, to_left[e.slot], e.axis, e.type});
-            else if (side[e.slot] == kRightOnly) er.push_back({e.pos, to_right[e.slot], e.axis, e.type});
-        }
-        // Straddling triangles: clip to each child's voxel, new events, sort, merge.
-        std::vector<Event>& nl = scratch.nl;
-        std::vector<Event>& nr = scratch.nr;
-        nl.clear();
-        nr.clear();
+        // Straddling triangles: clipped to each child's voxel, appended after the one-sided
+        // ones.
+        uint32_t one_sided[2] = {uint32_t(left.tris.size()), uint32_t(right.tris.size())};
+        Work* child[2] = {&left, &right};
         for (size_t s = 0; s < n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
             const Vec3 a = mesh_.vertex(t, 0), b = mesh_.vertex(t, 1), c = mesh_.vertex(t, 2);
-            const AABB bl = clip_triangle(a, b, c, left.voxel).bounds;
-            const AABB br = clip_triangle(a, b, c, right.voxel).bounds;
-            if (!bl.is_empty()) {
-                add_events(nl, bl, uint32_t(left.tris.size()));
-                left.tris.push_back(t);
-            }
-            if (!br.is_empty()) {
-                add_events(nr, br, uint32_t(right.tris.size()));
-                right.tris.push_back(t);
+            for (Work* ch : child) {
+                const AABB box = clip_triangle(a, b, c, ch->voxel).bounds;
+                if (box.is_empty()) continue;
+                ch->tris.push_back(t);
+                ch->boxes.push_back(box);
             }
         }
-        std::sort(nl.begin(), nl.end(), event_less);
-        std::sort(nr.begin(), nr.end(), event_less);
-        left.events.resize(el.size() + nl.size());
-        std::merge(el.begin(), el.end(), nl.begin(), nl.end(), left.events.begin(), event_less);
-        right.events.resize(er.size() + nr.size());
-        std::merge(er.begin(), er.end(), nr.begin(), nr.end(), right.events.begin(), event_less);
+        // Events only for children above the small-node size (their parent has events too).
+        // Per axis: the one-sided triangles' events stay sorted when filtered; the
+        // straddlers' new events are sorted and merged in.
+        for (int i = 0; i < 2; ++i) {
+            Work& ch = *child[i];
+            if (ch.tris.size() <= kSmallNode) continue;
+            for (auto& f : ts.fresh[i]) f.clear();
+            for (uint32_t slot = one_sided[i]; slot < ch.tris.size(); ++slot) add_events(ts.fresh[i], ch.boxes[slot], slot);
+        }
+        const bool events[2] = {left.tris.size() > kSmallNode, right.tris.size() > kSmallNode};
+        if (!events[0] && !events[1]) return;
+        for (int k = 0; k < 3; ++k) {
+            const std::vector<Event>& in = w.events[k];
+            for (auto& f : ts.filtered) f.resize(in.size());
+            // Both outputs are written every time and the counters decide what is kept, so
+            // the loop has no branch and no store-to-load chain through a pointer table.
+            Event* fl = ts.filtered[0].data();
+            Event* fr = ts.filtered[1].data();
+            size_t il = 0, ir = 0;
+            for (const Event& e : in) {
+                const uint32_t s = e.slot();
+                const Event moved{e.pos, (e.code & ~kSlotMask) | remap[s]};
+                fl[il] = moved;
+                fr[ir] = moved;
+                il += side[s] == kLeftOnly;
+                ir += side[s] == kRightOnly;
+            }
+            const size_t kept[2] = {il, ir};
+            for (int i = 0; i < 2; ++i) {
+                if (!events[i]) continue;
+                std::vector<Event>& fresh = ts.fresh[i][k];
+                std::sort(fresh.begin(), fresh.end(), event_less);
+                std::vector<Event>& dst = child[i]->events[k];
+                dst.resize(kept[i] + fresh.size());
+                std::merge(ts.filtered[i].data(), ts.filtered[i].data() + kept[i], fresh.begin(), fresh.end(),
+                           dst.begin(), event_less);
+            }
+        }
+    }
+
+    /// find_plane for a node without events (at most kSmallNode triangles): every bound inside
+    /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
+    /// same plane the sweep would make (ties: lower axis, then lower position, left first).
+    Plane find_plane_small(const Work& w) const {
+        Plane best;
+        const float area = w.voxel.area();
+        const auto n = uint32_t(w.tris.size());
+        if (!(area > 0.0f) || n == 0) return best;
+        const float inv_area = 1.0f / area;
+        const Vec3 ext = w.voxel.hi - w.voxel.lo;
+        const float ct = c_.traversal_cost, ci = c_.intersection_cost, bonus = 1.0f - c_.empty_bonus;
+        for (int k = 0; k < 3; ++k) {
+            const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
+            const float face = 2.0f * a * b * inv_area, side = 2.0f * (a + b) * inv_area;
+            const float lo = w.voxel.lo[k], hi = w.voxel.hi[k];
+            float blo[kSmallNode], bhi[kSmallNode];
+            for (uint32_t s = 0; s < n; ++s) blo[s] = w.boxes[s].lo[k], bhi[s] = w.boxes[s].hi[k];
+            for (uint32_t c = 0; c < 2 * n; ++c) {
+                const float pos = (c & 1) ? bhi[c >> 1] : blo[c >> 1];
+                if (!(pos > lo && pos < hi)) continue;
+                uint32_t below = 0, above = 0, planar = 0;
+                for (uint32_t s = 0; s < n; ++s) {
+                    below += uint32_t(blo[s] < pos);
+                    above += uint32_t(bhi[s] > pos);
+                    planar += uint32_t(blo[s] == pos && bhi[s] == pos);
+                }
+                const float pl = face + side * (pos - lo), pr = face + side * (hi - pos);
+                const auto cost = [&](uint32_t cl, uint32_t cr) {
+                    const float x = ct + ci * (pl * float(cl) + pr * float(cr));
+                    return (cl == 0 || cr == 0) ? x * bonus : x;
+                };
+                const float cl = cost(below + planar, above), cr = cost(below, above + planar);
+                const auto better = [&](float x) {
+                    return x < best.cost || (x == best.cost && k == best.axis && pos < best.pos);
+                };
+                if (better(cl)) best = {cl, k, pos, true};
+                if (better(cr)) best = {cr, k, pos, false};
+            }
+        }
+        return best;
     }
 
     const KdTreeBuilder::Config& c_;
     const TriangleMesh& mesh_;
     const int max_depth_;
+    tbb::enumerable_thread_specific<ThreadState> state_;
 };
 
-KdTree flatten(const KNode& root, const AABB& bounds) {
+/// The final layout: the top nodes in depth-first order, each fragment appended whole with its
+/// indices moved to their final place.
+KdTree flatten(const TopNode& root, const AABB& bounds) {
     KdTree t;
     t.bounds = bounds;
     t.nodes.push_back({});
-    std::vector<std::pair<const KNode*, uint32_t>> stack{{&root, 0}};
+    std::vector<std::pair<const TopNode*, uint32_t>> stack{{&root, 0}};
     while (!stack.empty()) {
         auto [n, d] = stack.back();
         stack.pop_back();
-        if (n->axis == 3) {
-            t.nodes[d] = {0.0f, 3, uint32_t(t.prim_indices.size()), uint32_t(n->prims.size())};
-            t.prim_indices.insert(t.prim_indices.end(), n->prims.begin(), n->prims.end());
+        if (!n->child[0]) {
+            // Fragment node i > 0 goes to base + i - 1; its root goes to d.
+            const Fragment& f = n->frag;
+            const auto base = uint32_t(t.nodes.size());
+            const auto prim_base = uint32_t(t.prim_indices.size());
+            const auto place = [&](KdNode x) {
+                x.child = x.is_leaf() ? x.child + prim_base : base + x.child - 1;
+                return x;
+            };
+            t.nodes[d] = place(f.nodes[0]);
+            for (size_t i = 1; i < f.nodes.size(); ++i) t.nodes.push_back(place(f.nodes[i]));
+            t.prim_indices.insert(t.prim_indices.end(), f.prims.begin(), f.prims.end());
             continue;
         }
         const auto k = uint32_t(t.nodes.size());
@@ -250,21 +420,35 @@ int KdTreeBuilder::max_depth_for(size_t n) const {
 
 KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
+    BVHLAB_CHECK(mesh.triangle_count() <= kSlotMask, "too many triangles for the kd-tree builder");
     BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
-    Work root;
-    root.voxel = mesh.bounds();
-    const size_t n = mesh.triangle_count();
-    root.tris.resize(n);
-    root.events.reserve(6 * n);
+    Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
+    std::unique_ptr<Work> root = rec.acquire();
+    root->voxel = mesh.bounds();
+    const auto n = uint32_t(mesh.triangle_count());
+    root->tris.resize(n);
+    root->boxes.resize(n);
     for (uint32_t t = 0; t < n; ++t) {
-        root.tris[t] = t;
-        add_events(root.events, mesh.triangle_bounds(t), t);
+        root->tris[t] = t;
+        root->boxes[t] = mesh.triangle_bounds(t);
     }
-    tbb::parallel_sort(root.events.begin(), root.events.end(), event_less);
-    Recursion rec(config_, mesh, max_depth_for(n));
-    const AABB bounds = root.voxel;
-    std::unique_ptr<KNode> tree = rec.build(std::move(root), 0);
+    // Per axis: events generated in code order (ends, planars, starts; each by slot), then a
+    // stable sort by position.
+    tbb::parallel_for(0, 3, [&](int k) {
+        std::vector<Event>& ev = root->events[k];
+        ev.reserve(2 * size_t(n));
+        const std::vector<AABB>& b = root->boxes;
+        for (uint32_t t = 0; t < n; ++t)
+            if (b[t].lo[k] != b[t].hi[k]) ev.push_back({b[t].hi[k] + 0.0f, (kEnd << kSlotBits) | t});
+        for (uint32_t t = 0; t < n; ++t)
+            if (b[t].lo[k] == b[t].hi[k]) ev.push_back({b[t].lo[k] + 0.0f, (kPlanar << kSlotBits) | t});
+        for (uint32_t t = 0; t < n; ++t)
+            if (b[t].lo[k] != b[t].hi[k]) ev.push_back({b[t].lo[k] + 0.0f, (kStart << kSlotBits) | t});
+        radix_sort_by_pos(ev);
+    });
+    const AABB bounds = root->voxel;
+    std::unique_ptr<TopNode> tree = rec.build_top(std::move(root), 0);
     KdTree out = flatten(*tree, bounds);
     destroy_iteratively(std::move(tree));
     return out;
