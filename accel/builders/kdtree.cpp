@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
-// O(N log N) SAH kd-tree build (Wald & Havran 2006). Each node keeps its events sorted by
-// (position, axis, type); one sweep finds the best plane on all three axes; triangles are
-// then classified left / right / both, only the straddling ones are clipped to each child's
-// voxel ("perfect splits"), and their few new events are sorted and merged into the already
-// sorted lists of the others. Node events refer to node-local triangle slots, so concurrent
-// subtrees never share state.
+// O(N log N) SAH kd-tree build (Wald & Havran 2006). Each node keeps, per axis, its events
+// sorted by (position, type); one sweep per axis finds the best plane. Triangles are then
+// classified left / right / both by their clipped bounds, only the straddling ones are clipped
+// to each child's voxel ("perfect splits"), and their few new events are sorted and merged into
+// the already sorted, filtered lists of the others. Nodes of a few triangles skip events and
+// count directly (same plane, less work). Events refer to node-local triangle slots, so
+// concurrent subtrees never share state; below a size threshold a subtree is built by one
+// thread into its own fragment of the final node array.
 #include "accel/builders/kdtree.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -26,9 +28,8 @@ namespace {
 enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
 constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
-/// Nodes with at most this many triangles keep no events: their planes are found by counting
-/// directly, which costs less than keeping sorted lists for so few.
-constexpr uint32_t kSmallNode = 8;
+/// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
+constexpr uint32_t kMaxSmallNode = 16;
 
 /// One event on one axis, 8 bytes: the plane position, and the event type (end < planar <
 /// start) above a node-local triangle slot. Each axis has its own sorted list, so sorting by
@@ -132,7 +133,7 @@ struct ThreadState {
 class Recursion {
 public:
     Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
-        : c_(c), mesh_(mesh), max_depth_(max_depth) {}
+        : c_(c), mesh_(mesh), max_depth_(max_depth), small_(c.small_node_size) {}
 
     std::unique_ptr<Work> acquire() {
         auto& pool = state_.local().free_work;
@@ -191,7 +192,7 @@ private:
     }
 
     Plane choose_plane(const Work& w) const {
-        return w.tris.size() <= kSmallNode ? find_plane_small(w) : find_plane(w);
+        return w.tris.size() <= small_ ? find_plane_small(w) : find_plane(w);
     }
 
     /// One sweep per axis over the sorted events finds the cheapest plane. A child's area is
@@ -295,11 +296,11 @@ private:
         // straddlers' new events are sorted and merged in.
         for (int i = 0; i < 2; ++i) {
             Work& ch = *child[i];
-            if (ch.tris.size() <= kSmallNode) continue;
+            if (ch.tris.size() <= small_) continue;
             for (auto& f : ts.fresh[i]) f.clear();
             for (uint32_t slot = one_sided[i]; slot < ch.tris.size(); ++slot) add_events(ts.fresh[i], ch.boxes[slot], slot);
         }
-        const bool events[2] = {left.tris.size() > kSmallNode, right.tris.size() > kSmallNode};
+        const bool events[2] = {left.tris.size() > small_, right.tris.size() > small_};
         if (!events[0] && !events[1]) return;
         for (int k = 0; k < 3; ++k) {
             const std::vector<Event>& in = w.events[k];
@@ -330,7 +331,7 @@ private:
         }
     }
 
-    /// find_plane for a node without events (at most kSmallNode triangles): every bound inside
+    /// find_plane for a node without events (at most small_ triangles): every bound inside
     /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
     /// same plane the sweep would make (ties: lower axis, then lower position, left first).
     Plane find_plane_small(const Work& w) const {
@@ -345,7 +346,7 @@ private:
             const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
             const float face = 2.0f * a * b * inv_area, side = 2.0f * (a + b) * inv_area;
             const float lo = w.voxel.lo[k], hi = w.voxel.hi[k];
-            float blo[kSmallNode], bhi[kSmallNode];
+            float blo[kMaxSmallNode], bhi[kMaxSmallNode];
             for (uint32_t s = 0; s < n; ++s) blo[s] = w.boxes[s].lo[k], bhi[s] = w.boxes[s].hi[k];
             for (uint32_t c = 0; c < 2 * n; ++c) {
                 const float pos = (c & 1) ? bhi[c >> 1] : blo[c >> 1];
@@ -375,6 +376,7 @@ private:
     const KdTreeBuilder::Config& c_;
     const TriangleMesh& mesh_;
     const int max_depth_;
+    const uint32_t small_;  // nodes of at most this many triangles keep no events
     tbb::enumerable_thread_specific<ThreadState> state_;
 };
 
@@ -422,6 +424,7 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
     BVHLAB_CHECK(mesh.triangle_count() <= kSlotMask, "too many triangles for the kd-tree builder");
     BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");
+    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode, "kd-tree small_node_size must be at most 16");
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
     Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
     std::unique_ptr<Work> root = rec.acquire();

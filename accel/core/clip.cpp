@@ -37,13 +37,20 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
     Vec3 tri[3] = {a, b, c};
     for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k) buf[0][i].v[k] = tri[i][k];
+    // A plane that the whole triangle lies inside of cannot cut any clipped part either, so
+    // it is skipped (most planes, for a triangle that straddles just one split).
+    const Vec3 tlo = vmin(a, vmin(b, c)), thi = vmax(a, vmax(b, c));
     int n = 3, cur = 0;
     for (int axis = 0; axis < 3 && n > 0; ++axis) {
-        n = clip_plane(buf[cur], n, buf[cur ^ 1], axis, box.lo[axis], -1.0);
-        cur ^= 1;
-        if (n == 0) break;
-        n = clip_plane(buf[cur], n, buf[cur ^ 1], axis, box.hi[axis], 1.0);
-        cur ^= 1;
+        if (tlo[axis] < box.lo[axis]) {
+            n = clip_plane(buf[cur], n, buf[cur ^ 1], axis, box.lo[axis], -1.0);
+            cur ^= 1;
+            if (n == 0) break;
+        }
+        if (thi[axis] > box.hi[axis]) {
+            n = clip_plane(buf[cur], n, buf[cur ^ 1], axis, box.hi[axis], 1.0);
+            cur ^= 1;
+        }
     }
     ClipResult r;
     if (n < 3) {

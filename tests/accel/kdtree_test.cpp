@@ -91,6 +91,41 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
     EXPECT_EQ(KdTreeBuilder().build(test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}})).nodes.size(), 1u);
 }
 
+// The small-node plane search (direct counting, no events) must pick the plane the event sweep
+// picks, so the tree does not depend on where the builder switches between them; and the
+// parallel top levels must not change the tree either. Scenes with shared vertices (many equal
+// event positions), axis-aligned (planar) triangles and random soup.
+TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
+    const TriangleMesh scenes[] = {make_procedural(ProceduralKind::kStructured, 3000, 3),
+                                   make_procedural(ProceduralKind::kSoup, 2000, 5),
+                                   load_obj(test::data_dir() + "/cornell_box.obj")};
+    for (const TriangleMesh& m : scenes) {
+        KdTreeBuilder::Config c;
+        c.small_node_size = 0;
+        c.task_threshold = ~0u;  // one thread, events everywhere
+        const KdTree ref = KdTreeBuilder(c).build(m);
+        ASSERT_EQ(validate_kd(ref, m.triangle_count()), "");
+        for (uint32_t small : {1u, 8u, 16u}) {
+            for (uint32_t task : {64u, 2048u}) {
+                c.small_node_size = small;
+                c.task_threshold = task;
+                const KdTree t = KdTreeBuilder(c).build(m);
+                ASSERT_EQ(t.nodes.size(), ref.nodes.size()) << "small " << small << " task " << task;
+                EXPECT_EQ(t.prim_indices, ref.prim_indices) << "small " << small << " task " << task;
+                for (size_t i = 0; i < t.nodes.size(); ++i) {
+                    ASSERT_EQ(t.nodes[i].axis, ref.nodes[i].axis) << i;
+                    ASSERT_EQ(t.nodes[i].split, ref.nodes[i].split) << i;
+                    ASSERT_EQ(t.nodes[i].child, ref.nodes[i].child) << i;
+                    ASSERT_EQ(t.nodes[i].count, ref.nodes[i].count) << i;
+                }
+            }
+        }
+    }
+    KdTreeBuilder::Config c;
+    c.small_node_size = 17;
+    EXPECT_THROW(KdTreeBuilder(c).build(scenes[0]), Error);
+}
+
 TEST(KdTreeBuilder, ValidateAndStats) {
     TriangleMesh m = make_procedural(ProceduralKind::kStructured, 4000, 6);
     KdTree t = KdTreeBuilder().build(m);
