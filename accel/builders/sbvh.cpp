@@ -2,7 +2,7 @@
 // SBVH: at each node, the best binned object split; where its children overlap by more than
 // alpha x root area, also the best spatial split (chopped, clipped bins). Spatial splits
 // duplicate straddling references unless moving one whole to a side is cheaper ("reference
-// unsplitting"), within a global reference budget.
+// unsplitting"), within a reference budget shared out down the tree.
 #include "accel/builders/sbvh.h"
 
 #include <tbb/blocked_range.h>
@@ -10,7 +10,6 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <atomic>
 #include <memory>
 
 #include "accel/core/check.h"
@@ -47,10 +46,12 @@ AABB bounds_of(const std::vector<PrimRef>& refs) {
 class Recursion {
 public:
     Recursion(const SbvhBuilder::Config& c, const TriangleMesh& mesh, float root_half_area)
-        : c_(c), mesh_(mesh), root_area_(root_half_area),
-          budget_(int64_t(double(c.reference_budget - 1.0f) * double(mesh.triangle_count()))) {}
+        : c_(c), mesh_(mesh), root_area_(root_half_area) {}
 
-    std::unique_ptr<TNode> build(std::vector<PrimRef> refs, const AABB& bounds, uint32_t depth) {
+    /// `budget`: how many more references this subtree may create. What a node leaves unused
+    /// goes to its children in proportion to their sizes (as Embree's builders share out
+    /// extra space), so the tree does not depend on which thread reaches the budget first.
+    std::unique_ptr<TNode> build(std::vector<PrimRef> refs, const AABB& bounds, uint32_t depth, int64_t budget) {
         auto node = std::make_unique<TNode>();
         node->bounds = bounds;
         const auto n = uint32_t(refs.size());
@@ -63,7 +64,7 @@ public:
             const AABB overlap{vmax(obj.left.lo, obj.right.lo), vmin(obj.left.hi, obj.right.hi)};
             // Without an object split both "children" would be the whole node.
             const float overlap_area = obj.axis < 0 ? bounds.half_area() : overlap.half_area();
-            if (overlap_area > c_.alpha * root_area_ && budget_.load(std::memory_order_relaxed) > 0)
+            if (overlap_area > c_.alpha * root_area_ && budget > 0)
                 spa = spatial_split(refs, bounds);
         }
         const bool spatial = spa.weight < obj.weight;
@@ -79,7 +80,7 @@ public:
         }
         std::vector<PrimRef> left, right;
         if (d == SplitDecision::kSplit && spatial) {
-            partition_spatial(refs, spa, left, right);
+            partition_spatial(refs, spa, left, right, budget);
         } else if (d == SplitDecision::kSplit) {
             const BinMapping map(cb, c_.object_bins);
             for (PrimRef& r : refs)
@@ -88,13 +89,14 @@ public:
         if (left.empty() || right.empty()) median(refs, cb, left, right);
         refs = {};  // release before recursing
         const AABB lb = bounds_of(left), rb = bounds_of(right);
-        auto l = [&] { node->child[0] = build(std::move(left), lb, depth + 1); };
-        auto r = [&] { node->child[1] = build(std::move(right), rb, depth + 1); };
+        const auto budget_left =
+            int64_t(double(budget) * double(left.size()) / double(left.size() + right.size()));
+        const int64_t budget_right = budget - budget_left;
+        auto l = [&] { node->child[0] = build(std::move(left), lb, depth + 1, budget_left); };
+        auto r = [&] { node->child[1] = build(std::move(right), rb, depth + 1, budget_right); };
         if (n >= c_.task_threshold) tbb::parallel_invoke(l, r); else { l(); r(); }
         return node;
     }
-
-    int64_t budget_left() const { return budget_.load(); }
 
 private:
     Candidate object_split(const std::vector<PrimRef>& refs, const AABB& cb) const {
@@ -169,7 +171,7 @@ private:
     /// Splits at the spatial plane; straddling references are duplicated with clipped
     /// bounds, or moved whole to one side when that is cheaper (Stich et al., section 4.5).
     void partition_spatial(const std::vector<PrimRef>& refs, Candidate s, std::vector<PrimRef>& left,
-                           std::vector<PrimRef>& right) {
+                           std::vector<PrimRef>& right, int64_t& budget) const {
         const int a = s.axis;
         const float p = s.plane;
         for (const PrimRef& r : refs) {
@@ -186,8 +188,7 @@ private:
             const float c_left = merge(s.left, r.bounds).half_area() * float(s.nl) + ar * float(s.nr - 1);
             const float c_right = al * float(s.nl - 1) + merge(s.right, r.bounds).half_area() * float(s.nr);
             const bool to_left = c_left <= c_right;
-            if (std::min(c_left, c_right) < c_dup || budget_.fetch_sub(1, std::memory_order_relaxed) <= 0) {
-                if (std::min(c_left, c_right) >= c_dup) budget_.fetch_add(1, std::memory_order_relaxed);
+            if (std::min(c_left, c_right) < c_dup || budget <= 0) {
                 if (to_left) {
                     left.push_back(r);
                     s.left.extend(r.bounds);
@@ -204,7 +205,7 @@ private:
             // Rounding can leave one side with nothing; then the reference is not duplicated.
             if (!lr.bounds.is_empty()) left.push_back(lr);
             if (!rr.bounds.is_empty()) right.push_back(rr);
-            if (lr.bounds.is_empty() || rr.bounds.is_empty()) budget_.fetch_add(1, std::memory_order_relaxed);
+            if (!lr.bounds.is_empty() && !rr.bounds.is_empty()) --budget;
             if (lr.bounds.is_empty() && rr.bounds.is_empty()) (to_left ? left : right).push_back(r);
         }
     }
@@ -225,7 +226,6 @@ private:
     const SbvhBuilder::Config& c_;
     const TriangleMesh& mesh_;
     const float root_area_;
-    std::atomic<int64_t> budget_;
 };
 
 /// Depth-first flattening: siblings adjacent, a subtree's references contiguous.
@@ -262,7 +262,8 @@ BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
     std::vector<PrimRef> refs = make_prim_refs(mesh);
     const AABB bounds = bounds_of(refs);
     Recursion rec(config_, mesh, bounds.half_area());
-    std::unique_ptr<TNode> root = rec.build(std::move(refs), bounds, 0);
+    const auto budget = int64_t(double(config_.reference_budget - 1.0f) * double(mesh.triangle_count()));
+    std::unique_ptr<TNode> root = rec.build(std::move(refs), bounds, 0, budget);
     BuildTree t = flatten(*root);
     destroy_iteratively(std::move(root));
     return t;

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+
 #include <random>
 
 #include "accel/builders/builder.h"
@@ -92,6 +94,35 @@ TEST(SbvhBuilder, BudgetOfOneMeansNoDuplicates) {
     BuildTree t = SbvhBuilder(c).build(m);
     EXPECT_EQ(t.prim_indices.size(), m.triangle_count());
     EXPECT_EQ(validate(t, m, c), "");  // exactly once, like an object-split BVH
+}
+
+// When the budget runs out, which references get split must not depend on which thread got
+// there first: the same tree with 1 or 2 threads, run after run.
+TEST(SbvhBuilder, BindingBudgetIsDeterministic) {
+    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 60000, 8);
+    SbvhBuilder::Config c;
+    c.reference_budget = 1.02f;
+    c.alpha = 0.0f;          // spatial splits wanted everywhere, so the budget binds
+    c.task_threshold = 256;  // plenty of parallel subtrees
+    const auto build_with = [&](size_t threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        return SbvhBuilder(c).build(m);
+    };
+    const BuildTree one = build_with(1);
+    EXPECT_GT(double(one.prim_indices.size()), 1.015 * double(m.triangle_count()));  // the budget binds
+    EXPECT_LE(double(one.prim_indices.size()), 1.02 * double(m.triangle_count()) + 1.0);
+    for (int run = 0; run < 3; ++run) {
+        const BuildTree two = build_with(2);
+        ASSERT_EQ(two.nodes.size(), one.nodes.size());
+        ASSERT_EQ(two.prim_indices, one.prim_indices);
+        for (size_t i = 0; i < one.nodes.size(); ++i) {
+            ASSERT_EQ(two.nodes[i].first_index, one.nodes[i].first_index) << i;
+            for (int k = 0; k < 3; ++k) {
+                ASSERT_EQ(two.nodes[i].bounds.lo[k], one.nodes[i].bounds.lo[k]) << i;
+                ASSERT_EQ(two.nodes[i].bounds.hi[k], one.nodes[i].bounds.hi[k]) << i;
+            }
+        }
+    }
 }
 
 TEST(SbvhBuilder, HugeAlphaDisablesSpatialSplits) {
