@@ -48,10 +48,12 @@ public:
     Recursion(const SbvhBuilder::Config& c, const TriangleMesh& mesh, float root_half_area)
         : c_(c), mesh_(mesh), root_area_(root_half_area) {}
 
-    /// `budget`: how many more references this subtree may create. What a node leaves unused
-    /// goes to its children in proportion to their sizes (as Embree's builders share out
-    /// extra space), so the tree does not depend on which thread reaches the budget first.
-    std::unique_ptr<TNode> build(std::vector<PrimRef> refs, const AABB& bounds, uint32_t depth, int64_t budget) {
+    /// `budget`: how many more references this subtree may create; on return, what it left
+    /// unused. A node shares what it does not use between its children in proportion to their
+    /// SAH weight (area x references). Below the task threshold, one thread builds left then
+    /// right, and the left subtree's leftover goes on to the right. So the tree never depends
+    /// on which thread reaches the budget first.
+    std::unique_ptr<TNode> build(std::vector<PrimRef> refs, const AABB& bounds, uint32_t depth, int64_t& budget) {
         auto node = std::make_unique<TNode>();
         node->bounds = bounds;
         const auto n = uint32_t(refs.size());
@@ -89,12 +91,21 @@ public:
         if (left.empty() || right.empty()) median(refs, cb, left, right);
         refs = {};  // release before recursing
         const AABB lb = bounds_of(left), rb = bounds_of(right);
-        const auto budget_left =
-            int64_t(double(budget) * double(left.size()) / double(left.size() + right.size()));
-        const int64_t budget_right = budget - budget_left;
-        auto l = [&] { node->child[0] = build(std::move(left), lb, depth + 1, budget_left); };
-        auto r = [&] { node->child[1] = build(std::move(right), rb, depth + 1, budget_right); };
-        if (n >= c_.task_threshold) tbb::parallel_invoke(l, r); else { l(); r(); }
+        const double wl = double(lb.half_area()) * double(left.size()), wr = double(rb.half_area()) * double(right.size());
+        const auto budget_left = int64_t(double(budget) * (wl + wr > 0 ? wl / (wl + wr) : 0.5));
+        int64_t bl = budget_left, br = budget - budget_left;
+        auto l = [&] { node->child[0] = build(std::move(left), lb, depth + 1, bl); };
+        auto r = [&] { node->child[1] = build(std::move(right), rb, depth + 1, br); };
+        if (n >= c_.task_threshold) {
+            tbb::parallel_invoke(l, r);
+        } else {
+            // One thread, a fixed order: what the left subtree leaves goes on to the right.
+            l();
+            br += bl;
+            bl = 0;
+            r();
+        }
+        budget = bl + br;  // unused, handed back up
         return node;
     }
 
@@ -263,7 +274,8 @@ BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
     const AABB bounds = bounds_of(refs);
     Recursion rec(config_, mesh, bounds.half_area());
     const auto budget = int64_t(double(config_.reference_budget - 1.0f) * double(mesh.triangle_count()));
-    std::unique_ptr<TNode> root = rec.build(std::move(refs), bounds, 0, budget);
+    int64_t budget_left = budget;
+    std::unique_ptr<TNode> root = rec.build(std::move(refs), bounds, 0, budget_left);
     BuildTree t = flatten(*root);
     destroy_iteratively(std::move(root));
     return t;
