@@ -195,20 +195,33 @@ private:
         return w.tris.size() <= small_ ? find_plane_small(w) : find_plane(w);
     }
 
-    /// One sweep per axis over the sorted events finds the cheapest plane. A child's area is
+    /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
     /// linear in the plane position: 2 (a b + (a + b) d) for the other two extents a, b and
     /// the child's extent d along the axis.
+    struct AxisCost {
+        float lo, hi, face, side, ct, ci, bonus;
+        float operator()(float pos, uint32_t nl, uint32_t nr) const {
+            const float pl = face + side * (pos - lo), pr = face + side * (hi - pos);
+            const float c = ct + ci * (pl * float(nl) + pr * float(nr));
+            return (nl == 0 || nr == 0) ? c * bonus : c;
+        }
+    };
+    AxisCost axis_cost(const AABB& voxel, int k, float inv_area) const {
+        const Vec3 ext = voxel.hi - voxel.lo;
+        const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
+        return {voxel.lo[k], voxel.hi[k], 2.0f * a * b * inv_area, 2.0f * (a + b) * inv_area,
+                c_.traversal_cost, c_.intersection_cost, 1.0f - c_.empty_bonus};
+    }
+
+    /// One sweep per axis over the sorted events finds the cheapest plane.
     Plane find_plane(const Work& w) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.tris.empty()) return best;
         const float inv_area = 1.0f / area;
         const auto n = uint32_t(w.tris.size());
-        const Vec3 ext = w.voxel.hi - w.voxel.lo;
-        const float ct = c_.traversal_cost, ci = c_.intersection_cost, bonus = 1.0f - c_.empty_bonus;
         for (int k = 0; k < 3; ++k) {
-            const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
-            const float face = 2.0f * a * b * inv_area, side = 2.0f * (a + b) * inv_area;
+            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             const float lo = w.voxel.lo[k], hi = w.voxel.hi[k];
             const std::vector<Event>& e = w.events[k];
             const size_t m = e.size();
@@ -235,12 +248,7 @@ private:
                 nl += uint32_t(start);  // after the evaluation below; it reads nl - start
                 if (!eval || !(pos > lo && pos < hi)) continue;  // rarely mispredicted
                 const uint32_t l = nl - uint32_t(start);
-                const float pl = face + side * (pos - lo), pr = face + side * (hi - pos);
-                const auto cost = [&](uint32_t cl, uint32_t cr) {
-                    const float c = ct + ci * (pl * float(cl) + pr * float(cr));
-                    return (cl == 0 || cr == 0) ? c * bonus : c;
-                };
-                const float left = cost(l, nr), right = cost(l - planars, nr + planars);
+                const float left = cost(pos, l, nr), right = cost(pos, l - planars, nr + planars);
                 if (left < best.cost) best = {left, k, pos, true};
                 if (right < best.cost) best = {right, k, pos, false};
             }
@@ -340,11 +348,8 @@ private:
         const auto n = uint32_t(w.tris.size());
         if (!(area > 0.0f) || n == 0) return best;
         const float inv_area = 1.0f / area;
-        const Vec3 ext = w.voxel.hi - w.voxel.lo;
-        const float ct = c_.traversal_cost, ci = c_.intersection_cost, bonus = 1.0f - c_.empty_bonus;
         for (int k = 0; k < 3; ++k) {
-            const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
-            const float face = 2.0f * a * b * inv_area, side = 2.0f * (a + b) * inv_area;
+            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             const float lo = w.voxel.lo[k], hi = w.voxel.hi[k];
             float blo[kMaxSmallNode], bhi[kMaxSmallNode];
             for (uint32_t s = 0; s < n; ++s) blo[s] = w.boxes[s].lo[k], bhi[s] = w.boxes[s].hi[k];
@@ -357,12 +362,7 @@ private:
                     above += uint32_t(bhi[s] > pos);
                     planar += uint32_t(blo[s] == pos && bhi[s] == pos);
                 }
-                const float pl = face + side * (pos - lo), pr = face + side * (hi - pos);
-                const auto cost = [&](uint32_t cl, uint32_t cr) {
-                    const float x = ct + ci * (pl * float(cl) + pr * float(cr));
-                    return (cl == 0 || cr == 0) ? x * bonus : x;
-                };
-                const float cl = cost(below + planar, above), cr = cost(below, above + planar);
+                const float cl = cost(pos, below + planar, above), cr = cost(pos, below, above + planar);
                 const auto better = [&](float x) {
                     return x < best.cost || (x == best.cost && k == best.axis && pos < best.pos);
                 };
