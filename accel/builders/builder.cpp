@@ -3,6 +3,7 @@
 
 #include <chrono>
 
+#include "accel/builders/reinsertion.h"
 #include "accel/builders/sbvh.h"
 #include "accel/builders/sweep_sah.h"
 #include "accel/core/check.h"
@@ -18,6 +19,11 @@ BuilderKind parse_builder_kind(const std::string& name) {
 
 const char* builder_name(BuilderKind kind) {
     return kind == BuilderKind::kBinned ? "binned" : (kind == BuilderKind::kSweep ? "sweep" : "sbvh");
+}
+
+int reinsertion_passes(BuilderKind kind, const BuilderOptions& options) {
+    if (options.reinsertion_passes >= 0) return options.reinsertion_passes;
+    return kind == BuilderKind::kSbvh ? SbvhBuilder::Config{}.reinsertion_passes : 0;
 }
 
 BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const BuilderOptions& options) {
@@ -39,8 +45,10 @@ BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const Builde
         c.alpha = options.sbvh_alpha;
         c.reference_budget = options.sbvh_budget;
         c.spatial_bins = options.sbvh_spatial_bins;
+        c.reinsertion_passes = reinsertion_passes(kind, options);
         r.tree = SbvhBuilder(c).build(mesh);
     }
+    if (kind != BuilderKind::kSbvh) optimize_by_reinsertion(r.tree, options.config, reinsertion_passes(kind, options));
     r.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return r;
 }

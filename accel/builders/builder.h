@@ -24,7 +24,13 @@ struct BuilderOptions {
     float sbvh_alpha = 1e-5f;
     float sbvh_budget = 2.0f;
     int sbvh_spatial_bins = 32;
+    /// Passes of subtree reinsertion after the build; -1 = the builder's default (3 for SBVH,
+    /// 0 for the others). See reinsertion_passes().
+    int reinsertion_passes = -1;
 };
+
+/// The reinsertion passes `options` ask of builder `kind`, with -1 resolved.
+int reinsertion_passes(BuilderKind kind, const BuilderOptions& options);
 
 struct BuildResult {
     BuildTree tree;

@@ -16,6 +16,7 @@
 #include "accel/core/prim_ref.h"
 #include "accel/core/sah.h"
 #include "accel/core/spatial_split.h"
+#include "accel/builders/reinsertion.h"
 #include "accel/builders/top_down.h"
 
 namespace bvhlab::accel {
@@ -66,8 +67,12 @@ public:
             const AABB overlap{vmax(obj.left.lo, obj.right.lo), vmin(obj.left.hi, obj.right.hi)};
             // Without an object split both "children" would be the whole node.
             const float overlap_area = obj.axis < 0 ? bounds.half_area() : overlap.half_area();
-            if (overlap_area > c_.alpha * root_area_ && budget > 0)
+            if (overlap_area > c_.alpha * root_area_ && budget > 0) {
                 spa = spatial_split(refs, bounds);
+                // A split the budget cannot pay for would be carried out without its
+                // duplicates, as a worse split than its cost says: leave it out.
+                if (int64_t(spa.nl) + int64_t(spa.nr) - int64_t(n) > budget) spa = Candidate{};
+            }
         }
         const bool spatial = spa.weight < obj.weight;
         const float best = spatial ? spa.weight : obj.weight;
@@ -278,6 +283,7 @@ BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
     std::unique_ptr<TNode> root = rec.build(std::move(refs), bounds, 0, budget_left);
     BuildTree t = flatten(*root);
     destroy_iteratively(std::move(root));
+    optimize_by_reinsertion(t, config_, config_.reinsertion_passes);
     return t;
 }
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Spatial-split BVH (Stich, Friedrich & Dietrich 2009): binned object splits plus spatial
-// splits that duplicate references, with exact clipped bounds and reference unsplitting.
+// splits that duplicate references, with exact clipped bounds and reference unsplitting,
+// followed by a few passes of subtree reinsertion (accel/builders/reinsertion.h).
 #pragma once
 
 #include "accel/core/build_tree.h"
@@ -19,6 +20,8 @@ public:
         /// At most this many references in all, as a multiple of the triangle count.
         float reference_budget = 2.0f;
         uint32_t task_threshold = 4096;  ///< subtrees at least this big become TBB tasks
+        /// Passes of ReinsertionOptimizer over the finished tree (0 = the plain top-down SBVH).
+        int reinsertion_passes = 3;
     };
 
     SbvhBuilder() = default;

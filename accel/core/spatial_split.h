@@ -71,7 +71,10 @@ struct SpatialBins {
     /// Position of the plane after bin i.
     float plane(int i) const { return lo + width * float(i + 1); }
 
-    /// Adds one reference, chopping it at every bin boundary it crosses.
+    /// Adds one reference, chopped at every bin boundary it crosses. The piece in bin i is
+    /// the box of the triangle's part between the bin's planes (its vertices there and its
+    /// edges' crossings of both planes), cut to the reference's bounds. Each plane's crossings
+    /// are computed once and shared by the bins on either side; the triangle is read once.
     void add(const TriangleMesh& mesh, const PrimRef& r) {
         const int first = bin_of(r.bounds.lo[axis]), last = bin_of(r.bounds.hi[axis]);
         ++entry[first];
@@ -80,16 +83,37 @@ struct SpatialBins {
             bins[first].bounds.extend(r.bounds);
             return;
         }
-        // Chop at each plane in turn: the left piece goes to bin i, the right piece goes on.
-        PrimRef rest = r;
-        for (int i = first; i < last; ++i) {
-            AABB l, rr;
-            split_reference(mesh, rest, axis, plane(i), l, rr);
-            bins[i].bounds.extend(l);
-            rest.bounds = rr;
-            if (rr.is_empty()) return;
+        const Vec3 v[3] = {mesh.vertex(r.prim_id, 0), mesh.vertex(r.prim_id, 1), mesh.vertex(r.prim_id, 2)};
+        // Where the triangle's edges cross the plane x[axis] = pos, strictly.
+        auto crossings = [&](float pos) {
+            AABB c = AABB::empty();
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 a = v[k], b = v[k == 2 ? 0 : k + 1];
+                if (!((a[axis] < pos && b[axis] > pos) || (a[axis] > pos && b[axis] < pos))) continue;
+                Vec3 x = a + (b - a) * ((pos - a[axis]) / (b[axis] - a[axis]));
+                x[axis] = pos;
+                c.extend(x);
+            }
+            return c;
+        };
+        float left = r.bounds.lo[axis];
+        AABB at_left = crossings(left);  // a clipped reference's triangle may reach past its box
+        for (int i = first; i <= last; ++i) {
+            const float right = i < last ? plane(i) : r.bounds.hi[axis];
+            const AABB at_right = crossings(right);
+            AABB piece = at_left;
+            piece.extend(at_right);
+            for (const Vec3& p : v)
+                if (p[axis] >= left && p[axis] <= right) piece.extend(p);
+            AABB clipped = r.bounds;
+            clipped.lo[axis] = max_f(clipped.lo[axis], left);
+            clipped.hi[axis] = min_f(clipped.hi[axis], right);
+            clipped.lo = vmax(clipped.lo, piece.lo);
+            clipped.hi = vmin(clipped.hi, piece.hi);
+            if (!clipped.is_empty()) bins[i].bounds.extend(clipped);
+            at_left = at_right;
+            left = right;
         }
-        bins[last].bounds.extend(rest.bounds);
     }
 };
 

@@ -30,7 +30,7 @@ struct Header {
     uint64_t node_count;     // BuildNode records (32 bytes each) that follow
     uint64_t index_count;    // uint32 primitive indices that follow the nodes
     uint32_t spatial_bins;   // SBVH spatial bins
-    uint32_t reserved;       // 0
+    uint32_t reinsertion;    // BVH files: reinsertion passes run after the build (was reserved, 0)
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
@@ -78,6 +78,7 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
     if (kind != BuilderKind::kSweep) s << " bins=" << o.num_bins;
     if (kind == BuilderKind::kSbvh)
         s << " alpha=" << o.sbvh_alpha << " budget=" << o.sbvh_budget << " spatial_bins=" << o.sbvh_spatial_bins;
+    s << " reinsert=" << reinsertion_passes(kind, o);
     return s.str();
 }
 
@@ -94,6 +95,7 @@ void write_tree_file(const std::string& path, const BuildTree& tree, const TreeF
     h.sbvh_alpha = meta.options.sbvh_alpha;
     h.sbvh_budget = meta.options.sbvh_budget;
     h.spatial_bins = uint32_t(meta.options.sbvh_spatial_bins);
+    h.reinsertion = uint32_t(reinsertion_passes(meta.builder, meta.options));
     write_file(path, h, tree.nodes, tree.prim_indices);
 }
 
@@ -172,6 +174,7 @@ TreeFile read_tree_file(const std::string& path) {
     o.sbvh_alpha = h.sbvh_alpha;
     o.sbvh_budget = h.sbvh_budget;
     o.sbvh_spatial_bins = int(h.spatial_bins);
+    o.reinsertion_passes = int(h.reinsertion);
     return f;
 }
 

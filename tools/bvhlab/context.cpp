@@ -183,6 +183,11 @@ void BuildOptions::add_to(CLI::App& app) {
         app.add_option("--spatial-bins", opts.sbvh_spatial_bins, "SBVH: bins per axis for spatial splits")
             ->check(CLI::Range(2, 256))
             ->capture_default_str(),
+        app.add_option("--reinsert", opts.reinsertion_passes,
+                       "passes of SAH-lowering subtree reinsertion after the BVH build; -1 = the builder's default "
+                       "(3 for sbvh, 0 for binned and sweep)")
+            ->check(CLI::Range(-1, 16))
+            ->capture_default_str(),
     };
     // --structure NAME picks the builder; a path is checked when the command runs.
     st->each([this](const std::string& v) {

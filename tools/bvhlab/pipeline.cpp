@@ -47,6 +47,7 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     if (flags[3]->count()) asked.sbvh_alpha = given.sbvh_alpha;
     if (flags[4]->count()) asked.sbvh_budget = given.sbvh_budget;
     if (flags[5]->count()) asked.sbvh_spatial_bins = given.sbvh_spatial_bins;
+    if (flags[6]->count()) asked.reinsertion_passes = given.reinsertion_passes;
     const std::string have = accel::describe_config(f.meta.builder, f.meta.options);
     const std::string want = accel::describe_config(f.meta.builder, asked);
     if (have != want)
@@ -146,6 +147,7 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
         b.record["budget"] = opts.opts.sbvh_budget;
     }
     b.record["max_leaf"] = opts.opts.config.max_leaf_size;
+    b.record["reinsertion_passes"] = accel::reinsertion_passes(opts.kind(), opts.opts);
     b.record["config"] = accel::describe_config(opts.kind(), opts.opts);
     if (!file.empty()) b.record["structure_file"] = file;  // build_ms is then 0: nothing was built
     b.record["machine"] = machine_description();
