@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SBVH: at each node, the best binned object split; where its children overlap by more than
-// alpha x root area, also the best spatial split (chopped, clipped bins). Spatial splits
+// alpha x root area, also the best spatial split (chopped, clipped bins), taken only if it is
+// cheaper by the spatial margin and the node's share of the budget pays for its duplicates. Spatial splits
 // duplicate straddling references unless moving one whole to a side is cheaper ("reference
 // unsplitting"), within a reference budget shared out down the tree.
 #include "accel/builders/sbvh.h"
@@ -74,7 +75,7 @@ public:
                 if (int64_t(spa.nl) + int64_t(spa.nr) - int64_t(n) > budget) spa = Candidate{};
             }
         }
-        const bool spatial = spa.weight < obj.weight;
+        const bool spatial = spa.weight < (1.0f - c_.spatial_margin) * obj.weight;
         const float best = spatial ? spa.weight : obj.weight;
         const float pa = bounds.half_area();
         const float cost = std::isfinite(best) ? c_.traversal_cost + c_.intersection_cost * (pa > 0 ? best / pa : 0.0f)
@@ -275,6 +276,8 @@ BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
                  "SBVH bin counts must be in [2, 256]");
     BVHLAB_CHECK(config_.reference_budget >= 1.0f, "the SBVH reference budget must be at least 1");
     BVHLAB_CHECK(config_.alpha >= 0.0f, "SBVH alpha must be non-negative");
+    BVHLAB_CHECK(config_.spatial_margin >= 0.0f && config_.spatial_margin < 1.0f,
+                 "SBVH spatial margin must be in [0, 1)");
     std::vector<PrimRef> refs = make_prim_refs(mesh);
     const AABB bounds = bounds_of(refs);
     Recursion rec(config_, mesh, bounds.half_area());

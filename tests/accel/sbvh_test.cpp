@@ -7,6 +7,7 @@
 
 #include <tbb/global_control.h>
 
+#include <cstdio>
 #include <random>
 
 #include "accel/builders/builder.h"
@@ -103,6 +104,7 @@ TEST(SbvhBuilder, BindingBudgetIsDeterministic) {
     SbvhBuilder::Config c;
     c.reference_budget = 1.02f;
     c.alpha = 0.0f;          // spatial splits wanted everywhere, so the budget binds
+    c.spatial_margin = 0.0f;
     c.task_threshold = 256;  // plenty of parallel subtrees
     const auto build_with = [&](size_t threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
@@ -129,6 +131,26 @@ TEST(SbvhBuilder, BindingBudgetIsDeterministic) {
             }
         }
     }
+}
+
+// The spatial margin drops the marginal spatial splits that a finely tessellated surface
+// offers everywhere, and keeps the ones long thin triangles need.
+TEST(SbvhBuilder, SpatialMarginDropsMarginalSplits) {
+    const TriangleMesh surface = make_procedural(ProceduralKind::kStructured, 40000, 9);
+    const TriangleMesh star = star_slivers(3000, 9);
+    SbvhBuilder::Config c;
+    c.reinsertion_passes = 0;
+    c.spatial_margin = 0.0f;
+    const size_t surface_all = SbvhBuilder(c).build(surface).prim_indices.size();
+    const size_t star_all = SbvhBuilder(c).build(star).prim_indices.size();
+    c.spatial_margin = 0.1f;
+    const size_t surface_margin = SbvhBuilder(c).build(surface).prim_indices.size();
+    const size_t star_margin = SbvhBuilder(c).build(star).prim_indices.size();
+    std::printf("surface refs %zu -> %zu, star refs %zu -> %zu\n", surface_all, surface_margin, star_all, star_margin);
+    EXPECT_LT(double(surface_margin - surface.triangle_count()), 0.5 * double(surface_all - surface.triangle_count()));
+    EXPECT_GT(double(star_margin), 0.9 * double(star_all));
+    c.spatial_margin = 1.0f;
+    EXPECT_THROW(SbvhBuilder(c).build(star), Error);
 }
 
 TEST(SbvhBuilder, HugeAlphaDisablesSpatialSplits) {
