@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 // BM_Build/<builder>/<scene>: build time (Mtris/s) with SAH, EPO, nodes, references and bytes
-// as counters, so speed and quality land in one JSON.
+// as counters, so speed and quality land in one JSON. Builders run with their defaults (SBVH
+// includes its 3 reinsertion passes); "sbvh-r0" is the SBVH without them and "sweep-r3" the
+// sweep with them, so the optimiser's share can be read off.
 #include <benchmark/benchmark.h>
 
 #include "accel/builders/builder.h"
@@ -12,8 +14,10 @@
 namespace bvhlab::bench {
 namespace {
 
-void bm_build(benchmark::State& state, accel::BuilderKind kind, std::shared_ptr<accel::TriangleMesh> mesh) {
+void bm_build(benchmark::State& state, accel::BuilderKind kind, int reinsertion,
+              std::shared_ptr<accel::TriangleMesh> mesh) {
     accel::BuilderOptions opts;
+    opts.reinsertion_passes = reinsertion;
     accel::BuildResult last;
     for (auto _ : state) {
         last = accel::run_builder(kind, *mesh, opts);
@@ -72,11 +76,15 @@ int main(int argc, char** argv) {
         // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
         auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
         auto load = scene.load;
-        for (auto kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh}) {
-            const std::string name = std::string("BM_Build/") + accel::builder_name(kind) + "/" + scene.name;
-            benchmark::RegisterBenchmark(name.c_str(), [holder, load, kind](benchmark::State& st) {
+        const std::pair<accel::BuilderKind, int> variants[] = {
+            {accel::BuilderKind::kBinned, -1}, {accel::BuilderKind::kSweep, -1}, {accel::BuilderKind::kSweep, 3},
+            {accel::BuilderKind::kSbvh, -1},   {accel::BuilderKind::kSbvh, 0}};
+        for (const auto& [kind, reinsertion] : variants) {
+            const std::string suffix = reinsertion < 0 ? "" : "-r" + std::to_string(reinsertion);
+            const std::string name = std::string("BM_Build/") + accel::builder_name(kind) + suffix + "/" + scene.name;
+            benchmark::RegisterBenchmark(name.c_str(), [holder, load, kind = kind, reinsertion = reinsertion](benchmark::State& st) {
                 if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
-                bench::bm_build(st, kind, *holder);
+                bench::bm_build(st, kind, reinsertion, *holder);
             })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
         }
         benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(), [holder, load](benchmark::State& st) {
