@@ -63,6 +63,8 @@ expect_error rays-needs-out "--out" rays "$data/cornell_box.obj"
 "$bin" -q build "$data/cornell_box.obj" --builder sbvh --out "$tmp/cb.tree" >/dev/null
 expect_error cache-other-scene "stale structure file.*other triangles" verify gen:soup:50 --structure "$tmp/cb.tree"
 expect_error cache-other-config "stale structure file.*asked for" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --max-leaf 2
+expect_error cache-other-reinsertion "stale structure file.*reinsert=3.*reinsert=0" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --reinsert 0
+expect_error bad-reinsert "reinsert" build "$data/cornell_box.obj" --builder sbvh --reinsert 99
 head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
 expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"
 expect_error cache-not-a-tree "not a bvhlab structure file" verify "$data/cornell_box.obj" --structure "$data/cornell_box.obj"
