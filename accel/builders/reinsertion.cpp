@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Reinsertion: each pass takes the largest nodes, cuts each one out (its parent goes with it
-// and its sibling takes the parent's place), and puts it back as the sibling of the node X
+// Reinsertion: each pass takes every node, the largest first, cuts it out (its parent goes with
+// it and its sibling takes the parent's place), and puts it back as the sibling of the node X
 // that minimises the growth in interior area: A(X u N) plus, on every ancestor a of X,
 // A(a u N) - A(a). Candidates X are visited best-first; a node whose ancestors' growth alone
 // already reaches the best cost found prunes its whole subtree. Leaves never change, so the
@@ -8,14 +8,13 @@
 // the candidates: no move makes the tree worse.
 #include "accel/builders/reinsertion.h"
 
-#include <algorithm>
-#include <array>
-#include <queue>
-#include <vector>
-
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <vector>
 
 #include "accel/core/check.h"
 
