@@ -39,7 +39,7 @@ public:
         }
         // Children follow their parents in a BuildTree, so a reverse sweep sees kids first.
         for (size_t i = t.nodes.size(); i-- > 0;)
-            if (!leaf(uint32_t(i))) height_[i] = uint8_t(1 + std::max(height_[kid_[i][0]], height_[kid_[i][1]]));
+            if (!leaf(uint32_t(i))) update_height(uint32_t(i));
     }
 
     bool leaf(uint32_t n) const { return kid_[n][0] == kNone; }
@@ -112,7 +112,7 @@ public:
     void refresh_heights(const std::vector<uint32_t>& pre, const std::vector<uint32_t>& size, uint32_t cut) {
         for (size_t i = pre.size(); i-- > 0;) {
             const uint32_t n = pre[i];
-            if (size[n] > cut) height_[n] = uint8_t(1 + std::max(height_[kid_[n][0]], height_[kid_[n][1]]));
+            if (size[n] > cut) update_height(n);
         }
     }
 
@@ -143,14 +143,13 @@ public:
     }
 
 private:
+    void update_height(uint32_t n) { height_[n] = uint8_t(1 + std::max(height_[kid_[n][0]], height_[kid_[n][1]])); }
+
     /// Recomputes bounds and heights from n up to `top`, inclusive.
     void refit(uint32_t n, uint32_t top) {
         for (;; n = parent_[n]) {
-            const auto [a, b] = kid_[n];
-            AABB u = box_[a];
-            u.extend(box_[b]);
-            box_[n] = u;
-            height_[n] = uint8_t(1 + std::max(height_[a], height_[b]));
+            box_[n] = merge(box_[kid_[n][0]], box_[kid_[n][1]]);
+            update_height(n);
             if (n == top) return;
         }
     }
@@ -169,9 +168,7 @@ private:
             const Entry e = heap.back();
             heap.pop_back();
             if (e.induced + an >= best) break;  // every entry left is at least as costly
-            AABB u = box_[e.node];
-            u.extend(nb);
-            const float grown = u.half_area();
+            const float grown = merge(box_[e.node], nb).half_area();
             const float c = e.induced + grown;
             if (c < best && e.depth + 1 + std::max(height_[e.node], height_[n]) <= max_depth) {
                 best = c;
@@ -230,10 +227,9 @@ ReinsertionOptimizer::Stats ReinsertionOptimizer::optimize(BuildTree& tree) cons
         tbb::parallel_for(size_t(0), roots.size(), [&](size_t i) {
             const uint32_t r = roots[i];
             if (size[r] < 7) return;
-            // Every node of the subtree but r and its children, the largest first.
-            std::vector<uint32_t> cand;
-            for (uint32_t j = first[r] + 1; j < first[r] + size[r]; ++j)
-                if (t.parent(pre[j]) != r) cand.push_back(pre[j]);
+            // Every node of the subtree below r, the largest first; r's children stay (a move
+            // could make them children of r again, so that is checked as they come).
+            std::vector<uint32_t> cand(pre.begin() + first[r] + 1, pre.begin() + first[r] + size[r]);
             std::sort(cand.begin(), cand.end(), by_area);
             MutableTree::Heap& heap = heaps.local();
             uint64_t m = 0;
@@ -261,8 +257,7 @@ ReinsertionOptimizer::Stats ReinsertionOptimizer::optimize(BuildTree& tree) cons
 }
 
 ReinsertionOptimizer::Stats optimize_by_reinsertion(BuildTree& tree, const BuildConfig& build, int passes) {
-    BVHLAB_CHECK(passes >= 0, "reinsertion passes must be non-negative");
-    if (passes == 0) return {};
+    if (passes == 0) return {};  // optimize() rejects negative counts
     ReinsertionOptimizer::Config rc;
     rc.max_passes = passes;
     rc.max_depth = build.max_depth - 1;  // builders keep leaves above max_depth

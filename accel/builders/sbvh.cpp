@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 // SBVH: at each node, the best binned object split; where its children overlap by more than
 // alpha x root area, also the best spatial split (chopped, clipped bins), taken only if it is
-// cheaper by the spatial margin and the node's share of the budget pays for its duplicates. Spatial splits
-// duplicate straddling references unless moving one whole to a side is cheaper ("reference
-// unsplitting"), within a reference budget shared out down the tree.
+// cheaper by the spatial margin and the node's share of the budget pays for its duplicates.
+// Spatial splits duplicate straddling references unless moving one whole to a side is cheaper
+// ("reference unsplitting"), within a reference budget shared out down the tree.
 #include "accel/builders/sbvh.h"
 
 #include <tbb/blocked_range.h>
@@ -65,9 +65,8 @@ public:
         Candidate obj, spa;
         if (n > c_.min_leaf_size) {
             obj = object_split(refs, cb);
-            const AABB overlap{vmax(obj.left.lo, obj.right.lo), vmin(obj.left.hi, obj.right.hi)};
             // Without an object split both "children" would be the whole node.
-            const float overlap_area = obj.axis < 0 ? bounds.half_area() : overlap.half_area();
+            const float overlap_area = obj.axis < 0 ? bounds.half_area() : intersect(obj.left, obj.right).half_area();
             if (overlap_area > c_.alpha * root_area_ && budget > 0) {
                 spa = spatial_split(refs, bounds);
                 // A split the budget cannot pay for would be carried out without its

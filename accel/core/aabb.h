@@ -57,4 +57,11 @@ BVHLAB_HD inline AABB merge(AABB a, const AABB& b) {
     return a;
 }
 
+/// The common part of two boxes; AABB::empty() if they do not overlap.
+BVHLAB_HD inline AABB intersect(AABB a, const AABB& b) {
+    a.lo = vmax(a.lo, b.lo);
+    a.hi = vmin(a.hi, b.hi);
+    return a.is_empty() ? AABB::empty() : a;
+}
+
 }  // namespace bvhlab
