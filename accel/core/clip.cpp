@@ -29,12 +29,10 @@ int clip_plane(const P3* in, int n, P3* out, int axis, double plane, double sign
     return m;
 }
 
-}  // namespace
-
-ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
-    // A triangle clipped by 6 planes has at most 9 vertices.
-    P3 buf[2][12];
-    Vec3 tri[3] = {a, b, c};
+/// Clips triangle abc to `box` into buf; returns the vertex count and sets *out to the buffer
+/// holding the polygon. A triangle clipped by 6 planes has at most 9 vertices.
+int clip_to_box(Vec3 a, Vec3 b, Vec3 c, const AABB& box, P3 (&buf)[2][12], const P3** out) {
+    const Vec3 tri[3] = {a, b, c};
     for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k) buf[0][i].v[k] = tri[i][k];
     // A plane that the whole triangle lies inside of cannot cut any clipped part either, so
@@ -52,14 +50,25 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
             cur ^= 1;
         }
     }
+    *out = buf[cur];
+    return n;
+}
+
+Vec3 to_float(const P3& p) { return Vec3{float(p.v[0]), float(p.v[1]), float(p.v[2])}; }
+
+}  // namespace
+
+ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
+    P3 buf[2][12];
+    const P3* poly = nullptr;
+    const int n = clip_to_box(a, b, c, box, buf, &poly);
     ClipResult r;
     if (n < 3) {
-        for (int i = 0; i < n; ++i)
-            r.bounds.extend(Vec3{float(buf[cur][i].v[0]), float(buf[cur][i].v[1]), float(buf[cur][i].v[2])});
+        for (int i = 0; i < n; ++i) r.bounds.extend(to_float(poly[i]));
         return r;
     }
     // Area of a planar polygon: half the norm of the summed fan cross products.
-    const P3* p = buf[cur];
+    const P3* p = poly;
     double s[3] = {0, 0, 0};
     for (int i = 1; i + 1 < n; ++i) {
         double e1[3], e2[3];
@@ -72,12 +81,45 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
         s[2] += e1[0] * e2[1] - e1[1] * e2[0];
     }
     r.area = 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    for (int i = 0; i < n; ++i)
-        r.bounds.extend(Vec3{float(p[i].v[0]), float(p[i].v[1]), float(p[i].v[2])});
+    for (int i = 0; i < n; ++i) r.bounds.extend(to_float(p[i]));
     // Rounding to float may step outside the box by an ulp; clamp back in.
     r.bounds.lo = vmax(r.bounds.lo, box.lo);
     r.bounds.hi = vmin(r.bounds.hi, box.hi);
     return r;
+}
+
+std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box, int axis, float pos) {
+    P3 buf[2][12];
+    const P3* poly = nullptr;
+    const int n = clip_to_box(a, b, c, box, buf, &poly);
+    // One pass over the clipped polygon's edges: each vertex bounds the side(s) it is on, and
+    // each edge that crosses the plane adds its crossing, exactly on the plane, to both.
+    AABB side[2] = {AABB::empty(), AABB::empty()};
+    for (int i = 0; i < n; ++i) {
+        const P3& p = poly[i];
+        const P3& q = poly[(i + 1) % n];
+        const double dp = p.v[axis] - double(pos), dq = q.v[axis] - double(pos);
+        const Vec3 fp = to_float(p);
+        if (dp <= 0) side[0].extend(fp);
+        if (dp >= 0) side[1].extend(fp);
+        if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
+            const double t = dp / (dp - dq);
+            P3 r;
+            for (int k = 0; k < 3; ++k) r.v[k] = p.v[k] + t * (q.v[k] - p.v[k]);
+            r.v[axis] = pos;
+            side[0].extend(to_float(r));
+            side[1].extend(to_float(r));
+        }
+    }
+    // Rounding to float may step outside a side's box by an ulp; clamp back in.
+    AABB cell[2] = {box, box};
+    cell[0].hi[axis] = pos;
+    cell[1].lo[axis] = pos;
+    for (int s = 0; s < 2; ++s) {
+        side[s].lo = vmax(side[s].lo, cell[s].lo);
+        side[s].hi = vmin(side[s].hi, cell[s].hi);
+    }
+    return {side[0], side[1]};
 }
 
 }  // namespace bvhlab::accel

@@ -3,6 +3,8 @@
 // Used by EPO and by spatial-split builders, which need exact clipped bounds.
 #pragma once
 
+#include <utility>
+
 #include "accel/core/aabb.h"
 
 namespace bvhlab::accel {
@@ -14,5 +16,10 @@ struct ClipResult {
 };
 
 ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box);
+
+/// The bounds of the two parts of triangle abc clipped to `box` that lie below and above the
+/// plane x[axis] = pos (perfect splits for a kd-tree): one clip to the box, then one pass over
+/// the polygon for both sides. A side the triangle does not reach is empty.
+std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box, int axis, float pos);
 
 }  // namespace bvhlab::accel
