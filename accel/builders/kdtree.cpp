@@ -31,23 +31,53 @@ constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
 constexpr uint32_t kMaxSmallNode = 16;
 
-/// One event on one axis, 8 bytes: the plane position, and the event type (end < planar <
-/// start) above a node-local triangle slot. Each axis has its own sorted list, so sorting by
-/// (pos, code) orders by position, then type, then slot.
+/// A float's bits mapped so that unsigned order is float order, and back.
+inline uint32_t sort_key(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+inline float from_sort_key(uint32_t u) {
+    u = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
+    float f;
+    std::memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/// One event on one axis, as one 64-bit key: the plane position's sort key above the event
+/// type (end < planar < start) above a node-local triangle slot. Each axis has its own sorted
+/// list; key order is position, then type, then slot, and comparing two events is a single
+/// integer comparison (merges run without branches). Positions carry +0 for -0 (x + 0 is +0
+/// for x = -0), so that equal positions have equal keys.
 struct Event {
-    float pos;
-    uint32_t code;
+    uint64_t key;
 
-    uint32_t type() const { return code >> kSlotBits; }
-    uint32_t slot() const { return code & kSlotMask; }
-};
-
-struct EventLess {
-    bool operator()(const Event& a, const Event& b) const {
-        return a.pos < b.pos || (a.pos == b.pos && a.code < b.code);
+    static Event make(float pos, uint32_t type, uint32_t slot) {
+        return {uint64_t(sort_key(pos + 0.0f)) << 32 | type << kSlotBits | slot};
     }
+    uint32_t pos_key() const { return uint32_t(key >> 32); }
+    float pos() const { return from_sort_key(pos_key()); }
+    uint32_t type() const { return uint32_t(key) >> kSlotBits; }
+    uint32_t slot() const { return uint32_t(key) & kSlotMask; }
+    Event with_slot(uint32_t s) const { return {(key & ~uint64_t(kSlotMask)) | s}; }
+    bool operator<(const Event& o) const { return key < o.key; }
 };
-constexpr EventLess event_less{};
+
+/// Merges two sorted event lists into out, with a conditional move instead of a branch per
+/// event (the straddlers' new events fall anywhere among the others).
+void merge_events(const Event* a, size_t na, const Event* b, size_t nb, Event* out) {
+    size_t i = 0, j = 0;
+    while (i < na && j < nb) {
+        const uint64_t x = a[i].key, y = b[j].key;
+        const bool take_b = y < x;
+        out->key = take_b ? y : x;
+        ++out;
+        j += take_b;
+        i += !take_b;
+    }
+    out = std::copy(a + i, a + na, out);
+    std::copy(b + j, b + nb, out);
+}
 
 /// A node's work: its voxel, and per triangle slot the global id and the bounds of the
 /// triangle clipped to the voxel; per axis, the events of those bounds, sorted.
@@ -65,43 +95,47 @@ struct Work {
 };
 
 /// A node of at most kMaxSmallNode triangles, held on the stack: no events, no heap. Such a
-/// node's children are no larger, so its whole subtree is built from these.
+/// node's children are no larger, so its whole subtree is built from these. The clipped bounds
+/// are kept per axis (structure of arrays), so that the plane search loads them four at a time;
+/// the entries from n to the next multiple of 4 hold the voxel's lower face, never a candidate.
 struct SmallWork {
     AABB voxel;
     uint32_t n = 0;
     uint32_t tris[kMaxSmallNode];
-    AABB boxes[kMaxSmallNode];
+    alignas(16) float lo[3][kMaxSmallNode];
+    alignas(16) float hi[3][kMaxSmallNode];
+
+    void add(uint32_t t, const AABB& b) {
+        tris[n] = t;
+        for (int k = 0; k < 3; ++k) lo[k][n] = b.lo[k], hi[k][n] = b.hi[k];
+        ++n;
+    }
+    void pad() {
+        for (uint32_t s = n; s % 4 != 0; ++s)
+            for (int k = 0; k < 3; ++k) lo[k][s] = hi[k][s] = voxel.lo[k];
+    }
 };
 
-/// Events carry +0 for -0 (x + 0 is +0 for x = -0), so that equal positions have equal bits and
-/// the radix sort below orders them as the comparison does.
 void add_events(std::vector<Event>* ev, const AABB& b, uint32_t slot) {
     for (int k = 0; k < 3; ++k) {
         if (b.lo[k] == b.hi[k]) {
-            ev[k].push_back({b.lo[k] + 0.0f, (kPlanar << kSlotBits) | slot});
+            ev[k].push_back(Event::make(b.lo[k], kPlanar, slot));
         } else {
-            ev[k].push_back({b.lo[k] + 0.0f, (kStart << kSlotBits) | slot});
-            ev[k].push_back({b.hi[k] + 0.0f, (kEnd << kSlotBits) | slot});
+            ev[k].push_back(Event::make(b.lo[k], kStart, slot));
+            ev[k].push_back(Event::make(b.hi[k], kEnd, slot));
         }
     }
 }
 
-/// A float's bits mapped so that unsigned order is float order.
-inline uint32_t sort_key(float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, sizeof u);
-    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
-}
-
 /// Stable LSD radix sort by position (3 passes of 11 bits). Events that arrive in code order
-/// leave sorted by (position, code), the order of EventLess.
+/// leave sorted by key.
 void radix_sort_by_pos(std::vector<Event>& ev) {
     std::vector<Event> tmp(ev.size());
     for (int shift = 0; shift < 32; shift += 11) {
         uint32_t count[2049] = {};
-        for (const Event& e : ev) ++count[((sort_key(e.pos) >> shift) & 2047u) + 1];
+        for (const Event& e : ev) ++count[((e.pos_key() >> shift) & 2047u) + 1];
         for (int b = 0; b < 2048; ++b) count[b + 1] += count[b];
-        for (const Event& e : ev) tmp[count[(sort_key(e.pos) >> shift) & 2047u]++] = e;
+        for (const Event& e : ev) tmp[count[(e.pos_key() >> shift) & 2047u]++] = e;
         ev.swap(tmp);
     }
 }
@@ -194,9 +228,8 @@ private:
         if (n <= small_) {
             SmallWork sw;
             sw.voxel = w->voxel;
-            sw.n = n;
-            std::copy(w->tris.begin(), w->tris.end(), sw.tris);
-            std::copy(w->boxes.begin(), w->boxes.end(), sw.boxes);
+            for (uint32_t s = 0; s < n; ++s) sw.add(w->tris[s], w->boxes[s]);
+            sw.pad();
             release(std::move(w));
             build_small(sw, depth, f, at);
             return;
@@ -220,13 +253,18 @@ private:
 
     Plane choose_plane(const Work& w) const {
         const auto n = uint32_t(w.tris.size());
-        return n <= small_ ? find_plane_small(w.voxel, w.boxes.data(), n) : find_plane(w);
+        if (n > small_) return find_plane(w);
+        SmallWork sw;
+        sw.voxel = w.voxel;
+        for (uint32_t s = 0; s < n; ++s) sw.add(w.tris[s], w.boxes[s]);
+        sw.pad();
+        return find_plane_small(sw);
     }
 
     /// build_fragment for a node of at most small_ triangles: the same planes, clipping and
     /// slot order as split(), with everything on the stack.
     void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at) {
-        const Plane p = depth < max_depth_ ? find_plane_small(w.voxel, w.boxes, w.n) : Plane{};
+        const Plane p = depth < max_depth_ ? find_plane_small(w) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
             f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), w.n};
             f.prims.insert(f.prims.end(), w.tris, w.tris + w.n);
@@ -239,24 +277,23 @@ private:
         child[1].voxel.lo[axis] = p.pos;
         uint8_t side[kMaxSmallNode];
         for (uint32_t s = 0; s < w.n; ++s) {
-            side[s] = classify(w.boxes[s], p);
+            side[s] = classify(w.lo[axis][s], w.hi[axis][s], p);
             if (side[s] == kBoth) continue;
             SmallWork& to = child[side[s] - 1];
             to.tris[to.n] = w.tris[s];
-            to.boxes[to.n++] = w.boxes[s];
+            for (int k = 0; k < 3; ++k) to.lo[k][to.n] = w.lo[k][s], to.hi[k][to.n] = w.hi[k][s];
+            ++to.n;
         }
         for (uint32_t s = 0; s < w.n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
             const auto boxes = split_clipped_triangle(mesh_.vertex(t, 0), mesh_.vertex(t, 1), mesh_.vertex(t, 2),
                                                       w.voxel, axis, p.pos);
-            for (int i = 0; i < 2; ++i) {
-                const AABB& box = i == 0 ? boxes.first : boxes.second;
-                if (box.is_empty()) continue;
-                child[i].tris[child[i].n] = t;
-                child[i].boxes[child[i].n++] = box;
-            }
+            if (!boxes.first.is_empty()) child[0].add(t, boxes.first);
+            if (!boxes.second.is_empty()) child[1].add(t, boxes.second);
         }
+        child[0].pad();
+        child[1].pad();
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = {p.pos, uint32_t(axis), k, 0};
@@ -304,16 +341,16 @@ private:
             uint32_t nl = 0, nr = n, planars = 0, starts = 0;
             size_t groups = 0;
             for (size_t i = 0; i < m; ++i) {
-                const float pos = e[i].pos;
+                const uint32_t key = e[i].pos_key();
                 const uint32_t type = e[i].type();
-                const uint32_t first = uint32_t(i == 0 || e[i - 1].pos != pos);
+                const uint32_t first = uint32_t(i == 0 || e[i - 1].pos_key() != key);
                 const uint32_t start = uint32_t(type == kStart), planar = uint32_t(type == kPlanar);
                 planars = (planars & (first - 1u)) + planar;  // reset at a new position
                 starts = (starts & (first - 1u)) + start;
                 nl += start | planar;
                 nr -= start ^ 1u;
-                at[groups] = {pos, nl - starts, nr, planars};
-                groups += uint32_t(i + 1 == m || e[i + 1].pos != pos);
+                at[groups] = {e[i].pos(), nl - starts, nr, planars};
+                groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != key);
             }
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             for (size_t g = 0; g < groups; ++g) {
@@ -330,8 +367,7 @@ private:
 
     enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
     /// The side of a plane that a clipped bound lies on, by the rule the sweep counted with.
-    static uint8_t classify(const AABB& box, const Plane& p) {
-        const float lo = box.lo[p.axis], hi = box.hi[p.axis];
+    static uint8_t classify(float lo, float hi, const Plane& p) {
         if (lo == p.pos && hi == p.pos) return p.planar_left ? kLeftOnly : kRightOnly;
         if (hi <= p.pos) return kLeftOnly;
         if (lo >= p.pos) return kRightOnly;
@@ -344,7 +380,7 @@ private:
         const int axis = p.axis;
         std::vector<uint8_t>& side = ts.side;
         side.resize(n);
-        for (size_t s = 0; s < n; ++s) side[s] = classify(w.boxes[s], p);
+        for (size_t s = 0; s < n; ++s) side[s] = classify(w.boxes[s].lo[axis], w.boxes[s].hi[axis], p);
         left.voxel = right.voxel = w.voxel;
         left.voxel.hi[axis] = p.pos;
         right.voxel.lo[axis] = p.pos;
@@ -395,7 +431,7 @@ private:
             size_t il = 0, ir = 0;
             for (const Event& e : in) {
                 const uint32_t s = e.slot();
-                const Event moved{e.pos, (e.code & ~kSlotMask) | remap[s]};
+                const Event moved = e.with_slot(remap[s]);
                 fl[il] = moved;
                 fr[ir] = moved;
                 il += side[s] == kLeftOnly;
@@ -405,11 +441,10 @@ private:
             for (int i = 0; i < 2; ++i) {
                 if (!events[i]) continue;
                 std::vector<Event>& fresh = ts.fresh[i][k];
-                std::sort(fresh.begin(), fresh.end(), event_less);
+                std::sort(fresh.begin(), fresh.end());
                 std::vector<Event>& dst = child[i]->events[k];
                 dst.resize(kept[i] + fresh.size());
-                std::merge(ts.filtered[i].data(), ts.filtered[i].data() + kept[i], fresh.begin(), fresh.end(),
-                           dst.begin(), event_less);
+                merge_events(ts.filtered[i].data(), kept[i], fresh.data(), fresh.size(), dst.data());
             }
         }
     }
@@ -418,62 +453,73 @@ private:
     /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
     /// same plane the sweep would make (ties: lower axis, then lower position, left first).
     /// Candidates go four at a time through GCC/Clang vector types (SSE, NEON).
-    Plane find_plane_small(const AABB& voxel, const AABB* boxes, uint32_t n) const {
+    Plane find_plane_small(const SmallWork& w) const {
         using F4 = float __attribute__((vector_size(16)));
         using I4 = int32_t __attribute__((vector_size(16)));
-        constexpr uint32_t kVecs = 2 * kMaxSmallNode / 4;
+        constexpr uint32_t kVecs = kMaxSmallNode / 4;
         Plane best;
-        const float area = voxel.area();
+        const float area = w.voxel.area();
+        const uint32_t n = w.n;
         if (!(area > 0.0f) || n == 0) return best;
         const float inv_area = 1.0f / area;
-        const uint32_t vecs = (2 * n + 3) / 4;
+        const uint32_t vecs = (n + 3) / 4;
+        const F4 inf = F4{} + INFINITY;
         for (int k = 0; k < 3; ++k) {
-            const AxisCost cost = axis_cost(voxel, k, inv_area);
-            // Candidates: every lower and upper bound; the padding lies on the voxel's face,
-            // so it is never inside.
-            union {
-                F4 v[kVecs];
-                float f[4 * kVecs];
-            } pos;
-            for (uint32_t s = 0; s < n; ++s) pos.f[2 * s] = boxes[s].lo[k], pos.f[2 * s + 1] = boxes[s].hi[k];
-            for (uint32_t c = 2 * n; c < 4 * vecs; ++c) pos.f[c] = cost.lo;
-            I4 below[kVecs], above[kVecs], planar[kVecs];
-            for (uint32_t v = 0; v < vecs; ++v) below[v] = above[v] = planar[v] = I4{};
-            for (uint32_t s = 0; s < n; ++s) {
-                const float lo = boxes[s].lo[k], hi = boxes[s].hi[k];
-                const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
-                for (uint32_t v = 0; v < vecs; ++v) {  // comparisons give -1 for true
-                    below[v] -= lo < pos.v[v];
-                    above[v] -= hi > pos.v[v];
-                    planar[v] -= flat & (lo == pos.v[v]);
-                }
-            }
-            union {
-                F4 v[kVecs];
-                float f[4 * kVecs];
-            } left, right;
-            const F4 inf = F4{} + INFINITY;
+            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
+            // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
+            F4 pos[2][kVecs];
+            I4 below[2][kVecs], above[2][kVecs], planar[2][kVecs];
             for (uint32_t v = 0; v < vecs; ++v) {
-                const F4 x = pos.v[v];
-                const I4 nl = below[v] + planar[v], nr = above[v] + planar[v];
-                const F4 pl = cost.face + cost.side * (x - cost.lo), pr = cost.face + cost.side * (cost.hi - x);
-                F4 cl = cost.ct + cost.ci * (pl * __builtin_convertvector(nl, F4) + pr * __builtin_convertvector(above[v], F4));
-                F4 cr = cost.ct + cost.ci * (pl * __builtin_convertvector(below[v], F4) + pr * __builtin_convertvector(nr, F4));
-                const I4 empty_l = (nl == 0) | (above[v] == 0), empty_r = (below[v] == 0) | (nr == 0);
-                cl = empty_l ? cl * cost.bonus : cl;
-                cr = empty_r ? cr * cost.bonus : cr;
-                const I4 inside = (x > cost.lo) & (x < cost.hi);
-                left.v[v] = inside ? cl : inf;
-                right.v[v] = inside ? cr : inf;
+                std::memcpy(&pos[0][v], &w.lo[k][4 * v], sizeof(F4));
+                std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
+                for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = I4{};
             }
-            for (uint32_t c = 0; c < 2 * n; ++c) {
-                const float x = pos.f[c];
-                const auto better = [&](float y) {
-                    return y < best.cost || (y == best.cost && k == best.axis && x < best.pos);
-                };
-                if (better(left.f[c])) best = {left.f[c], k, x, true};
-                if (better(right.f[c])) best = {right.f[c], k, x, false};
+            for (uint32_t s = 0; s < n; ++s) {
+                const float lo = w.lo[k][s], hi = w.hi[k][s];
+                const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
+                for (int l = 0; l < 2; ++l)
+                    for (uint32_t v = 0; v < vecs; ++v) {  // comparisons give -1 for true
+                        below[l][v] -= lo < pos[l][v];
+                        above[l][v] -= hi > pos[l][v];
+                        planar[l][v] -= flat & (lo == pos[l][v]);
+                    }
             }
+            F4 left[2][kVecs], right[2][kVecs];
+            for (int l = 0; l < 2; ++l)
+                for (uint32_t v = 0; v < vecs; ++v) {
+                    const F4 x = pos[l][v];
+                    const I4 b = below[l][v], a = above[l][v], nl = b + planar[l][v], nr = a + planar[l][v];
+                    const F4 pl = cost.face + cost.side * (x - cost.lo), pr = cost.face + cost.side * (cost.hi - x);
+                    F4 cl = cost.ct + cost.ci * (pl * __builtin_convertvector(nl, F4) + pr * __builtin_convertvector(a, F4));
+                    F4 cr = cost.ct + cost.ci * (pl * __builtin_convertvector(b, F4) + pr * __builtin_convertvector(nr, F4));
+                    cl = ((nl == 0) | (a == 0)) ? cl * cost.bonus : cl;
+                    cr = ((b == 0) | (nr == 0)) ? cr * cost.bonus : cr;
+                    const I4 inside = (x > cost.lo) & (x < cost.hi);
+                    left[l][v] = inside ? cl : inf;
+                    right[l][v] = inside ? cr : inf;
+                }
+            // The cheapest cost, the lowest position at that cost, and left before right, with
+            // vector minima instead of a branch per candidate (they mispredicted).
+            const auto hmin = [](F4 x) { return std::min(std::min(x[0], x[1]), std::min(x[2], x[3])); };
+            F4 low = inf;
+            for (int l = 0; l < 2; ++l)
+                for (uint32_t v = 0; v < vecs; ++v) {
+                    low = low < left[l][v] ? low : left[l][v];
+                    low = low < right[l][v] ? low : right[l][v];
+                }
+            const float m = hmin(low);
+            F4 at = inf;
+            for (int l = 0; l < 2; ++l)
+                for (uint32_t v = 0; v < vecs; ++v) {
+                    const F4 x = (left[l][v] == m) | (right[l][v] == m) ? pos[l][v] : inf;
+                    at = at < x ? at : x;
+                }
+            const float x = hmin(at);
+            I4 on_left = I4{};
+            for (int l = 0; l < 2; ++l)
+                for (uint32_t v = 0; v < vecs; ++v) on_left |= (left[l][v] == m) & (pos[l][v] == x);
+            const bool planar_left = (on_left[0] | on_left[1] | on_left[2] | on_left[3]) != 0;
+            if (m < best.cost) best = {m, k, x, planar_left};  // an earlier axis wins ties
         }
         return best;
     }
@@ -486,35 +532,47 @@ private:
 };
 
 /// The final layout: the top nodes in depth-first order, each fragment appended whole with its
-/// indices moved to their final place.
+/// indices moved to their final place. A first walk places everything; the fragments are then
+/// copied in parallel.
 KdTree flatten(const TopNode& root, const AABB& bounds) {
-    KdTree t;
-    t.bounds = bounds;
-    t.nodes.push_back({});
+    struct Placed {
+        const Fragment* frag;
+        uint32_t at, base, prim_base;  // its root's index; where its other nodes and ids go
+    };
+    std::vector<Placed> frags;
+    std::vector<std::pair<uint32_t, KdNode>> interior;
+    uint32_t nodes = 1, prims = 0;
     std::vector<std::pair<const TopNode*, uint32_t>> stack{{&root, 0}};
     while (!stack.empty()) {
         auto [n, d] = stack.back();
         stack.pop_back();
         if (!n->child[0]) {
-            // Fragment node i > 0 goes to base + i - 1; its root goes to d.
-            const Fragment& f = n->frag;
-            const auto base = uint32_t(t.nodes.size());
-            const auto prim_base = uint32_t(t.prim_indices.size());
-            const auto place = [&](KdNode x) {
-                x.child = x.is_leaf() ? x.child + prim_base : base + x.child - 1;
-                return x;
-            };
-            t.nodes[d] = place(f.nodes[0]);
-            for (size_t i = 1; i < f.nodes.size(); ++i) t.nodes.push_back(place(f.nodes[i]));
-            t.prim_indices.insert(t.prim_indices.end(), f.prims.begin(), f.prims.end());
+            frags.push_back({&n->frag, d, nodes, prims});
+            nodes += uint32_t(n->frag.nodes.size()) - 1;
+            prims += uint32_t(n->frag.prims.size());
             continue;
         }
-        const auto k = uint32_t(t.nodes.size());
-        t.nodes.resize(k + 2);
-        t.nodes[d] = {n->split, n->axis, k, 0};
-        stack.push_back({n->child[1].get(), k + 1});
-        stack.push_back({n->child[0].get(), k});
+        interior.push_back({d, {n->split, n->axis, nodes, 0}});
+        stack.push_back({n->child[1].get(), nodes + 1});
+        stack.push_back({n->child[0].get(), nodes});
+        nodes += 2;
     }
+    KdTree t;
+    t.bounds = bounds;
+    t.nodes.resize(nodes);
+    t.prim_indices.resize(prims);
+    for (const auto& [d, x] : interior) t.nodes[d] = x;
+    tbb::parallel_for(size_t(0), frags.size(), [&](size_t i) {
+        // Fragment node j > 0 goes to base + j - 1; its root goes to at.
+        const Placed& p = frags[i];
+        const auto place = [&](KdNode x) {
+            x.child = x.is_leaf() ? x.child + p.prim_base : p.base + x.child - 1;
+            return x;
+        };
+        t.nodes[p.at] = place(p.frag->nodes[0]);
+        for (size_t j = 1; j < p.frag->nodes.size(); ++j) t.nodes[p.base + j - 1] = place(p.frag->nodes[j]);
+        std::copy(p.frag->prims.begin(), p.frag->prims.end(), t.prim_indices.begin() + p.prim_base);
+    });
     return t;
 }
 
@@ -548,11 +606,11 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
         ev.reserve(2 * size_t(n));
         const std::vector<AABB>& b = root->boxes;
         for (uint32_t t = 0; t < n; ++t)
-            if (b[t].lo[k] != b[t].hi[k]) ev.push_back({b[t].hi[k] + 0.0f, (kEnd << kSlotBits) | t});
+            if (b[t].lo[k] != b[t].hi[k]) ev.push_back(Event::make(b[t].hi[k], kEnd, t));
         for (uint32_t t = 0; t < n; ++t)
-            if (b[t].lo[k] == b[t].hi[k]) ev.push_back({b[t].lo[k] + 0.0f, (kPlanar << kSlotBits) | t});
+            if (b[t].lo[k] == b[t].hi[k]) ev.push_back(Event::make(b[t].lo[k], kPlanar, t));
         for (uint32_t t = 0; t < n; ++t)
-            if (b[t].lo[k] != b[t].hi[k]) ev.push_back({b[t].lo[k] + 0.0f, (kStart << kSlotBits) | t});
+            if (b[t].lo[k] != b[t].hi[k]) ev.push_back(Event::make(b[t].lo[k], kStart, t));
         radix_sort_by_pos(ev);
     });
     const AABB bounds = root->voxel;
