@@ -29,7 +29,7 @@ enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
 constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
-constexpr uint32_t kMaxSmallNode = 16;
+constexpr uint32_t kMaxSmallNode = 32;
 
 /// A float's bits mapped so that unsigned order is float order, and back.
 inline uint32_t sort_key(float f) {
@@ -357,8 +357,9 @@ private:
                 const Position& q = at[g];
                 if (!(q.pos > cost.lo && q.pos < cost.hi)) continue;  // only at the two ends
                 const float left = cost(q.pos, q.left, q.right);
-                const float right = cost(q.pos, q.left - q.planars, q.right + q.planars);
                 if (left < best.cost) best = {left, k, q.pos, true};
+                if (q.planars == 0) continue;  // both sides cost the same
+                const float right = cost(q.pos, q.left - q.planars, q.right + q.planars);
                 if (right < best.cost) best = {right, k, q.pos, false};
             }
         }
@@ -452,76 +453,92 @@ private:
     /// find_plane for a node without events (at most small_ triangles): every bound inside
     /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
     /// same plane the sweep would make (ties: lower axis, then lower position, left first).
-    /// Candidates go four at a time through GCC/Clang vector types (SSE, NEON).
     Plane find_plane_small(const SmallWork& w) const {
+        Plane best;
+        const float area = w.voxel.area();
+        if (!(area > 0.0f) || w.n == 0) return best;
+        const float inv_area = 1.0f / area;
+        for (int k = 0; k < 3; ++k) {
+            bool flat = false;
+            for (uint32_t s = 0; s < w.n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
+            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
+            const Plane p = flat ? small_axis<true>(w, k, cost) : small_axis<false>(w, k, cost);
+            if (p.cost < best.cost) best = p;  // an earlier axis wins ties
+        }
+        return best;
+    }
+
+    /// The cheapest plane on axis k of a small node. Candidates go four at a time through
+    /// GCC/Clang vector types (SSE, NEON). Without flat (planar) bounds on this axis, which is
+    /// the common case, both sides of a plane cost the same and half the work is skipped.
+    template <bool kFlat>
+    Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) const {
         using F4 = float __attribute__((vector_size(16)));
         using I4 = int32_t __attribute__((vector_size(16)));
         constexpr uint32_t kVecs = kMaxSmallNode / 4;
-        Plane best;
-        const float area = w.voxel.area();
-        const uint32_t n = w.n;
-        if (!(area > 0.0f) || n == 0) return best;
-        const float inv_area = 1.0f / area;
-        const uint32_t vecs = (n + 3) / 4;
+        const uint32_t n = w.n, vecs = (n + 3) / 4;
         const F4 inf = F4{} + INFINITY;
-        for (int k = 0; k < 3; ++k) {
-            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
-            F4 pos[2][kVecs];
-            I4 below[2][kVecs], above[2][kVecs], planar[2][kVecs];
-            for (uint32_t v = 0; v < vecs; ++v) {
-                std::memcpy(&pos[0][v], &w.lo[k][4 * v], sizeof(F4));
-                std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
-                for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = I4{};
-            }
-            for (uint32_t s = 0; s < n; ++s) {
-                const float lo = w.lo[k][s], hi = w.hi[k][s];
-                const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
-                for (int l = 0; l < 2; ++l)
-                    for (uint32_t v = 0; v < vecs; ++v) {  // comparisons give -1 for true
-                        below[l][v] -= lo < pos[l][v];
-                        above[l][v] -= hi > pos[l][v];
-                        planar[l][v] -= flat & (lo == pos[l][v]);
-                    }
-            }
-            F4 left[2][kVecs], right[2][kVecs];
+        // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
+        F4 pos[2][kVecs];
+        I4 below[2][kVecs], above[2][kVecs], planar[2][kVecs];
+        for (uint32_t v = 0; v < vecs; ++v) {
+            std::memcpy(&pos[0][v], &w.lo[k][4 * v], sizeof(F4));
+            std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
+            for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = I4{};
+        }
+        for (uint32_t s = 0; s < n; ++s) {
+            const float lo = w.lo[k][s], hi = w.hi[k][s];
+            const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
             for (int l = 0; l < 2; ++l)
-                for (uint32_t v = 0; v < vecs; ++v) {
-                    const F4 x = pos[l][v];
-                    const I4 b = below[l][v], a = above[l][v], nl = b + planar[l][v], nr = a + planar[l][v];
-                    const F4 pl = cost.face + cost.side * (x - cost.lo), pr = cost.face + cost.side * (cost.hi - x);
-                    F4 cl = cost.ct + cost.ci * (pl * __builtin_convertvector(nl, F4) + pr * __builtin_convertvector(a, F4));
+                for (uint32_t v = 0; v < vecs; ++v) {  // comparisons give -1 for true
+                    below[l][v] -= lo < pos[l][v];
+                    above[l][v] -= hi > pos[l][v];
+                    if (kFlat) planar[l][v] -= flat & (lo == pos[l][v]);
+                }
+        }
+        F4 left[2][kVecs], right[2][kVecs];
+        for (int l = 0; l < 2; ++l)
+            for (uint32_t v = 0; v < vecs; ++v) {
+                const F4 x = pos[l][v];
+                const I4 b = below[l][v], a = above[l][v], nl = b + planar[l][v], nr = a + planar[l][v];
+                const F4 pl = cost.face + cost.side * (x - cost.lo), pr = cost.face + cost.side * (cost.hi - x);
+                const I4 inside = (x > cost.lo) & (x < cost.hi);
+                F4 cl = cost.ct + cost.ci * (pl * __builtin_convertvector(nl, F4) + pr * __builtin_convertvector(a, F4));
+                cl = ((nl == 0) | (a == 0)) ? cl * cost.bonus : cl;
+                left[l][v] = inside ? cl : inf;
+                if (kFlat) {
                     F4 cr = cost.ct + cost.ci * (pl * __builtin_convertvector(b, F4) + pr * __builtin_convertvector(nr, F4));
-                    cl = ((nl == 0) | (a == 0)) ? cl * cost.bonus : cl;
                     cr = ((b == 0) | (nr == 0)) ? cr * cost.bonus : cr;
-                    const I4 inside = (x > cost.lo) & (x < cost.hi);
-                    left[l][v] = inside ? cl : inf;
                     right[l][v] = inside ? cr : inf;
                 }
-            // The cheapest cost, the lowest position at that cost, and left before right, with
-            // vector minima instead of a branch per candidate (they mispredicted).
-            const auto hmin = [](F4 x) { return std::min(std::min(x[0], x[1]), std::min(x[2], x[3])); };
-            F4 low = inf;
-            for (int l = 0; l < 2; ++l)
-                for (uint32_t v = 0; v < vecs; ++v) {
-                    low = low < left[l][v] ? low : left[l][v];
-                    low = low < right[l][v] ? low : right[l][v];
-                }
-            const float m = hmin(low);
-            F4 at = inf;
-            for (int l = 0; l < 2; ++l)
-                for (uint32_t v = 0; v < vecs; ++v) {
-                    const F4 x = (left[l][v] == m) | (right[l][v] == m) ? pos[l][v] : inf;
-                    at = at < x ? at : x;
-                }
-            const float x = hmin(at);
+            }
+        // The cheapest cost, the lowest position at that cost, and left before right, with
+        // vector minima instead of a branch per candidate (they mispredicted).
+        const auto hmin = [](F4 x) { return std::min(std::min(x[0], x[1]), std::min(x[2], x[3])); };
+        F4 low = inf;
+        for (int l = 0; l < 2; ++l)
+            for (uint32_t v = 0; v < vecs; ++v) {
+                low = low < left[l][v] ? low : left[l][v];
+                if (kFlat) low = low < right[l][v] ? low : right[l][v];
+            }
+        const float m = hmin(low);
+        F4 at = inf;
+        for (int l = 0; l < 2; ++l)
+            for (uint32_t v = 0; v < vecs; ++v) {
+                I4 hit = left[l][v] == m;
+                if (kFlat) hit |= right[l][v] == m;
+                const F4 x = hit ? pos[l][v] : inf;
+                at = at < x ? at : x;
+            }
+        const float x = hmin(at);
+        bool planar_left = true;
+        if (kFlat) {
             I4 on_left = I4{};
             for (int l = 0; l < 2; ++l)
                 for (uint32_t v = 0; v < vecs; ++v) on_left |= (left[l][v] == m) & (pos[l][v] == x);
-            const bool planar_left = (on_left[0] | on_left[1] | on_left[2] | on_left[3]) != 0;
-            if (m < best.cost) best = {m, k, x, planar_left};  // an earlier axis wins ties
+            planar_left = (on_left[0] | on_left[1] | on_left[2] | on_left[3]) != 0;
         }
-        return best;
+        return {m, k, x, planar_left};
     }
 
     const KdTreeBuilder::Config& c_;
@@ -587,7 +604,7 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
     BVHLAB_CHECK(mesh.triangle_count() <= kSlotMask, "too many triangles for the kd-tree builder");
     BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");
-    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode, "kd-tree small_node_size must be at most 16");
+    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode, "kd-tree small_node_size must be at most 32");
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
     Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
     std::unique_ptr<Work> root = rec.acquire();

@@ -21,9 +21,9 @@ public:
         float empty_bonus = 0.2f;  ///< cost x (1 - bonus) when one side is empty
         int max_depth = -1;        ///< -1: 8 + 1.3 log2(N), at most 64
         uint32_t task_threshold = 2048;
-        /// Nodes with at most this many triangles (0..16) keep no sorted events: their planes
+        /// Nodes with at most this many triangles (0..32) keep no sorted events: their planes
         /// are found by counting directly, which is cheaper for so few and picks the same plane.
-        uint32_t small_node_size = 8;
+        uint32_t small_node_size = 24;
     };
 
     KdTreeBuilder() = default;

@@ -105,7 +105,7 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
         c.task_threshold = ~0u;  // one thread, events everywhere
         const KdTree ref = KdTreeBuilder(c).build(m);
         ASSERT_EQ(validate_kd(ref, m.triangle_count()), "");
-        for (uint32_t small : {1u, 8u, 16u}) {
+        for (uint32_t small : {1u, 8u, 16u, 32u}) {
             for (uint32_t task : {64u, 2048u}) {
                 c.small_node_size = small;
                 c.task_threshold = task;
@@ -122,7 +122,7 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
         }
     }
     KdTreeBuilder::Config c;
-    c.small_node_size = 17;
+    c.small_node_size = 33;
     EXPECT_THROW(KdTreeBuilder(c).build(scenes[0]), Error);
 }
 
