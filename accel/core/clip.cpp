@@ -15,7 +15,7 @@ int clip_plane(const P3* in, int n, P3* out, int axis, double plane, double sign
     int m = 0;
     for (int i = 0; i < n; ++i) {
         const P3& p = in[i];
-        const P3& q = in[(i + 1) % n];
+        const P3& q = in[i + 1 == n ? 0 : i + 1];
         double dp = sign * (p.v[axis] - plane), dq = sign * (q.v[axis] - plane);
         if (dp <= 0) out[m++] = p;
         if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
@@ -97,7 +97,7 @@ std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB&
     AABB side[2] = {AABB::empty(), AABB::empty()};
     for (int i = 0; i < n; ++i) {
         const P3& p = poly[i];
-        const P3& q = poly[(i + 1) % n];
+        const P3& q = poly[i + 1 == n ? 0 : i + 1];
         const double dp = p.v[axis] - double(pos), dq = q.v[axis] - double(pos);
         const Vec3 fp = to_float(p);
         if (dp <= 0) side[0].extend(fp);
