@@ -18,8 +18,10 @@ public:
         /// tree, if more) are optimised in parallel, each node moving within its subtree.
         uint32_t subtree_nodes = 32768;
         int max_passes = 3;
-        /// Stops after a pass that lowers the interior area by less than this fraction.
-        float min_pass_gain = 0.002f;
+        /// Stops after a pass that lowers the interior area by less than this fraction. Each
+        /// pass gains about a third of the one before (soup: 3.1%, 0.94%, 0.28%; furball:
+        /// 11.5%, 2.9%, 0.86%), so after a pass under 1% the next is not worth its time.
+        float min_pass_gain = 0.01f;
         uint32_t max_depth = 64;  ///< no reinsertion makes the tree deeper than this
     };
 
