@@ -184,8 +184,8 @@ void BuildOptions::add_to(CLI::App& app) {
             ->check(CLI::Range(2, 256))
             ->capture_default_str(),
         app.add_option("--reinsert", opts.reinsertion_passes,
-                       "passes of SAH-lowering subtree reinsertion after the BVH build; -1 = the builder's default "
-                       "(3 for sbvh, 0 for binned and sweep)")
+                       "at most this many passes of SAH-lowering subtree reinsertion after the BVH build (it stops "
+                       "after a pass that gains under 1%); -1 = the builder's default (3 for sbvh, 0 for binned and sweep)")
             ->check(CLI::Range(-1, 16))
             ->capture_default_str(),
     };
