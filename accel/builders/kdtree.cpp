@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 // O(N log N) SAH kd-tree build (Wald & Havran 2006). Each node keeps, per axis, its events
 // sorted by (position, type); one sweep per axis finds the best plane. Triangles are then
-// classified left / right / both by their clipped bounds, only the straddling ones are clipped
-// to each child's voxel ("perfect splits"), and their few new events are sorted and merged into
-// the already sorted, filtered lists of the others. Nodes of a few triangles skip events and
-// count directly (same plane, less work). Events refer to node-local triangle slots, so
+// classified left / right / both by their clipped bounds; only the straddling ones are clipped,
+// once to the node's voxel and then split by the plane into both children's bounds ("perfect
+// splits"), and their few new events are sorted and merged into the already sorted, filtered
+// lists of the others. Nodes of up to small_node_size triangles are built on the stack without
+// events: their planes are counted directly, four candidates at a time (same plane, less
+// work). Events refer to node-local triangle slots, so
 // concurrent subtrees never share state; below a size threshold a subtree is built by one
 // thread into its own fragment of the final node array.
 #include "accel/builders/kdtree.h"
