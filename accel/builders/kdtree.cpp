@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <utility>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -33,6 +34,12 @@ constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
 constexpr uint32_t kMaxSmallNode = 32;
+
+/// Four floats or ints in one register (GCC/Clang vector types: SSE, NEON).
+using F4 = float __attribute__((vector_size(16)));
+using I4 = int32_t __attribute__((vector_size(16)));
+inline float to_float(uint32_t x) { return float(x); }
+inline F4 to_float(I4 x) { return __builtin_convertvector(x, F4); }
 
 /// A float's bits mapped so that unsigned order is float order, and back.
 inline uint32_t sort_key(float f) {
@@ -108,9 +115,23 @@ struct SmallWork {
     alignas(16) float lo[3][kMaxSmallNode];
     alignas(16) float hi[3][kMaxSmallNode];
 
+    /// A small node's copy of a (small) Work node, padded.
+    static SmallWork of(const Work& w) {
+        SmallWork sw;
+        sw.voxel = w.voxel;
+        for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s]);
+        sw.pad();
+        return sw;
+    }
     void add(uint32_t t, const AABB& b) {
         tris[n] = t;
         for (int k = 0; k < 3; ++k) lo[k][n] = b.lo[k], hi[k][n] = b.hi[k];
+        ++n;
+    }
+    /// Appends slot s of another small node.
+    void add(const SmallWork& w, uint32_t s) {
+        tris[n] = w.tris[s];
+        for (int k = 0; k < 3; ++k) lo[k][n] = w.lo[k][s], hi[k][n] = w.hi[k][s];
         ++n;
     }
     void pad() {
@@ -174,8 +195,8 @@ struct Position {
 };
 
 /// Per-thread reusable storage: free Work objects (their vectors keep their capacity) and the
-/// temporaries of split(). A node's vectors are taken from here and given back once the node
-/// is split, so after warm-up the build allocates almost nothing per node.
+/// temporaries of find_plane() and split(). A node's vectors are taken from here and given
+/// back once the node is split, so after warm-up the build allocates almost nothing per node.
 struct ThreadState {
     std::vector<std::unique_ptr<Work>> free_work;
     std::vector<Position> positions;
@@ -242,10 +263,7 @@ private:
     void build_fragment(std::unique_ptr<Work> w, int depth, Fragment& f, uint32_t at) {
         const auto n = uint32_t(w->tris.size());
         if (n <= small_) {
-            SmallWork sw;
-            sw.voxel = w->voxel;
-            for (uint32_t s = 0; s < n; ++s) sw.add(w->tris[s], w->boxes[s]);
-            sw.pad();
+            const SmallWork sw = SmallWork::of(*w);
             release(std::move(w));
             build_small(sw, depth, f, at);
             return;
@@ -268,13 +286,13 @@ private:
     }
 
     Plane choose_plane(const Work& w) const {
-        const auto n = uint32_t(w.tris.size());
-        if (n > small_) return find_plane(w);
-        SmallWork sw;
-        sw.voxel = w.voxel;
-        for (uint32_t s = 0; s < n; ++s) sw.add(w.tris[s], w.boxes[s]);
-        sw.pad();
-        return find_plane_small(sw);
+        return w.tris.size() <= small_ ? find_plane_small(SmallWork::of(w)) : find_plane(w);
+    }
+
+    /// The bounds of straddling triangle t clipped to each side of plane p in `voxel`.
+    std::pair<AABB, AABB> split_straddler(uint32_t t, const AABB& voxel, const Plane& p) const {
+        return split_clipped_triangle(mesh_.vertex(t, 0), mesh_.vertex(t, 1), mesh_.vertex(t, 2), voxel, p.axis,
+                                      p.pos);
     }
 
     /// build_fragment for a node of at most small_ triangles: the same planes, clipping and
@@ -295,16 +313,12 @@ private:
         for (uint32_t s = 0; s < w.n; ++s) {
             side[s] = classify(w.lo[axis][s], w.hi[axis][s], p);
             if (side[s] == kBoth) continue;
-            SmallWork& to = child[side[s] - 1];
-            to.tris[to.n] = w.tris[s];
-            for (int k = 0; k < 3; ++k) to.lo[k][to.n] = w.lo[k][s], to.hi[k][to.n] = w.hi[k][s];
-            ++to.n;
+            child[side[s] - 1].add(w, s);
         }
         for (uint32_t s = 0; s < w.n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
-            const auto boxes = split_clipped_triangle(mesh_.vertex(t, 0), mesh_.vertex(t, 1), mesh_.vertex(t, 2),
-                                                      w.voxel, axis, p.pos);
+            const auto boxes = split_straddler(t, w.voxel, p);
             if (!boxes.first.is_empty()) child[0].add(t, boxes.first);
             if (!boxes.second.is_empty()) child[1].add(t, boxes.second);
         }
@@ -320,13 +334,14 @@ private:
     /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
     /// linear in the plane position: 2 (a b + (a + b) d) for the other two extents a, b and
     /// the child's extent d along the axis.
+    /// F and I are float and uint32_t, or F4 and I4 for four planes at once.
     struct AxisCost {
         float lo, hi, face, side, ct, ci, bonus;
-        template <typename Count>
-        float operator()(float pos, Count nl, Count nr) const {
-            const float pl = face + side * (pos - lo), pr = face + side * (hi - pos);
-            const float c = ct + ci * (pl * float(nl) + pr * float(nr));
-            return (nl == 0 || nr == 0) ? c * bonus : c;
+        template <typename F, typename I>
+        F operator()(F pos, I nl, I nr) const {
+            const F pl = face + side * (pos - lo), pr = face + side * (hi - pos);
+            const F c = ct + ci * (pl * to_float(nl) + pr * to_float(nr));
+            return ((nl == 0) | (nr == 0)) ? c * bonus : c;
         }
     };
     AxisCost axis_cost(const AABB& voxel, int k, float inv_area) const {
@@ -418,8 +433,7 @@ private:
         for (size_t s = 0; s < n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
-            const auto boxes = split_clipped_triangle(mesh_.vertex(t, 0), mesh_.vertex(t, 1), mesh_.vertex(t, 2),
-                                                      w.voxel, axis, p.pos);
+            const auto boxes = split_straddler(t, w.voxel, p);
             for (int i = 0; i < 2; ++i) {
                 const AABB& box = i == 0 ? boxes.first : boxes.second;
                 if (box.is_empty()) continue;
@@ -489,8 +503,6 @@ private:
     /// the common case, both sides of a plane cost the same and half the work is skipped.
     template <bool kFlat>
     Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) const {
-        using F4 = float __attribute__((vector_size(16)));
-        using I4 = int32_t __attribute__((vector_size(16)));
         constexpr uint32_t kVecs = kMaxSmallNode / 4;
         const uint32_t n = w.n, vecs = (n + 3) / 4;
         const F4 inf = F4{} + INFINITY;
@@ -516,17 +528,10 @@ private:
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
                 const F4 x = pos[l][v];
-                const I4 b = below[l][v], a = above[l][v], nl = b + planar[l][v], nr = a + planar[l][v];
-                const F4 pl = cost.face + cost.side * (x - cost.lo), pr = cost.face + cost.side * (cost.hi - x);
+                const I4 b = below[l][v], a = above[l][v];
                 const I4 inside = (x > cost.lo) & (x < cost.hi);
-                F4 cl = cost.ct + cost.ci * (pl * __builtin_convertvector(nl, F4) + pr * __builtin_convertvector(a, F4));
-                cl = ((nl == 0) | (a == 0)) ? cl * cost.bonus : cl;
-                left[l][v] = inside ? cl : inf;
-                if (kFlat) {
-                    F4 cr = cost.ct + cost.ci * (pl * __builtin_convertvector(b, F4) + pr * __builtin_convertvector(nr, F4));
-                    cr = ((b == 0) | (nr == 0)) ? cr * cost.bonus : cr;
-                    right[l][v] = inside ? cr : inf;
-                }
+                left[l][v] = inside ? cost(x, b + planar[l][v], a) : inf;
+                if (kFlat) right[l][v] = inside ? cost(x, b, a + planar[l][v]) : inf;
             }
         // The cheapest cost, the lowest position at that cost, and left before right, with
         // vector minima instead of a branch per candidate (they mispredicted).

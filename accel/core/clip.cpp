@@ -10,6 +10,18 @@ struct P3 {
     double v[3];
 };
 
+/// Whether edge pq, whose ends lie at signed distances dp and dq from a plane, crosses it.
+bool crosses(double dp, double dq) { return (dp < 0 && dq > 0) || (dp > 0 && dq < 0); }
+
+/// The point where edge pq crosses the plane x[axis] = plane (dp, dq as for crosses()).
+P3 crossing(const P3& p, const P3& q, double dp, double dq, int axis, double plane) {
+    const double t = dp / (dp - dq);
+    P3 r;
+    for (int k = 0; k < 3; ++k) r.v[k] = p.v[k] + t * (q.v[k] - p.v[k]);
+    r.v[axis] = plane;  // exact on the plane, so clipped bounds never leak past it
+    return r;
+}
+
 /// Keeps the part of `in` (n vertices) on the side sign*(x[axis] - plane) <= 0.
 int clip_plane(const P3* in, int n, P3* out, int axis, double plane, double sign) {
     int m = 0;
@@ -18,13 +30,7 @@ int clip_plane(const P3* in, int n, P3* out, int axis, double plane, double sign
         const P3& q = in[i + 1 == n ? 0 : i + 1];
         double dp = sign * (p.v[axis] - plane), dq = sign * (q.v[axis] - plane);
         if (dp <= 0) out[m++] = p;
-        if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
-            double t = dp / (dp - dq);
-            P3 r;
-            for (int k = 0; k < 3; ++k) r.v[k] = p.v[k] + t * (q.v[k] - p.v[k]);
-            r.v[axis] = plane;  // exact on the plane, so clipped bounds never leak past it
-            out[m++] = r;
-        }
+        if (crosses(dp, dq)) out[m++] = crossing(p, q, dp, dq, axis, plane);
     }
     return m;
 }
@@ -83,8 +89,7 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
     r.area = 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
     for (int i = 0; i < n; ++i) r.bounds.extend(to_float(p[i]));
     // Rounding to float may step outside the box by an ulp; clamp back in.
-    r.bounds.lo = vmax(r.bounds.lo, box.lo);
-    r.bounds.hi = vmin(r.bounds.hi, box.hi);
+    r.bounds = intersect(r.bounds, box);
     return r;
 }
 
@@ -102,24 +107,17 @@ std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB&
         const Vec3 fp = to_float(p);
         if (dp <= 0) side[0].extend(fp);
         if (dp >= 0) side[1].extend(fp);
-        if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
-            const double t = dp / (dp - dq);
-            P3 r;
-            for (int k = 0; k < 3; ++k) r.v[k] = p.v[k] + t * (q.v[k] - p.v[k]);
-            r.v[axis] = pos;
-            side[0].extend(to_float(r));
-            side[1].extend(to_float(r));
+        if (crosses(dp, dq)) {
+            const Vec3 r = to_float(crossing(p, q, dp, dq, axis, pos));
+            side[0].extend(r);
+            side[1].extend(r);
         }
     }
     // Rounding to float may step outside a side's box by an ulp; clamp back in.
     AABB cell[2] = {box, box};
     cell[0].hi[axis] = pos;
     cell[1].lo[axis] = pos;
-    for (int s = 0; s < 2; ++s) {
-        side[s].lo = vmax(side[s].lo, cell[s].lo);
-        side[s].hi = vmin(side[s].hi, cell[s].hi);
-    }
-    return {side[0], side[1]};
+    return {intersect(side[0], cell[0]), intersect(side[1], cell[1])};
 }
 
 }  // namespace bvhlab::accel
