@@ -22,6 +22,8 @@
 #include <cstring>
 #include <memory>
 
+#include <sys/mman.h>
+
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
@@ -40,6 +42,24 @@ using F4 = float __attribute__((vector_size(16)));
 using I4 = int32_t __attribute__((vector_size(16)));
 inline float to_float(uint32_t x) { return float(x); }
 inline F4 to_float(I4 x) { return __builtin_convertvector(x, F4); }
+
+/// Asks for transparent huge pages on the whole 2 MiB pages of a fresh, untouched block: for
+/// the output arrays, filled once (furball's are 0.7 GB; faulting them in 4 KiB pages cost
+/// 5% of its build). The working arrays are recycled instead (see acquire()): huge pages
+/// for them made the 1M soup 10% slower.
+void advise_huge_pages(void* p, size_t bytes) {
+    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+    const uintptr_t lo = (uintptr_t(p) + kHuge - 1) & ~(kHuge - 1), hi = (uintptr_t(p) + bytes) & ~(kHuge - 1);
+    if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+}
+
+/// v.reserve(n), with huge pages for a new block.
+template <typename T>
+void reserve_huge(std::vector<T>& v, size_t n) {
+    if (n <= v.capacity()) return;
+    v.reserve(n);
+    advise_huge_pages(v.data(), n * sizeof(T));
+}
 
 /// A float's bits mapped so that unsigned order is float order, and back.
 inline uint32_t sort_key(float f) {
@@ -140,6 +160,16 @@ struct SmallWork {
     }
 };
 
+/// The counts behind a small node's plane search, per axis and candidate (lower bounds, then
+/// upper bounds, four to a vector): bounds below, bounds above, and flat bounds on the
+/// candidate. They depend on the clipped bounds only, not on the voxel, so the one child of an
+/// empty-space cut, which keeps every bound, reuses them and only re-prices the planes.
+struct SmallCounts {
+    static constexpr uint32_t kVecs = kMaxSmallNode / 4;
+    bool flat[3];  ///< whether any bound on the axis is flat (else planar is not filled)
+    I4 below[3][2][kVecs], above[3][2][kVecs], planar[3][2][kVecs];
+};
+
 void add_events(std::vector<Event>* ev, const AABB& b, uint32_t slot) {
     for (int k = 0; k < 3; ++k) {
         if (b.lo[k] == b.hi[k]) {
@@ -199,7 +229,8 @@ struct Position {
 /// back once the node is split, so after warm-up the build allocates almost nothing per node.
 struct ThreadState {
     std::vector<std::unique_ptr<Work>> free_work;
-    std::vector<Position> positions;
+    std::vector<Position> positions[3];  ///< find_plane's records, per axis
+    size_t groups[3] = {0, 0, 0};
     std::vector<uint8_t> side;
     std::vector<uint32_t> remap;
     std::vector<Event> filtered[2], fresh[2][3];
@@ -210,10 +241,19 @@ public:
     Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
         : c_(c), mesh_(mesh), max_depth_(max_depth), small_(c.small_node_size) {}
 
-    std::unique_ptr<Work> acquire() {
+    /// A free Work for about n triangles: the pooled one with the least capacity that holds
+    /// n, else the largest. Reusing capacity matters because fresh pages are costly: on furball
+    /// page faults took a quarter of the build.
+    std::unique_ptr<Work> acquire(size_t n = 0) {
         auto& pool = state_.local().free_work;
         if (pool.empty()) return std::make_unique<Work>();
-        std::unique_ptr<Work> w = std::move(pool.back());
+        size_t pick = 0;
+        for (size_t i = 1; i < pool.size(); ++i) {
+            const size_t have = pool[i]->tris.capacity(), best = pool[pick]->tris.capacity();
+            if (best < n ? have > best : have >= n && have < best) pick = i;
+        }
+        std::unique_ptr<Work> w = std::move(pool[pick]);
+        pool[pick] = std::move(pool.back());
         pool.pop_back();
         w->clear();
         return w;
@@ -248,19 +288,19 @@ public:
             release(std::move(w));
             return node;
         }
-        std::unique_ptr<Work> left = acquire(), right = acquire();
-        split(*w, p, *left, *right);
-        release(std::move(w));
+        Children ch = split(std::move(w), p);
         node->axis = uint32_t(p.axis);
         node->split = p.pos;
-        tbb::parallel_invoke([&] { node->child[0] = build_top(std::move(left), depth + 1); },
-                             [&] { node->child[1] = build_top(std::move(right), depth + 1); });
+        tbb::parallel_invoke([&] { node->child[0] = build_top(std::move(ch.left), depth + 1); },
+                             [&] { node->child[1] = build_top(std::move(ch.right), depth + 1); });
         return node;
     }
 
 private:
-    /// Builds the subtree of `w` into `f`, its root at f.nodes[at].
-    void build_fragment(std::unique_ptr<Work> w, int depth, Fragment& f, uint32_t at) {
+    /// Builds the subtree of `w` into `f`, its root at f.nodes[at]. `counted`: w has the same
+    /// bounds and events as the node whose find_plane() ran last on this thread (it is the
+    /// child of an empty-space cut), so that sweep's counts still hold.
+    void build_fragment(std::unique_ptr<Work> w, int depth, Fragment& f, uint32_t at, bool counted = false) {
         const auto n = uint32_t(w->tris.size());
         if (n <= small_) {
             const SmallWork sw = SmallWork::of(*w);
@@ -268,25 +308,26 @@ private:
             build_small(sw, depth, f, at);
             return;
         }
-        const Plane p = depth < max_depth_ ? find_plane(*w) : Plane{};
+        const Plane p = depth < max_depth_ ? find_plane(*w, counted, true) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(n))) {
             f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), n};
             f.prims.insert(f.prims.end(), w->tris.begin(), w->tris.end());
             release(std::move(w));
             return;
         }
-        std::unique_ptr<Work> left = acquire(), right = acquire();
-        split(*w, p, *left, *right);
-        release(std::move(w));
+        Children ch = split(std::move(w), p);
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = {p.pos, uint32_t(p.axis), k, 0};
-        build_fragment(std::move(left), depth + 1, f, k);
-        build_fragment(std::move(right), depth + 1, f, k + 1);
+        // An empty child is a leaf at once, so the other child's find_plane() is the next.
+        build_fragment(std::move(ch.left), depth + 1, f, k, ch.empty_cut);
+        build_fragment(std::move(ch.right), depth + 1, f, k + 1, ch.empty_cut);
     }
 
     Plane choose_plane(const Work& w) const {
-        return w.tris.size() <= small_ ? find_plane_small(SmallWork::of(w)) : find_plane(w);
+        if (w.tris.size() > small_) return find_plane(w, false, false);
+        SmallCounts counts;
+        return find_plane_small(SmallWork::of(w), nullptr, counts);
     }
 
     /// The bounds of straddling triangle t clipped to each side of plane p in `voxel`.
@@ -296,9 +337,11 @@ private:
     }
 
     /// build_fragment for a node of at most small_ triangles: the same planes, clipping and
-    /// slot order as split(), with everything on the stack.
-    void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at) {
-        const Plane p = depth < max_depth_ ? find_plane_small(w) : Plane{};
+    /// slot order as split(), with everything on the stack. `kept`: the counts of w's bounds,
+    /// when its parent had the same ones (an empty-space cut).
+    void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at, const SmallCounts* kept = nullptr) {
+        SmallCounts own;
+        const Plane p = depth < max_depth_ ? find_plane_small(w, kept, own) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
             f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), w.n};
             f.prims.insert(f.prims.end(), w.tris, w.tris + w.n);
@@ -310,12 +353,14 @@ private:
         child[0].voxel.hi[axis] = p.pos;
         child[1].voxel.lo[axis] = p.pos;
         uint8_t side[kMaxSmallNode];
+        uint32_t straddlers = 0;
         for (uint32_t s = 0; s < w.n; ++s) {
             side[s] = classify(w.lo[axis][s], w.hi[axis][s], p);
+            straddlers += side[s] == kBoth;
             if (side[s] == kBoth) continue;
             child[side[s] - 1].add(w, s);
         }
-        for (uint32_t s = 0; s < w.n; ++s) {
+        for (uint32_t s = 0; straddlers > 0 && s < w.n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
             const auto boxes = split_straddler(t, w.voxel, p);
@@ -327,8 +372,11 @@ private:
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = {p.pos, uint32_t(axis), k, 0};
-        build_small(child[0], depth + 1, f, k);
-        build_small(child[1], depth + 1, f, k + 1);
+        // After an empty-space cut the non-empty child has every bound, in the same order.
+        const bool empty_cut = straddlers == 0 && (child[0].n == 0 || child[1].n == 0);
+        const SmallCounts* counts = !empty_cut ? nullptr : kept ? kept : &own;
+        build_small(child[0], depth + 1, f, k, counts);
+        build_small(child[1], depth + 1, f, k + 1, counts);
     }
 
     /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
@@ -354,35 +402,21 @@ private:
     /// One sweep per axis over the sorted events finds the cheapest plane, in two passes.
     /// The first counts, without branches, and writes one record per distinct position (on
     /// scanned meshes about a third of the events: vertices are shared); the second evaluates
-    /// the SAH at the records inside the voxel.
-    Plane find_plane(const Work& w) const {
+    /// the SAH at the records inside the voxel. `keep`: keep each axis's records (else one
+    /// buffer serves all three: the large nodes above the fragments). `counted`: the kept
+    /// records of the last call on this thread still hold (same events), so only the second
+    /// pass runs.
+    Plane find_plane(const Work& w, bool counted, bool keep) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.tris.empty()) return best;
         const float inv_area = 1.0f / area;
         const auto n = uint32_t(w.tris.size());
-        std::vector<Position>& at = state_.local().positions;
+        ThreadState& ts = state_.local();
         for (int k = 0; k < 3; ++k) {
-            const std::vector<Event>& e = w.events[k];
-            const size_t m = e.size();
-            at.resize(m + 1);
-            // Within a position the order is ends, planars, starts. At its last event, nl
-            // counts the starts and planars so far and nr the triangles not yet ended; the
-            // starts at this position go right, its planars either way.
-            uint32_t nl = 0, nr = n, planars = 0, starts = 0;
-            size_t groups = 0;
-            for (size_t i = 0; i < m; ++i) {
-                const uint32_t key = e[i].pos_key();
-                const uint32_t type = e[i].type();
-                const uint32_t first = uint32_t(i == 0 || e[i - 1].pos_key() != key);
-                const uint32_t start = uint32_t(type == kStart), planar = uint32_t(type == kPlanar);
-                planars = (planars & (first - 1u)) + planar;  // reset at a new position
-                starts = (starts & (first - 1u)) + start;
-                nl += start | planar;
-                nr -= start ^ 1u;
-                at[groups] = {e[i].pos(), nl - starts, nr, planars};
-                groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != key);
-            }
+            std::vector<Position>& at = ts.positions[keep ? k : 0];
+            size_t& groups = ts.groups[keep ? k : 0];
+            if (!counted) groups = count_positions(w.events[k], n, at);
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             for (size_t g = 0; g < groups; ++g) {
                 const Position& q = at[g];
@@ -397,6 +431,31 @@ private:
         return best;
     }
 
+    /// find_plane's first pass on one axis: one record per distinct position of the n
+    /// triangles' sorted events e. Returns the number of records.
+    static size_t count_positions(const std::vector<Event>& e, uint32_t n, std::vector<Position>& at) {
+        const size_t m = e.size();
+        at.resize(m + 1);
+        // Within a position the order is ends, planars, starts. At its last event, nl
+        // counts the starts and planars so far and nr the triangles not yet ended; the
+        // starts at this position go right, its planars either way.
+        uint32_t nl = 0, nr = n, planars = 0, starts = 0;
+        size_t groups = 0;
+        for (size_t i = 0; i < m; ++i) {
+            const uint32_t key = e[i].pos_key();
+            const uint32_t type = e[i].type();
+            const uint32_t first = uint32_t(i == 0 || e[i - 1].pos_key() != key);
+            const uint32_t start = uint32_t(type == kStart), planar = uint32_t(type == kPlanar);
+            planars = (planars & (first - 1u)) + planar;  // reset at a new position
+            starts = (starts & (first - 1u)) + start;
+            nl += start | planar;
+            nr -= start ^ 1u;
+            at[groups] = {e[i].pos(), nl - starts, nr, planars};
+            groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != key);
+        }
+        return groups;
+    }
+
     enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
     /// The side of a plane that a clipped bound lies on, by the rule the sweep counted with.
     static uint8_t classify(float lo, float hi, const Plane& p) {
@@ -406,16 +465,48 @@ private:
         return kBoth;
     }
 
-    void split(const Work& w, const Plane& p, Work& left, Work& right) {
+    struct Children {
+        std::unique_ptr<Work> left, right;
+        bool empty_cut;  ///< one child is empty and the other is w, with a smaller voxel
+    };
+
+    /// Splits w's triangles, bounds and events between two children.
+    Children split(std::unique_ptr<Work> wp, const Plane& p) {
         ThreadState& ts = state_.local();
+        const Work& w = *wp;
         const size_t n = w.tris.size();
         const int axis = p.axis;
         std::vector<uint8_t>& side = ts.side;
         side.resize(n);
-        for (size_t s = 0; s < n; ++s) side[s] = classify(w.boxes[s].lo[axis], w.boxes[s].hi[axis], p);
-        left.voxel = right.voxel = w.voxel;
-        left.voxel.hi[axis] = p.pos;
-        right.voxel.lo[axis] = p.pos;
+        size_t sides[3] = {0, 0, 0};  // straddling, left only, right only
+        for (size_t s = 0; s < n; ++s) {
+            side[s] = classify(w.boxes[s].lo[axis], w.boxes[s].hi[axis], p);
+            ++sides[side[s]];
+        }
+        AABB cell[2] = {w.voxel, w.voxel};
+        cell[0].hi[axis] = p.pos;
+        cell[1].lo[axis] = p.pos;
+        if (sides[kLeftOnly] == n || sides[kRightOnly] == n) {
+            // An empty-space cut: every slot keeps its number, bounds and events.
+            const int full = sides[kLeftOnly] == n ? 0 : 1;
+            std::unique_ptr<Work> c[2];
+            c[full] = std::move(wp);
+            c[full]->voxel = cell[full];
+            c[!full] = acquire();
+            c[!full]->voxel = cell[!full];
+            return {std::move(c[0]), std::move(c[1]), true};
+        }
+        std::unique_ptr<Work> lp = acquire(sides[kLeftOnly] + sides[kBoth]);
+        std::unique_ptr<Work> rp = acquire(sides[kRightOnly] + sides[kBoth]);
+        Work &left = *lp, &right = *rp;
+        left.voxel = cell[0];
+        right.voxel = cell[1];
+        for (int i = 0; i < 2; ++i) {
+            Work& c = i == 0 ? left : right;
+            const size_t most = sides[i == 0 ? kLeftOnly : kRightOnly] + sides[kBoth];
+            c.tris.reserve(most);
+            c.boxes.reserve(most);
+        }
         // One-sided triangles keep their bounds; their slots are renumbered in order.
         std::vector<uint32_t>& remap = ts.remap;
         remap.resize(n);
@@ -451,7 +542,10 @@ private:
             for (uint32_t slot = one_sided[i]; slot < ch.tris.size(); ++slot) add_events(ts.fresh[i], ch.boxes[slot], slot);
         }
         const bool events[2] = {left.tris.size() > small_, right.tris.size() > small_};
-        if (!events[0] && !events[1]) return;
+        if (!events[0] && !events[1]) {
+            release(std::move(wp));
+            return {std::move(lp), std::move(rp), false};
+        }
         for (int k = 0; k < 3; ++k) {
             const std::vector<Event>& in = w.events[k];
             for (auto& f : ts.filtered) f.resize(in.size());
@@ -478,34 +572,44 @@ private:
                 merge_events(ts.filtered[i].data(), kept[i], fresh.data(), fresh.size(), dst.data());
             }
         }
+        release(std::move(wp));
+        return {std::move(lp), std::move(rp), false};
     }
 
     /// find_plane for a node without events (at most small_ triangles): every bound inside
     /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
     /// same plane the sweep would make (ties: lower axis, then lower position, left first).
-    Plane find_plane_small(const SmallWork& w) const {
+    /// The counts are taken from `kept` when given, else made in `own`.
+    Plane find_plane_small(const SmallWork& w, const SmallCounts* kept, SmallCounts& own) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.n == 0) return best;
+        if (!kept) count_small(w, own);
+        const SmallCounts& c = kept ? *kept : own;
         const float inv_area = 1.0f / area;
         for (int k = 0; k < 3; ++k) {
-            bool flat = false;
-            for (uint32_t s = 0; s < w.n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            const Plane p = flat ? small_axis<true>(w, k, cost) : small_axis<false>(w, k, cost);
+            const Plane p = c.flat[k] ? small_axis<true>(w, c, k, cost) : small_axis<false>(w, c, k, cost);
             if (p.cost < best.cost) best = p;  // an earlier axis wins ties
         }
         return best;
     }
 
-    /// The cheapest plane on axis k of a small node. Candidates go four at a time through
-    /// GCC/Clang vector types (SSE, NEON). Without flat (planar) bounds on this axis, which is
-    /// the common case, both sides of a plane cost the same and half the work is skipped.
-    template <bool kFlat>
-    Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) const {
-        constexpr uint32_t kVecs = kMaxSmallNode / 4;
+    /// The counts of a small node's candidates on every axis, four candidates at a time
+    /// through GCC/Clang vector types (SSE, NEON).
+    static void count_small(const SmallWork& w, SmallCounts& c) {
         const uint32_t n = w.n, vecs = (n + 3) / 4;
-        const F4 inf = F4{} + INFINITY;
+        for (int k = 0; k < 3; ++k) {
+            bool flat = false;
+            for (uint32_t s = 0; s < n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
+            c.flat[k] = flat;
+            if (flat) count_axis<true>(w, k, vecs, c);
+            else count_axis<false>(w, k, vecs, c);
+        }
+    }
+    template <bool kFlat>
+    static void count_axis(const SmallWork& w, int k, uint32_t vecs, SmallCounts& c) {
+        constexpr uint32_t kVecs = SmallCounts::kVecs;
         // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
         F4 pos[2][kVecs];
         I4 below[2][kVecs], above[2][kVecs], planar[2][kVecs];
@@ -514,7 +618,7 @@ private:
             std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
             for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = I4{};
         }
-        for (uint32_t s = 0; s < n; ++s) {
+        for (uint32_t s = 0; s < w.n; ++s) {
             const float lo = w.lo[k][s], hi = w.hi[k][s];
             const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
             for (int l = 0; l < 2; ++l)
@@ -524,14 +628,38 @@ private:
                     if (kFlat) planar[l][v] -= flat & (lo == pos[l][v]);
                 }
         }
-        F4 left[2][kVecs], right[2][kVecs];
+        const size_t bytes = vecs * sizeof(I4);
+        for (int l = 0; l < 2; ++l) {
+            std::memcpy(c.below[k][l], below[l], bytes);
+            std::memcpy(c.above[k][l], above[l], bytes);
+            if (kFlat) std::memcpy(c.planar[k][l], planar[l], bytes);
+        }
+    }
+
+    /// The cheapest plane on axis k of a small node, from its counts. Without flat (planar)
+    /// bounds on this axis, which is the common case, both sides of a plane cost the same and
+    /// half the work is skipped.
+    template <bool kFlat>
+    Plane small_axis(const SmallWork& w, const SmallCounts& c, int k, const AxisCost& cost) const {
+        constexpr uint32_t kVecs = SmallCounts::kVecs;
+        const uint32_t vecs = (w.n + 3) / 4;
+        const F4 inf = F4{} + INFINITY;
+        F4 pos[2][kVecs], left[2][kVecs], right[2][kVecs];
+        for (uint32_t v = 0; v < vecs; ++v) {
+            std::memcpy(&pos[0][v], &w.lo[k][4 * v], sizeof(F4));
+            std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
+        }
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
                 const F4 x = pos[l][v];
-                const I4 b = below[l][v], a = above[l][v];
+                const I4 b = c.below[k][l][v], a = c.above[k][l][v];
                 const I4 inside = (x > cost.lo) & (x < cost.hi);
-                left[l][v] = inside ? cost(x, b + planar[l][v], a) : inf;
-                if (kFlat) right[l][v] = inside ? cost(x, b, a + planar[l][v]) : inf;
+                if (kFlat) {
+                    left[l][v] = inside ? cost(x, b + c.planar[k][l][v], a) : inf;
+                    right[l][v] = inside ? cost(x, b, a + c.planar[k][l][v]) : inf;
+                } else {
+                    left[l][v] = inside ? cost(x, b, a) : inf;
+                }
             }
         // The cheapest cost, the lowest position at that cost, and left before right, with
         // vector minima instead of a branch per candidate (they mispredicted).
@@ -598,6 +726,8 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
     }
     KdTree t;
     t.bounds = bounds;
+    reserve_huge(t.nodes, nodes);
+    reserve_huge(t.prim_indices, prims);
     t.nodes.resize(nodes);
     t.prim_indices.resize(prims);
     for (const auto& [d, x] : interior) t.nodes[d] = x;

@@ -101,12 +101,14 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
                                    load_obj(test::data_dir() + "/cornell_box.obj")};
     for (const TriangleMesh& m : scenes) {
         KdTreeBuilder::Config c;
+        // The plain algorithm: every node is a parallel task (so no counts are carried over
+        // an empty-space cut) and has events (no small-node search).
         c.small_node_size = 0;
-        c.task_threshold = ~0u;  // one thread, events everywhere
+        c.task_threshold = 1;
         const KdTree ref = KdTreeBuilder(c).build(m);
         ASSERT_EQ(validate_kd(ref, m.triangle_count()), "");
-        for (uint32_t small : {1u, 8u, 16u, 32u}) {
-            for (uint32_t task : {64u, 2048u}) {
+        for (uint32_t small : {0u, 1u, 8u, 16u, 32u}) {
+            for (uint32_t task : {64u, 2048u, ~0u}) {
                 c.small_node_size = small;
                 c.task_threshold = task;
                 const KdTree t = KdTreeBuilder(c).build(m);
