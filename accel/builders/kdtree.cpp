@@ -93,10 +93,30 @@ struct Event {
     bool operator<(const Event& o) const { return key < o.key; }
 };
 
-/// Merges two sorted event lists into out, with a conditional move instead of a branch per
-/// event (the straddlers' new events fall anywhere among the others).
+/// Merges two sorted event lists into out. Usually b (the straddlers' new events) is much
+/// shorter: then each of its events finds its place in a by a galloping search and the runs of
+/// a between them are block copies. Otherwise a conditional move instead of a branch per event
+/// (the new events fall anywhere among the others).
 void merge_events(const Event* a, size_t na, const Event* b, size_t nb, Event* out) {
     size_t i = 0, j = 0;
+    if (nb * 16 < na) {
+        for (; j < nb; ++j) {
+            // The end of the run of a below b[j]: gallop, then bisect the last step.
+            const uint64_t y = b[j].key;
+            size_t step = 1, lo = i, hi = i;
+            while (hi < na && a[hi].key < y) {
+                lo = hi + 1;
+                hi = i + step;
+                step *= 2;
+            }
+            const Event* end = std::lower_bound(a + lo, a + std::min(hi, na), b[j]);
+            out = std::copy(a + i, end, out);
+            i = size_t(end - a);
+            *out++ = b[j];
+        }
+        std::copy(a + i, a + na, out);
+        return;
+    }
     while (i < na && j < nb) {
         const uint64_t x = a[i].key, y = b[j].key;
         const bool take_b = y < x;
