@@ -22,8 +22,6 @@
 #include <cstring>
 #include <memory>
 
-#include <sys/mman.h>
-
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
@@ -42,24 +40,6 @@ using F4 = float __attribute__((vector_size(16)));
 using I4 = int32_t __attribute__((vector_size(16)));
 inline float to_float(uint32_t x) { return float(x); }
 inline F4 to_float(I4 x) { return __builtin_convertvector(x, F4); }
-
-/// Asks for transparent huge pages on the whole 2 MiB pages of a fresh, untouched block: for
-/// the output arrays, filled once (furball's are 0.7 GB; faulting them in 4 KiB pages cost
-/// 5% of its build). The working arrays are recycled instead (see acquire()): huge pages
-/// for them made the 1M soup 10% slower.
-void advise_huge_pages(void* p, size_t bytes) {
-    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-    const uintptr_t lo = (uintptr_t(p) + kHuge - 1) & ~(kHuge - 1), hi = (uintptr_t(p) + bytes) & ~(kHuge - 1);
-    if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
-}
-
-/// v.reserve(n), with huge pages for a new block.
-template <typename T>
-void reserve_huge(std::vector<T>& v, size_t n) {
-    if (n <= v.capacity()) return;
-    v.reserve(n);
-    advise_huge_pages(v.data(), n * sizeof(T));
-}
 
 /// A float's bits mapped so that unsigned order is float order, and back.
 inline uint32_t sort_key(float f) {
@@ -746,8 +726,6 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
     }
     KdTree t;
     t.bounds = bounds;
-    reserve_huge(t.nodes, nodes);
-    reserve_huge(t.prim_indices, prims);
     t.nodes.resize(nodes);
     t.prim_indices.resize(prims);
     for (const auto& [d, x] : interior) t.nodes[d] = x;
