@@ -160,16 +160,6 @@ struct SmallWork {
     }
 };
 
-/// The counts behind a small node's plane search, per axis and candidate (lower bounds, then
-/// upper bounds, four to a vector): bounds below, bounds above, and flat bounds on the
-/// candidate. They depend on the clipped bounds only, not on the voxel, so the one child of an
-/// empty-space cut, which keeps every bound, reuses them and only re-prices the planes.
-struct SmallCounts {
-    static constexpr uint32_t kVecs = kMaxSmallNode / 4;
-    bool flat[3];  ///< whether any bound on the axis is flat (else planar is not filled)
-    I4 below[3][2][kVecs], above[3][2][kVecs], planar[3][2][kVecs];
-};
-
 void add_events(std::vector<Event>* ev, const AABB& b, uint32_t slot) {
     for (int k = 0; k < 3; ++k) {
         if (b.lo[k] == b.hi[k]) {
@@ -326,8 +316,7 @@ private:
 
     Plane choose_plane(const Work& w) const {
         if (w.tris.size() > small_) return find_plane(w, false, false);
-        SmallCounts counts;
-        return find_plane_small(SmallWork::of(w), nullptr, counts);
+        return find_plane_small(SmallWork::of(w));
     }
 
     /// The bounds of straddling triangle t clipped to each side of plane p in `voxel`.
@@ -337,11 +326,9 @@ private:
     }
 
     /// build_fragment for a node of at most small_ triangles: the same planes, clipping and
-    /// slot order as split(), with everything on the stack. `kept`: the counts of w's bounds,
-    /// when its parent had the same ones (an empty-space cut).
-    void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at, const SmallCounts* kept = nullptr) {
-        SmallCounts own;
-        const Plane p = depth < max_depth_ ? find_plane_small(w, kept, own) : Plane{};
+    /// slot order as split(), with everything on the stack.
+    void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at) {
+        const Plane p = depth < max_depth_ ? find_plane_small(w) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
             f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), w.n};
             f.prims.insert(f.prims.end(), w.tris, w.tris + w.n);
@@ -353,14 +340,12 @@ private:
         child[0].voxel.hi[axis] = p.pos;
         child[1].voxel.lo[axis] = p.pos;
         uint8_t side[kMaxSmallNode];
-        uint32_t straddlers = 0;
         for (uint32_t s = 0; s < w.n; ++s) {
             side[s] = classify(w.lo[axis][s], w.hi[axis][s], p);
-            straddlers += side[s] == kBoth;
             if (side[s] == kBoth) continue;
             child[side[s] - 1].add(w, s);
         }
-        for (uint32_t s = 0; straddlers > 0 && s < w.n; ++s) {
+        for (uint32_t s = 0; s < w.n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
             const auto boxes = split_straddler(t, w.voxel, p);
@@ -372,11 +357,8 @@ private:
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = {p.pos, uint32_t(axis), k, 0};
-        // After an empty-space cut the non-empty child has every bound, in the same order.
-        const bool empty_cut = straddlers == 0 && (child[0].n == 0 || child[1].n == 0);
-        const SmallCounts* counts = !empty_cut ? nullptr : kept ? kept : &own;
-        build_small(child[0], depth + 1, f, k, counts);
-        build_small(child[1], depth + 1, f, k + 1, counts);
+        build_small(child[0], depth + 1, f, k);
+        build_small(child[1], depth + 1, f, k + 1);
     }
 
     /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
@@ -579,37 +561,29 @@ private:
     /// find_plane for a node without events (at most small_ triangles): every bound inside
     /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
     /// same plane the sweep would make (ties: lower axis, then lower position, left first).
-    /// The counts are taken from `kept` when given, else made in `own`.
-    Plane find_plane_small(const SmallWork& w, const SmallCounts* kept, SmallCounts& own) const {
+    Plane find_plane_small(const SmallWork& w) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.n == 0) return best;
-        if (!kept) count_small(w, own);
-        const SmallCounts& c = kept ? *kept : own;
         const float inv_area = 1.0f / area;
         for (int k = 0; k < 3; ++k) {
+            bool flat = false;
+            for (uint32_t s = 0; s < w.n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            const Plane p = c.flat[k] ? small_axis<true>(w, c, k, cost) : small_axis<false>(w, c, k, cost);
+            const Plane p = flat ? small_axis<true>(w, k, cost) : small_axis<false>(w, k, cost);
             if (p.cost < best.cost) best = p;  // an earlier axis wins ties
         }
         return best;
     }
 
-    /// The counts of a small node's candidates on every axis, four candidates at a time
-    /// through GCC/Clang vector types (SSE, NEON).
-    static void count_small(const SmallWork& w, SmallCounts& c) {
-        const uint32_t n = w.n, vecs = (n + 3) / 4;
-        for (int k = 0; k < 3; ++k) {
-            bool flat = false;
-            for (uint32_t s = 0; s < n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
-            c.flat[k] = flat;
-            if (flat) count_axis<true>(w, k, vecs, c);
-            else count_axis<false>(w, k, vecs, c);
-        }
-    }
+    /// The cheapest plane on axis k of a small node. Candidates go four at a time through
+    /// GCC/Clang vector types (SSE, NEON). Without flat (planar) bounds on this axis, which is
+    /// the common case, both sides of a plane cost the same and half the work is skipped.
     template <bool kFlat>
-    static void count_axis(const SmallWork& w, int k, uint32_t vecs, SmallCounts& c) {
-        constexpr uint32_t kVecs = SmallCounts::kVecs;
+    Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) const {
+        constexpr uint32_t kVecs = kMaxSmallNode / 4;
+        const uint32_t n = w.n, vecs = (n + 3) / 4;
+        const F4 inf = F4{} + INFINITY;
         // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
         F4 pos[2][kVecs];
         I4 below[2][kVecs], above[2][kVecs], planar[2][kVecs];
@@ -618,7 +592,7 @@ private:
             std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
             for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = I4{};
         }
-        for (uint32_t s = 0; s < w.n; ++s) {
+        for (uint32_t s = 0; s < n; ++s) {
             const float lo = w.lo[k][s], hi = w.hi[k][s];
             const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
             for (int l = 0; l < 2; ++l)
@@ -628,38 +602,14 @@ private:
                     if (kFlat) planar[l][v] -= flat & (lo == pos[l][v]);
                 }
         }
-        const size_t bytes = vecs * sizeof(I4);
-        for (int l = 0; l < 2; ++l) {
-            std::memcpy(c.below[k][l], below[l], bytes);
-            std::memcpy(c.above[k][l], above[l], bytes);
-            if (kFlat) std::memcpy(c.planar[k][l], planar[l], bytes);
-        }
-    }
-
-    /// The cheapest plane on axis k of a small node, from its counts. Without flat (planar)
-    /// bounds on this axis, which is the common case, both sides of a plane cost the same and
-    /// half the work is skipped.
-    template <bool kFlat>
-    Plane small_axis(const SmallWork& w, const SmallCounts& c, int k, const AxisCost& cost) const {
-        constexpr uint32_t kVecs = SmallCounts::kVecs;
-        const uint32_t vecs = (w.n + 3) / 4;
-        const F4 inf = F4{} + INFINITY;
-        F4 pos[2][kVecs], left[2][kVecs], right[2][kVecs];
-        for (uint32_t v = 0; v < vecs; ++v) {
-            std::memcpy(&pos[0][v], &w.lo[k][4 * v], sizeof(F4));
-            std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
-        }
+        F4 left[2][kVecs], right[2][kVecs];
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
                 const F4 x = pos[l][v];
-                const I4 b = c.below[k][l][v], a = c.above[k][l][v];
+                const I4 b = below[l][v], a = above[l][v];
                 const I4 inside = (x > cost.lo) & (x < cost.hi);
-                if (kFlat) {
-                    left[l][v] = inside ? cost(x, b + c.planar[k][l][v], a) : inf;
-                    right[l][v] = inside ? cost(x, b, a + c.planar[k][l][v]) : inf;
-                } else {
-                    left[l][v] = inside ? cost(x, b, a) : inf;
-                }
+                left[l][v] = inside ? cost(x, b + planar[l][v], a) : inf;
+                if (kFlat) right[l][v] = inside ? cost(x, b, a + planar[l][v]) : inf;
             }
         // The cheapest cost, the lowest position at that cost, and left before right, with
         // vector minima instead of a branch per candidate (they mispredicted).
