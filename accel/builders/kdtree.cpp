@@ -237,9 +237,9 @@ public:
         });
     }
 
-    /// A free Work for about n triangles: the pooled one with the least capacity that holds
-    /// n, else the largest. Reusing capacity matters because fresh pages are costly: on furball
-    /// page faults took a quarter of the build.
+    /// A free Work with room for n triangles: the pooled one with the least capacity that
+    /// holds n, else the largest, grown to n. Reusing capacity matters because fresh pages are
+    /// costly: on furball page faults took a quarter of the build.
     std::unique_ptr<Work> acquire(size_t n = 0) {
         auto& pool = state_.local().free_work;
         if (pool.empty()) return std::make_unique<Work>();
@@ -252,6 +252,8 @@ public:
         pool[pick] = std::move(pool.back());
         pool.pop_back();
         w->clear();
+        w->tris.reserve(n);
+        w->boxes.reserve(n);
         return w;
     }
     void release(std::unique_ptr<Work> w) { state_.local().free_work.push_back(std::move(w)); }
@@ -304,7 +306,7 @@ private:
             build_small(sw, depth, f, at);
             return;
         }
-        const Plane p = depth < max_depth_ ? find_plane(*w, counted, true) : Plane{};
+        const Plane p = depth < max_depth_ ? find_plane(*w, counted ? Records::kKept : Records::kKeep) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(n))) {
             f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), n};
             f.prims.insert(f.prims.end(), w->tris.begin(), w->tris.end());
@@ -321,7 +323,7 @@ private:
     }
 
     Plane choose_plane(const Work& w) const {
-        if (w.tris.size() > small_) return find_plane(w, false, false);
+        if (w.tris.size() > small_) return find_plane(w, Records::kShared);
         return find_plane_small(SmallWork::of(w));
     }
 
@@ -397,14 +399,19 @@ private:
                 c_.traversal_cost, c_.intersection_cost, 1.0f - c_.empty_bonus};
     }
 
+    /// Where find_plane() keeps its per-position records.
+    enum class Records {
+        kShared,  ///< one buffer serves all three axes (the large nodes above the fragments)
+        kKeep,    ///< each axis keeps its records, for a child of an empty-space cut
+        kKept,    ///< the kept records of the last call on this thread hold (same events):
+                  ///< only the second pass runs
+    };
+
     /// One sweep per axis over the sorted events finds the cheapest plane, in two passes.
     /// The first counts, without branches, and writes one record per distinct position (on
     /// scanned meshes about a third of the events: vertices are shared); the second evaluates
-    /// the SAH at the records inside the voxel. `keep`: keep each axis's records (else one
-    /// buffer serves all three: the large nodes above the fragments). `counted`: the kept
-    /// records of the last call on this thread still hold (same events), so only the second
-    /// pass runs.
-    Plane find_plane(const Work& w, bool counted, bool keep) const {
+    /// the SAH at the records inside the voxel.
+    Plane find_plane(const Work& w, Records records) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.tris.empty()) return best;
@@ -412,9 +419,10 @@ private:
         const auto n = uint32_t(w.tris.size());
         ThreadState& ts = state_.local();
         for (int k = 0; k < 3; ++k) {
-            std::vector<Position>& at = ts.positions[keep ? k : 0];
-            size_t& groups = ts.groups[keep ? k : 0];
-            if (!counted) groups = count_positions(w.events[k], n, at);
+            const int buffer = records == Records::kShared ? 0 : k;
+            std::vector<Position>& at = ts.positions[buffer];
+            size_t& groups = ts.groups[buffer];
+            if (records != Records::kKept) groups = count_positions(w.events[k], n, at);
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             for (size_t g = 0; g < groups; ++g) {
                 const Position& q = at[g];
@@ -499,12 +507,6 @@ private:
         Work &left = *lp, &right = *rp;
         left.voxel = cell[0];
         right.voxel = cell[1];
-        for (int i = 0; i < 2; ++i) {
-            Work& c = i == 0 ? left : right;
-            const size_t most = sides[i == 0 ? kLeftOnly : kRightOnly] + sides[kBoth];
-            c.tris.reserve(most);
-            c.boxes.reserve(most);
-        }
         // One-sided triangles keep their bounds; their slots are renumbered in order.
         std::vector<uint32_t>& remap = ts.remap;
         remap.resize(n);
