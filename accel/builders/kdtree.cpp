@@ -37,11 +37,23 @@ constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
 constexpr uint32_t kMaxSmallNode = 32;
 
-/// Four floats or ints in one register (GCC/Clang vector types: SSE, NEON).
-using F4 = float __attribute__((vector_size(16)));
-using I4 = int32_t __attribute__((vector_size(16)));
+/// Eight floats or ints (GCC/Clang vector types): one AVX2 register, or two SSE or NEON ones.
+/// They never cross a non-inlined call, so GCC's note on their calling convention is moot.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+constexpr uint32_t kLanes = 8;
+using FV = float __attribute__((vector_size(4 * kLanes)));
+using IV = int32_t __attribute__((vector_size(4 * kLanes)));
 inline float to_float(uint32_t x) { return float(x); }
-inline F4 to_float(I4 x) { return __builtin_convertvector(x, F4); }
+inline FV to_float(const IV& x) { return __builtin_convertvector(x, FV); }
+/// x86-64 builds carry a second copy of the small-node plane search compiled for AVX2, used
+/// when the CPU has it (the portable copy runs each vector as two SSE halves).
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define BVHLAB_KD_AVX2 1
+#else
+#define BVHLAB_KD_AVX2 0
+#endif
 
 /// A float's bits mapped so that unsigned order is float order, and back.
 inline uint32_t sort_key(float f) {
@@ -128,14 +140,15 @@ struct Work {
 
 /// A node of at most kMaxSmallNode triangles, held on the stack: no events, no heap. Such a
 /// node's children are no larger, so its whole subtree is built from these. The clipped bounds
-/// are kept per axis (structure of arrays), so that the plane search loads them four at a time;
-/// the entries from n to the next multiple of 4 hold the voxel's lower face, never a candidate.
+/// are kept per axis (structure of arrays), so that the plane search loads them kLanes at a
+/// time; the entries from n to the next multiple of kLanes hold the voxel's lower face, never
+/// a candidate.
 struct SmallWork {
     AABB voxel;
     uint32_t n = 0;
     uint32_t tris[kMaxSmallNode];
-    alignas(16) float lo[3][kMaxSmallNode];
-    alignas(16) float hi[3][kMaxSmallNode];
+    alignas(32) float lo[3][kMaxSmallNode];
+    alignas(32) float hi[3][kMaxSmallNode];
 
     /// A small node's copy of a (small) Work node, padded.
     static SmallWork of(const Work& w) {
@@ -157,7 +170,7 @@ struct SmallWork {
         ++n;
     }
     void pad() {
-        for (uint32_t s = n; s % 4 != 0; ++s)
+        for (uint32_t s = n; s % kLanes != 0; ++s)
             for (int k = 0; k < 3; ++k) lo[k][s] = hi[k][s] = voxel.lo[k];
     }
 };
@@ -382,11 +395,11 @@ private:
     /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
     /// linear in the plane position: 2 (a b + (a + b) d) for the other two extents a, b and
     /// the child's extent d along the axis.
-    /// F and I are float and uint32_t, or F4 and I4 for four planes at once.
+    /// F and I are float and uint32_t, or FV and IV for kLanes planes at once.
     struct AxisCost {
         float lo, hi, face, side, ct, ci, bonus;
         template <typename F, typename I>
-        F operator()(F pos, I nl, I nr) const {
+        F operator()(const F& pos, const I& nl, const I& nr) const {
             const F pl = face + side * (pos - lo), pr = face + side * (hi - pos);
             const F c = ct + ci * (pl * to_float(nl) + pr * to_float(nr));
             return ((nl == 0) | (nr == 0)) ? c * bonus : c;
@@ -598,31 +611,48 @@ private:
             bool flat = false;
             for (uint32_t s = 0; s < w.n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            const Plane p = flat ? small_axis<true>(w, k, cost) : small_axis<false>(w, k, cost);
+            Plane p;
+#if BVHLAB_KD_AVX2
+            if (avx2_)
+                p = flat ? small_axis_avx2<true>(w, k, cost) : small_axis_avx2<false>(w, k, cost);
+            else
+#endif
+                p = flat ? small_axis<true>(w, k, cost) : small_axis<false>(w, k, cost);
             if (p.cost < best.cost) best = p;  // an earlier axis wins ties
         }
         return best;
     }
 
-    /// The cheapest plane on axis k of a small node. Candidates go four at a time through
-    /// GCC/Clang vector types (SSE, NEON). Without flat (planar) bounds on this axis, which is
-    /// the common case, both sides of a plane cost the same and half the work is skipped.
+    /// The cheapest plane on axis k of a small node. Candidates go kLanes at a time through
+    /// GCC/Clang vector types. Without flat (planar) bounds on this axis, which is the common
+    /// case, both sides of a plane cost the same and half the work is skipped.
     template <bool kFlat>
-    Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) const {
-        constexpr uint32_t kVecs = kMaxSmallNode / 4;
-        const uint32_t n = w.n, vecs = (n + 3) / 4;
-        const F4 inf = F4{} + INFINITY;
+    static Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) {
+        return small_axis_body<kFlat>(w, k, cost);
+    }
+#if BVHLAB_KD_AVX2
+    template <bool kFlat>
+    __attribute__((target("avx2"))) static Plane small_axis_avx2(const SmallWork& w, int k, const AxisCost& cost) {
+        return small_axis_body<kFlat>(w, k, cost);
+    }
+#endif
+    /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA.
+    template <bool kFlat>
+    __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k, const AxisCost& cost) {
+        constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
+        const uint32_t n = w.n, vecs = (n + kLanes - 1) / kLanes;
+        const FV inf = FV{} + INFINITY;
         // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
-        F4 pos[2][kVecs];
-        I4 below[2][kVecs], above[2][kVecs], planar[2][kVecs];
+        FV pos[2][kVecs];
+        IV below[2][kVecs], above[2][kVecs], planar[2][kVecs];
         for (uint32_t v = 0; v < vecs; ++v) {
-            std::memcpy(&pos[0][v], &w.lo[k][4 * v], sizeof(F4));
-            std::memcpy(&pos[1][v], &w.hi[k][4 * v], sizeof(F4));
-            for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = I4{};
+            std::memcpy(&pos[0][v], &w.lo[k][kLanes * v], sizeof(FV));
+            std::memcpy(&pos[1][v], &w.hi[k][kLanes * v], sizeof(FV));
+            for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = IV{};
         }
         for (uint32_t s = 0; s < n; ++s) {
             const float lo = w.lo[k][s], hi = w.hi[k][s];
-            const I4 flat = I4{} - int32_t(lo == hi);  // all ones when flat
+            const IV flat = IV{} - int32_t(lo == hi);  // all ones when flat
             for (int l = 0; l < 2; ++l)
                 for (uint32_t v = 0; v < vecs; ++v) {  // comparisons give -1 for true
                     below[l][v] -= lo < pos[l][v];
@@ -630,40 +660,46 @@ private:
                     if (kFlat) planar[l][v] -= flat & (lo == pos[l][v]);
                 }
         }
-        F4 left[2][kVecs], right[2][kVecs];
+        FV left[2][kVecs], right[2][kVecs];
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
-                const F4 x = pos[l][v];
-                const I4 b = below[l][v], a = above[l][v];
-                const I4 inside = (x > cost.lo) & (x < cost.hi);
+                const FV x = pos[l][v];
+                const IV b = below[l][v], a = above[l][v];
+                const IV inside = (x > cost.lo) & (x < cost.hi);
                 left[l][v] = inside ? cost(x, b + planar[l][v], a) : inf;
                 if (kFlat) right[l][v] = inside ? cost(x, b, a + planar[l][v]) : inf;
             }
         // The cheapest cost, the lowest position at that cost, and left before right, with
         // vector minima instead of a branch per candidate (they mispredicted).
-        const auto hmin = [](F4 x) { return std::min(std::min(x[0], x[1]), std::min(x[2], x[3])); };
-        F4 low = inf;
+        const auto hmin = [](const FV& x) {
+            float m = x[0];
+            for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, x[i]);
+            return m;
+        };
+        FV low = inf;
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
                 low = low < left[l][v] ? low : left[l][v];
                 if (kFlat) low = low < right[l][v] ? low : right[l][v];
             }
         const float m = hmin(low);
-        F4 at = inf;
+        FV at = inf;
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
-                I4 hit = left[l][v] == m;
+                IV hit = left[l][v] == m;
                 if (kFlat) hit |= right[l][v] == m;
-                const F4 x = hit ? pos[l][v] : inf;
+                const FV x = hit ? pos[l][v] : inf;
                 at = at < x ? at : x;
             }
         const float x = hmin(at);
         bool planar_left = true;
         if (kFlat) {
-            I4 on_left = I4{};
+            IV on_left = IV{};
             for (int l = 0; l < 2; ++l)
                 for (uint32_t v = 0; v < vecs; ++v) on_left |= (left[l][v] == m) & (pos[l][v] == x);
-            planar_left = (on_left[0] | on_left[1] | on_left[2] | on_left[3]) != 0;
+            int32_t any = 0;
+            for (uint32_t i = 0; i < kLanes; ++i) any |= on_left[i];
+            planar_left = any != 0;
         }
         return {m, k, x, planar_left};
     }
@@ -677,6 +713,9 @@ private:
     const KdTreeBuilder::Config& c_;
     const int max_depth_;
     const uint32_t small_;  // nodes of at most this many triangles keep no events
+#if BVHLAB_KD_AVX2
+    const bool avx2_ = c_.use_avx2 && __builtin_cpu_supports("avx2");
+#endif
     std::vector<Corners> corners_;
     mutable tbb::enumerable_thread_specific<ThreadState> state_;
     std::atomic<uint64_t> frag_tris_{0}, frag_nodes_{0}, frag_refs_{0};  // for reserving fragments

@@ -24,6 +24,9 @@ public:
         /// Nodes with at most this many triangles (0..32) keep no sorted events: their planes
         /// are found by counting directly, which is cheaper for so few and picks the same plane.
         uint32_t small_node_size = 24;
+        /// Let the small-node search use its AVX2 copy when the CPU has one (x86-64). Off:
+        /// the portable copy, for comparison; both pick the same planes.
+        bool use_avx2 = true;
     };
 
     KdTreeBuilder() = default;
