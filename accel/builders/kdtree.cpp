@@ -13,7 +13,9 @@
 // of the final node array.
 #include "accel/builders/kdtree.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -76,14 +78,18 @@ inline float from_sort_key(uint32_t u) {
 struct Event {
     uint64_t key;
 
+    /// Unwritten, so that sizing an event array costs no fill: every array is written whole
+    /// before it is read.
+    Event() {}
+    explicit Event(uint64_t k) : key(k) {}
     static Event make(float pos, uint32_t type, uint32_t slot) {
-        return {uint64_t(sort_key(pos + 0.0f)) << 32 | type << kSlotBits | slot};
+        return Event(uint64_t(sort_key(pos + 0.0f)) << 32 | type << kSlotBits | slot);
     }
     uint32_t pos_key() const { return uint32_t(key >> 32); }
     float pos() const { return from_sort_key(pos_key()); }
     uint32_t type() const { return uint32_t(key) >> kSlotBits; }
     uint32_t slot() const { return uint32_t(key) & kSlotMask; }
-    Event with_slot(uint32_t s) const { return {(key & ~uint64_t(kSlotMask)) | s}; }
+    Event with_slot(uint32_t s) const { return Event((key & ~uint64_t(kSlotMask)) | s); }
     bool operator<(const Event& o) const { return key < o.key; }
 };
 
@@ -186,17 +192,28 @@ void add_events(std::vector<Event>* ev, const AABB& b, uint32_t slot) {
     }
 }
 
-/// Stable LSD radix sort by position (3 passes of 11 bits). Events that arrive in code order
-/// leave sorted by key.
-void radix_sort_by_pos(std::vector<Event>& ev) {
-    std::vector<Event> tmp(ev.size());
-    for (int shift = 0; shift < 32; shift += 11) {
-        uint32_t count[2049] = {};
-        for (const Event& e : ev) ++count[((e.pos_key() >> shift) & 2047u) + 1];
-        for (int b = 0; b < 2048; ++b) count[b + 1] += count[b];
-        for (const Event& e : ev) tmp[count[(e.pos_key() >> shift) & 2047u]++] = e;
-        ev.swap(tmp);
+/// Sorts a[0, m) by position into t (a is scratch): a stable LSD radix sort, three digits of
+/// 11, 11 and 10 bits, all counted in one pass. Events generated in key order but for their
+/// positions leave sorted by key.
+void radix_sort_by_pos(Event* a, Event* t, size_t m) {
+    static constexpr int kShift[3] = {0, 11, 22};
+    std::unique_ptr<uint32_t[]> count(new uint32_t[3 * 2048]());
+    const auto digit = [](const Event& e, int d) { return (e.pos_key() >> kShift[d]) & 2047u; };
+    for (size_t i = 0; i < m; ++i)
+        for (int d = 0; d < 3; ++d) ++count[d * 2048 + digit(a[i], d)];
+    for (int d = 0; d < 3; ++d) {
+        uint32_t* c = &count[d * 2048];
+        uint32_t sum = 0;
+        for (int b = 0; b < 2048; ++b) sum += std::exchange(c[b], sum);
     }
+    Event* from = a;
+    Event* to = t;
+    for (int d = 0; d < 3; ++d) {
+        uint32_t* c = &count[d * 2048];
+        for (size_t i = 0; i < m; ++i) to[c[digit(from[i], d)]++] = from[i];
+        std::swap(from, to);
+    }
+    // Three passes: a -> t -> a -> t.
 }
 
 /// A subtree built by one thread, in the final layout (children of a node side by side) but
@@ -305,6 +322,67 @@ public:
         tbb::parallel_invoke([&] { node->child[0] = build_top(std::move(ch.left), depth + 1); },
                              [&] { node->child[1] = build_top(std::move(ch.right), depth + 1); });
         return node;
+    }
+
+    /// The root's work: every triangle with its bounds, the scene box, and the sorted events.
+    /// Bounds and box come from one parallel pass. Each axis's events are generated and
+    /// sorted in two halves of the triangles, six tasks instead of three (on two threads, the
+    /// third axis had run alone), and the halves are merged.
+    std::unique_ptr<Work> root() {
+        std::unique_ptr<Work> w = acquire();
+        const size_t n = corners_.size();
+        w->tris.resize(n);
+        w->boxes.resize(n);
+        // Per half of the triangles, the bounds that are flat on each axis (one event each).
+        const size_t half = n / 2;
+        std::atomic<size_t> flat[2][3] = {};
+        w->voxel = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, n), AABB::empty(),
+            [&](const tbb::blocked_range<size_t>& r, AABB voxel) {
+                size_t flats[2][3] = {};
+                for (size_t t = r.begin(); t != r.end(); ++t) {
+                    AABB b = AABB::empty();
+                    for (int i = 0; i < 3; ++i) b.extend(corners_[t].v[i]);
+                    w->tris[t] = uint32_t(t);
+                    w->boxes[t] = b;
+                    voxel.extend(b);  // in triangle order, as TriangleMesh::bounds()
+                    for (int k = 0; k < 3; ++k) flats[t >= half][k] += b.lo[k] == b.hi[k];
+                }
+                for (int h = 0; h < 2; ++h)
+                    for (int k = 0; k < 3; ++k) flat[h][k] += flats[h][k];
+                return voxel;
+            },
+            [](AABB a, const AABB& b) {
+                a.extend(b);
+                return a;
+            });
+        std::vector<Event> scratch[3];
+        const size_t lo[2] = {0, half}, hi[2] = {half, n};
+        for (int k = 0; k < 3; ++k) {  // no fill: Event's default constructor writes nothing
+            w->events[k].resize(2 * n - flat[0][k] - flat[1][k]);
+            scratch[k].resize(w->events[k].size());
+        }
+        tbb::parallel_for(0, 6, [&](int task) {
+            const int k = task / 2, h = task % 2;
+            // Within a half: ends, planars, starts, each by slot (key order but for position).
+            const std::vector<AABB>& b = w->boxes;
+            const size_t first = h == 0 ? 0 : 2 * half - flat[0][k];
+            Event* const a = w->events[k].data() + first;
+            Event* e = a;
+            for (size_t t = lo[h]; t < hi[h]; ++t)
+                if (b[t].lo[k] != b[t].hi[k]) *e++ = Event::make(b[t].hi[k], kEnd, uint32_t(t));
+            for (size_t t = lo[h]; t < hi[h]; ++t)
+                if (b[t].lo[k] == b[t].hi[k]) *e++ = Event::make(b[t].lo[k], kPlanar, uint32_t(t));
+            for (size_t t = lo[h]; t < hi[h]; ++t)
+                if (b[t].lo[k] != b[t].hi[k]) *e++ = Event::make(b[t].lo[k], kStart, uint32_t(t));
+            radix_sort_by_pos(a, scratch[k].data() + first, size_t(e - a));
+        });
+        tbb::parallel_for(0, 3, [&](int k) {
+            const size_t first = 2 * half - flat[0][k];
+            const Event* sorted = scratch[k].data();
+            merge_events(sorted, first, sorted + first, scratch[k].size() - first, w->events[k].data());
+        });
+        return w;
     }
 
 private:
@@ -789,29 +867,7 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode, "kd-tree small_node_size must be at most 32");
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
     Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
-    std::unique_ptr<Work> root = rec.acquire();
-    root->voxel = mesh.bounds();
-    const auto n = uint32_t(mesh.triangle_count());
-    root->tris.resize(n);
-    root->boxes.resize(n);
-    for (uint32_t t = 0; t < n; ++t) {
-        root->tris[t] = t;
-        root->boxes[t] = mesh.triangle_bounds(t);
-    }
-    // Per axis: events generated in code order (ends, planars, starts; each by slot), then a
-    // stable sort by position.
-    tbb::parallel_for(0, 3, [&](int k) {
-        std::vector<Event>& ev = root->events[k];
-        ev.reserve(2 * size_t(n));
-        const std::vector<AABB>& b = root->boxes;
-        for (uint32_t t = 0; t < n; ++t)
-            if (b[t].lo[k] != b[t].hi[k]) ev.push_back(Event::make(b[t].hi[k], kEnd, t));
-        for (uint32_t t = 0; t < n; ++t)
-            if (b[t].lo[k] == b[t].hi[k]) ev.push_back(Event::make(b[t].lo[k], kPlanar, t));
-        for (uint32_t t = 0; t < n; ++t)
-            if (b[t].lo[k] != b[t].hi[k]) ev.push_back(Event::make(b[t].lo[k], kStart, t));
-        radix_sort_by_pos(ev);
-    });
+    std::unique_ptr<Work> root = rec.root();
     const AABB bounds = root->voxel;
     std::unique_ptr<TopNode> tree = rec.build_top(std::move(root), 0);
     KdTree out = flatten(*tree, bounds);
