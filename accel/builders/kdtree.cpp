@@ -242,7 +242,7 @@ struct Plane {
 /// The counts at one plane position of a sweep: triangles left (planars included) and right
 /// of it, and the planar ones.
 struct Position {
-    float pos;
+    uint32_t pos_key;  ///< decoded only for the records that are priced
     uint32_t left, right, planars;
 };
 
@@ -517,12 +517,13 @@ private:
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             for (size_t g = 0; g < groups; ++g) {
                 const Position& q = at[g];
-                if (!(q.pos > cost.lo && q.pos < cost.hi)) continue;  // only at the two ends
-                const float left = cost(q.pos, q.left, q.right);
-                if (left < best.cost) best = {left, k, q.pos, true};
+                const float pos = from_sort_key(q.pos_key);
+                if (!(pos > cost.lo && pos < cost.hi)) continue;  // only at the two ends
+                const float left = cost(pos, q.left, q.right);
+                if (left < best.cost) best = {left, k, pos, true};
                 if (q.planars == 0) continue;  // both sides cost the same
-                const float right = cost(q.pos, q.left - q.planars, q.right + q.planars);
-                if (right < best.cost) best = {right, k, q.pos, false};
+                const float right = cost(pos, q.left - q.planars, q.right + q.planars);
+                if (right < best.cost) best = {right, k, pos, false};
             }
         }
         return best;
@@ -547,7 +548,7 @@ private:
             starts = (starts & (first - 1u)) + start;
             nl += start | planar;
             nr -= start ^ 1u;
-            at[groups] = {e[i].pos(), nl - starts, nr, planars};
+            at[groups] = {key, nl - starts, nr, planars};
             groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != key);
         }
         return groups;
