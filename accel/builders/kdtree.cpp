@@ -239,11 +239,10 @@ struct Plane {
     bool planar_left = true;
 };
 
-/// The counts at one plane position of a sweep: triangles left (planars included) and right
-/// of it, and the planar ones.
+/// One plane position of a sweep: the events of each type up to and including it.
 struct Position {
     uint32_t pos_key;  ///< decoded only for the records that are priced
-    uint32_t left, right, planars;
+    uint32_t starts, planars, ends;
 };
 
 /// Per-thread reusable storage: free Work objects (their vectors keep their capacity) and the
@@ -513,17 +512,25 @@ private:
             const int buffer = records == Records::kShared ? 0 : k;
             std::vector<Position>& at = ts.positions[buffer];
             size_t& groups = ts.groups[buffer];
-            if (records != Records::kKept) groups = count_positions(w.events[k], n, at);
+            if (records != Records::kKept) groups = count_positions(w.events[k], at);
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
+            // At a position, the triangles that started before it are left of the plane and
+            // those that have not ended (planars included) right of it; the starts at it go
+            // right, its planars either way.
+            uint32_t starts_before = 0, planars_before = 0;
             for (size_t g = 0; g < groups; ++g) {
                 const Position& q = at[g];
+                const uint32_t planars = q.planars - planars_before;
+                const uint32_t left = starts_before + q.planars, right = n - q.ends - q.planars;
+                starts_before = q.starts;
+                planars_before = q.planars;
                 const float pos = from_sort_key(q.pos_key);
                 if (!(pos > cost.lo && pos < cost.hi)) continue;  // only at the two ends
-                const float left = cost(pos, q.left, q.right);
-                if (left < best.cost) best = {left, k, pos, true};
-                if (q.planars == 0) continue;  // both sides cost the same
-                const float right = cost(pos, q.left - q.planars, q.right + q.planars);
-                if (right < best.cost) best = {right, k, pos, false};
+                const float cost_left = cost(pos, left, right);
+                if (cost_left < best.cost) best = {cost_left, k, pos, true};
+                if (planars == 0) continue;  // both sides cost the same
+                const float cost_right = cost(pos, left - planars, right + planars);
+                if (cost_right < best.cost) best = {cost_right, k, pos, false};
             }
         }
         return best;
@@ -531,24 +538,17 @@ private:
 
     /// find_plane's first pass on one axis: one record per distinct position of the n
     /// triangles' sorted events e. Returns the number of records.
-    static size_t count_positions(const std::vector<Event>& e, uint32_t n, std::vector<Position>& at) {
+    static size_t count_positions(const std::vector<Event>& e, std::vector<Position>& at) {
         const size_t m = e.size();
-        at.resize(m + 1);
-        // Within a position the order is ends, planars, starts. At its last event, nl
-        // counts the starts and planars so far and nr the triangles not yet ended; the
-        // starts at this position go right, its planars either way.
-        uint32_t nl = 0, nr = n, planars = 0, starts = 0;
+        if (at.size() < m) at.resize(m);  // never shrunk, so never filled again
+        // Running counts only, with no reset per position: each event's record is
+        // overwritten until the position's last event, which keeps it.
+        uint32_t counts[3] = {0, 0, 0};  // by type: ends, planars, starts
         size_t groups = 0;
         for (size_t i = 0; i < m; ++i) {
             const uint32_t key = e[i].pos_key();
-            const uint32_t type = e[i].type();
-            const uint32_t first = uint32_t(i == 0 || e[i - 1].pos_key() != key);
-            const uint32_t start = uint32_t(type == kStart), planar = uint32_t(type == kPlanar);
-            planars = (planars & (first - 1u)) + planar;  // reset at a new position
-            starts = (starts & (first - 1u)) + start;
-            nl += start | planar;
-            nr -= start ^ 1u;
-            at[groups] = {key, nl - starts, nr, planars};
+            ++counts[e[i].type()];
+            at[groups] = {key, counts[kStart], counts[kPlanar], counts[kEnd]};
             groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != key);
         }
         return groups;
