@@ -355,15 +355,17 @@ public:
             });
         std::vector<Event> scratch[3];
         const size_t lo[2] = {0, half}, hi[2] = {half, n};
+        size_t second_half[3];  // per axis, where the second half's events start
         for (int k = 0; k < 3; ++k) {  // no fill: Event's default constructor writes nothing
-            w->events[k].resize(2 * n - flat[0][k] - flat[1][k]);
+            second_half[k] = 2 * half - flat[0][k];
+            w->events[k].resize(second_half[k] + 2 * (n - half) - flat[1][k]);
             scratch[k].resize(w->events[k].size());
         }
         tbb::parallel_for(0, 6, [&](int task) {
             const int k = task / 2, h = task % 2;
             // Within a half: ends, planars, starts, each by slot (key order but for position).
             const std::vector<AABB>& b = w->boxes;
-            const size_t first = h == 0 ? 0 : 2 * half - flat[0][k];
+            const size_t first = h == 0 ? 0 : second_half[k];
             Event* const a = w->events[k].data() + first;
             Event* e = a;
             for (size_t t = lo[h]; t < hi[h]; ++t)
@@ -375,9 +377,9 @@ public:
             radix_sort_by_pos(a, scratch[k].data() + first, size_t(e - a));
         });
         tbb::parallel_for(0, 3, [&](int k) {
-            const size_t first = 2 * half - flat[0][k];
             const Event* sorted = scratch[k].data();
-            merge_events(sorted, first, sorted + first, scratch[k].size() - first, w->events[k].data());
+            const size_t m = second_half[k];
+            merge_events(sorted, m, sorted + m, scratch[k].size() - m, w->events[k].data());
         });
         return w;
     }
@@ -832,20 +834,18 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
     // microseconds: furball's 600 MB of nodes took 0.7-1.9 s when one thread zero-filled them.
     t.nodes.resize(nodes);
     for (const auto& [d, x] : interior) t.nodes[d] = x;
+    const auto copy_nodes = [&](size_t i) {
+        // Fragment node j > 0 goes to base + j - 1; its root goes to at.
+        const Placed& p = frags[i];
+        const auto place = [&](KdNode x) {
+            x.child = x.is_leaf() ? x.child + p.prim_base : p.base + x.child - 1;
+            return x;
+        };
+        t.nodes[p.at] = place(p.frag->nodes[0]);
+        for (size_t j = 1; j < p.frag->nodes.size(); ++j) t.nodes[p.base + j - 1] = place(p.frag->nodes[j]);
+    };
     tbb::parallel_invoke([&] { t.prim_indices.resize(prims); },
-                         [&] {
-                             tbb::parallel_for(size_t(0), frags.size(), [&](size_t i) {
-                                 // Fragment node j > 0 goes to base + j - 1; its root goes to at.
-                                 const Placed& p = frags[i];
-                                 const auto place = [&](KdNode x) {
-                                     x.child = x.is_leaf() ? x.child + p.prim_base : p.base + x.child - 1;
-                                     return x;
-                                 };
-                                 t.nodes[p.at] = place(p.frag->nodes[0]);
-                                 for (size_t j = 1; j < p.frag->nodes.size(); ++j)
-                                     t.nodes[p.base + j - 1] = place(p.frag->nodes[j]);
-                             });
-                         });
+                         [&] { tbb::parallel_for(size_t(0), frags.size(), copy_nodes); });
     tbb::parallel_for(size_t(0), frags.size(), [&](size_t i) {
         const Placed& p = frags[i];
         std::copy(p.frag->prims.begin(), p.frag->prims.end(), t.prim_indices.begin() + p.prim_base);
