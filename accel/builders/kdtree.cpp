@@ -180,15 +180,17 @@ struct SmallWork {
     }
 };
 
-void add_events(std::vector<Event>* ev, const AABB& b, uint32_t slot) {
-    for (int k = 0; k < 3; ++k) {
-        if (b.lo[k] == b.hi[k]) {
-            ev[k].push_back(Event::make(b.lo[k], kPlanar, slot));
-        } else {
-            ev[k].push_back(Event::make(b.lo[k], kStart, slot));
-            ev[k].push_back(Event::make(b.hi[k], kEnd, slot));
-        }
-    }
+/// Writes the events on axis k of bounds b[first, last), each with its index as its slot, to
+/// out in key order but for position: the ends, the planars, then the starts, each by slot.
+/// Returns the end of what was written (at most 2 (last - first) events).
+Event* write_events(const AABB* b, uint32_t first, uint32_t last, int k, Event* out) {
+    for (uint32_t s = first; s < last; ++s)
+        if (b[s].lo[k] != b[s].hi[k]) *out++ = Event::make(b[s].hi[k], kEnd, s);
+    for (uint32_t s = first; s < last; ++s)
+        if (b[s].lo[k] == b[s].hi[k]) *out++ = Event::make(b[s].lo[k], kPlanar, s);
+    for (uint32_t s = first; s < last; ++s)
+        if (b[s].lo[k] != b[s].hi[k]) *out++ = Event::make(b[s].lo[k], kStart, s);
+    return out;
 }
 
 /// Sorts a[0, m) by position into t (a is scratch): a stable LSD radix sort, three digits of
@@ -243,6 +245,15 @@ struct Position {
     uint32_t starts, planars, ends;
 };
 
+/// Where split() sends a parent slot's events: its slot in each child, and per axis the event
+/// types that each child keeps (bit 1 << type for the left child, 8 << type for the right).
+/// A one-sided triangle's child keeps all of them; a straddler's child keeps those whose
+/// bound the clipping left where it was.
+struct Route {
+    uint32_t slot[2];
+    uint8_t keep[3];
+};
+
 /// Per-thread reusable storage: free Work objects (their vectors keep their capacity) and the
 /// temporaries of find_plane() and split(). A node's vectors are taken from here and given
 /// back once the node is split, so after warm-up the build allocates almost nothing per node.
@@ -251,7 +262,8 @@ struct ThreadState {
     std::vector<Position> positions[3];  ///< find_plane's records, per axis
     size_t groups[3] = {0, 0, 0};
     std::vector<uint8_t> side;
-    std::vector<uint32_t> remap;
+    std::vector<Route> route;
+    std::vector<uint32_t> origin[2];
     std::vector<Event> filtered[2], fresh[2][3];
 };
 
@@ -363,17 +375,9 @@ public:
         }
         tbb::parallel_for(0, 6, [&](int task) {
             const int k = task / 2, h = task % 2;
-            // Within a half: ends, planars, starts, each by slot (key order but for position).
-            const std::vector<AABB>& b = w->boxes;
             const size_t first = h == 0 ? 0 : second_half[k];
             Event* const a = w->events[k].data() + first;
-            Event* e = a;
-            for (size_t t = lo[h]; t < hi[h]; ++t)
-                if (b[t].lo[k] != b[t].hi[k]) *e++ = Event::make(b[t].hi[k], kEnd, uint32_t(t));
-            for (size_t t = lo[h]; t < hi[h]; ++t)
-                if (b[t].lo[k] == b[t].hi[k]) *e++ = Event::make(b[t].lo[k], kPlanar, uint32_t(t));
-            for (size_t t = lo[h]; t < hi[h]; ++t)
-                if (b[t].lo[k] != b[t].hi[k]) *e++ = Event::make(b[t].lo[k], kStart, uint32_t(t));
+            const Event* e = write_events(w->boxes.data(), uint32_t(lo[h]), uint32_t(hi[h]), k, a);
             radix_sort_by_pos(a, scratch[k].data() + first, size_t(e - a));
         });
         tbb::parallel_for(0, 3, [&](int k) {
@@ -564,6 +568,16 @@ private:
         return kBoth;
     }
 
+    /// The event types (bits 1 << type) on axis k of a straddler's bounds `parent` that its
+    /// clipped bounds `child` in one child share: a bound the clip did not move keeps its
+    /// event, already in sorted place.
+    static uint32_t kept_events(const AABB& parent, const AABB& child, int k) {
+        if (parent.lo[k] == parent.hi[k])
+            return child.lo[k] == parent.lo[k] && child.hi[k] == parent.hi[k] ? 1u << kPlanar : 0u;
+        if (child.lo[k] == child.hi[k]) return 0;
+        return uint32_t(child.lo[k] == parent.lo[k]) << kStart | uint32_t(child.hi[k] == parent.hi[k]) << kEnd;
+    }
+
     struct Children {
         std::unique_ptr<Work> left, right;
         bool empty_cut;  ///< one child is empty and the other is w, with a smaller voxel
@@ -600,20 +614,28 @@ private:
         Work &left = *lp, &right = *rp;
         left.voxel = cell[0];
         right.voxel = cell[1];
-        // One-sided triangles keep their bounds; their slots are renumbered in order.
-        std::vector<uint32_t>& remap = ts.remap;
-        remap.resize(n);
+        // One-sided triangles keep their bounds and events; their slots are renumbered in
+        // order.
+        std::vector<Route>& route = ts.route;
+        route.resize(n);
         for (size_t s = 0; s < n; ++s) {
-            Work* to = side[s] == kLeftOnly ? &left : side[s] == kRightOnly ? &right : nullptr;
-            if (!to) continue;
-            remap[s] = uint32_t(to->tris.size());
-            to->tris.push_back(w.tris[s]);
-            to->boxes.push_back(w.boxes[s]);
+            Route& r = route[s];
+            if (side[s] == kBoth) {
+                r = {{0, 0}, {0, 0, 0}};
+                continue;
+            }
+            const int i = side[s] - 1;
+            Work& to = i == 0 ? left : right;
+            const auto keep = uint8_t(i == 0 ? 7 : 7 << 3);
+            r = {{uint32_t(to.tris.size()), uint32_t(to.tris.size())}, {keep, keep, keep}};
+            to.tris.push_back(w.tris[s]);
+            to.boxes.push_back(w.boxes[s]);
         }
         // Straddling triangles: clipped to each child's voxel, appended after the one-sided
-        // ones.
-        uint32_t one_sided[2] = {uint32_t(left.tris.size()), uint32_t(right.tris.size())};
+        // ones (so that slot order, and with it the order of kept events, is preserved).
+        const uint32_t one_sided[2] = {uint32_t(left.tris.size()), uint32_t(right.tris.size())};
         Work* child[2] = {&left, &right};
+        for (auto& o : ts.origin) o.clear();
         // The corners of the straddler 8 ahead are fetched while this one is clipped.
         const auto next_straddler = [&](size_t s) {
             while (s < n && side[s] != kBoth) ++s;
@@ -631,23 +653,42 @@ private:
             for (int i = 0; i < 2; ++i) {
                 const AABB& box = i == 0 ? boxes.first : boxes.second;
                 if (box.is_empty()) continue;
+                Route& r = route[s];
+                r.slot[i] = uint32_t(child[i]->tris.size());
+                for (int k = 0; k < 3; ++k) r.keep[k] |= uint8_t(kept_events(w.boxes[s], box, k) << (3 * i));
                 child[i]->tris.push_back(t);
                 child[i]->boxes.push_back(box);
+                ts.origin[i].push_back(uint32_t(s));
             }
         }
         // Events only for children above the small-node size (their parent has events too).
-        // Per axis: the one-sided triangles' events stay sorted when filtered; the
-        // straddlers' new events are sorted and merged in.
-        for (int i = 0; i < 2; ++i) {
-            Work& ch = *child[i];
-            if (ch.tris.size() <= small_) continue;
-            for (auto& f : ts.fresh[i]) f.clear();
-            for (uint32_t slot = one_sided[i]; slot < ch.tris.size(); ++slot) add_events(ts.fresh[i], ch.boxes[slot], slot);
-        }
+        // Per axis: the kept events stay sorted when filtered (slots are renumbered in order);
+        // the straddlers' new events (about half of theirs: a clip moves one bound on the
+        // split axis and often none on the others) are sorted and merged in.
         const bool events[2] = {left.tris.size() > small_, right.tris.size() > small_};
         if (!events[0] && !events[1]) {
             release(std::move(wp));
             return {std::move(lp), std::move(rp), false};
+        }
+        for (int i = 0; i < 2; ++i) {
+            if (!events[i]) continue;
+            const std::vector<AABB>& boxes = child[i]->boxes;
+            for (int k = 0; k < 3; ++k) {
+                std::vector<Event>& fresh = ts.fresh[i][k];
+                fresh.clear();
+                for (size_t j = 0; j < ts.origin[i].size(); ++j) {
+                    const auto slot = uint32_t(one_sided[i] + j);
+                    const AABB& b = boxes[slot];
+                    const uint32_t kept = route[ts.origin[i][j]].keep[k] >> (3 * i);
+                    if (b.lo[k] == b.hi[k]) {
+                        if (!(kept & 1u << kPlanar)) fresh.push_back(Event::make(b.lo[k], kPlanar, slot));
+                        continue;
+                    }
+                    if (!(kept & 1u << kStart)) fresh.push_back(Event::make(b.lo[k], kStart, slot));
+                    if (!(kept & 1u << kEnd)) fresh.push_back(Event::make(b.hi[k], kEnd, slot));
+                }
+                std::sort(fresh.begin(), fresh.end());
+            }
         }
         for (int k = 0; k < 3; ++k) {
             const std::vector<Event>& in = w.events[k];
@@ -658,18 +699,17 @@ private:
             Event* fr = ts.filtered[1].data();
             size_t il = 0, ir = 0;
             for (const Event& e : in) {
-                const uint32_t s = e.slot();
-                const Event moved = e.with_slot(remap[s]);
-                fl[il] = moved;
-                fr[ir] = moved;
-                il += side[s] == kLeftOnly;
-                ir += side[s] == kRightOnly;
+                const Route& r = route[e.slot()];
+                const uint32_t keep = r.keep[k] >> e.type();
+                fl[il] = e.with_slot(r.slot[0]);
+                fr[ir] = e.with_slot(r.slot[1]);
+                il += keep & 1;
+                ir += keep >> 3 & 1;
             }
             const size_t kept[2] = {il, ir};
             for (int i = 0; i < 2; ++i) {
                 if (!events[i]) continue;
-                std::vector<Event>& fresh = ts.fresh[i][k];
-                std::sort(fresh.begin(), fresh.end());
+                const std::vector<Event>& fresh = ts.fresh[i][k];
                 std::vector<Event>& dst = child[i]->events[k];
                 dst.resize(kept[i] + fresh.size());
                 merge_events(ts.filtered[i].data(), kept[i], fresh.data(), fresh.size(), dst.data());
