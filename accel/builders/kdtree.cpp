@@ -92,7 +92,8 @@ struct Event {
     bool operator<(const Event& o) const { return key < o.key; }
 };
 
-/// Merges two sorted event lists into out. Usually b (the straddlers' new events) is much
+/// Merges two sorted event lists into out, which may also be a's array nb places before a
+/// (then every write lands below the events of a still to be read). Usually b (the straddlers' new events) is much
 /// shorter: then each of its events finds its place in a by a galloping search and the runs of
 /// a between them are block copies. Otherwise a conditional move instead of a branch per event
 /// (the new events fall anywhere among the others).
@@ -264,7 +265,7 @@ struct ThreadState {
     std::vector<uint8_t> side;
     std::vector<Route> route;
     std::vector<uint32_t> origin[2];
-    std::vector<Event> filtered[2], fresh[2][3];
+    std::vector<Event> filtered, fresh[2][3];
 };
 
 class Recursion {
@@ -692,11 +693,19 @@ private:
         }
         for (int k = 0; k < 3; ++k) {
             const std::vector<Event>& in = w.events[k];
-            for (auto& f : ts.filtered) f.resize(in.size());
+            // The kept events are filtered straight into each child's array, behind room for
+            // its new events, which are then merged in place (the output never overtakes the
+            // unread kept events). A child without events gets a scratch array.
+            Event* kept_at[2];
+            for (int i = 0; i < 2; ++i) {
+                std::vector<Event>& dst = events[i] ? child[i]->events[k] : ts.filtered;
+                dst.resize(ts.fresh[i][k].size() + in.size());  // no fill: Event's constructor
+                kept_at[i] = dst.data() + ts.fresh[i][k].size();
+            }
             // Both outputs are written every time and the counters decide what is kept, so
             // the loop has no branch and no store-to-load chain through a pointer table.
-            Event* fl = ts.filtered[0].data();
-            Event* fr = ts.filtered[1].data();
+            Event* const fl = kept_at[0];
+            Event* const fr = kept_at[1];
             size_t il = 0, ir = 0;
             for (const Event& e : in) {
                 const Route& r = route[e.slot()];
@@ -711,8 +720,8 @@ private:
                 if (!events[i]) continue;
                 const std::vector<Event>& fresh = ts.fresh[i][k];
                 std::vector<Event>& dst = child[i]->events[k];
-                dst.resize(kept[i] + fresh.size());
-                merge_events(ts.filtered[i].data(), kept[i], fresh.data(), fresh.size(), dst.data());
+                merge_events(kept_at[i], kept[i], fresh.data(), fresh.size(), dst.data());
+                dst.resize(fresh.size() + kept[i]);
             }
         }
         release(std::move(wp));
