@@ -321,7 +321,7 @@ public:
         }
         const Plane p = depth < max_depth_ ? choose_plane(*w) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w->tris.size()))) {
-            node->frag.nodes.push_back({0.0f, 3, 0, uint32_t(w->tris.size())});
+            node->frag.nodes.push_back(KdNode::leaf(0, uint32_t(w->tris.size())));
             node->frag.prims = w->tris;
             release(std::move(w));
             return node;
@@ -403,7 +403,7 @@ private:
         }
         const Plane p = depth < max_depth_ ? find_plane(*w, counted ? Records::kKept : Records::kKeep) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(n))) {
-            f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), n};
+            f.nodes[at] = KdNode::leaf(uint32_t(f.prims.size()), n);
             f.prims.insert(f.prims.end(), w->tris.begin(), w->tris.end());
             release(std::move(w));
             return;
@@ -411,7 +411,7 @@ private:
         Children ch = split(std::move(w), p);
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
-        f.nodes[at] = {p.pos, uint32_t(p.axis), k, 0};
+        f.nodes[at] = KdNode::interior(uint32_t(p.axis), p.pos, k);
         // An empty child is a leaf at once, so the other child's find_plane() is the next.
         build_fragment(std::move(ch.left), depth + 1, f, k, ch.empty_cut);
         build_fragment(std::move(ch.right), depth + 1, f, k + 1, ch.empty_cut);
@@ -440,7 +440,7 @@ private:
     void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at) {
         const Plane p = depth < max_depth_ ? find_plane_small(w) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
-            f.nodes[at] = {0.0f, 3, uint32_t(f.prims.size()), w.n};
+            f.nodes[at] = KdNode::leaf(uint32_t(f.prims.size()), w.n);
             f.prims.insert(f.prims.end(), w.tris, w.tris + w.n);
             return;
         }
@@ -469,7 +469,7 @@ private:
         child[1].pad();
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
-        f.nodes[at] = {p.pos, uint32_t(axis), k, 0};
+        f.nodes[at] = KdNode::interior(uint32_t(axis), p.pos, k);
         build_small(child[0], depth + 1, f, k);
         build_small(child[1], depth + 1, f, k + 1);
     }
@@ -860,22 +860,25 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
     };
     std::vector<Placed> frags;
     std::vector<std::pair<uint32_t, KdNode>> interior;
-    uint32_t nodes = 1, prims = 0;
+    uint64_t nodes = 1, prims = 0;  // checked against KdNode's 30-bit children below
     std::vector<std::pair<const TopNode*, uint32_t>> stack{{&root, 0}};
     while (!stack.empty()) {
         auto [n, d] = stack.back();
         stack.pop_back();
         if (!n->child[0]) {
-            frags.push_back({&n->frag, d, nodes, prims});
-            nodes += uint32_t(n->frag.nodes.size()) - 1;
-            prims += uint32_t(n->frag.prims.size());
+            frags.push_back({&n->frag, d, uint32_t(nodes), uint32_t(prims)});
+            nodes += n->frag.nodes.size() - 1;
+            prims += n->frag.prims.size();
             continue;
         }
-        interior.push_back({d, {n->split, n->axis, nodes, 0}});
-        stack.push_back({n->child[1].get(), nodes + 1});
-        stack.push_back({n->child[0].get(), nodes});
+        interior.push_back({d, KdNode::interior(n->axis, n->split, uint32_t(nodes))});
+        stack.push_back({n->child[1].get(), uint32_t(nodes + 1)});
+        stack.push_back({n->child[0].get(), uint32_t(nodes)});
         nodes += 2;
     }
+    BVHLAB_CHECK(nodes <= KdNode::kMaxIndex && prims <= UINT32_MAX,
+                 "kd-tree too large (" + std::to_string(nodes) + " nodes, " + std::to_string(prims) +
+                     " references; the limits are 2^30 and 2^32): lower max_depth");
     KdTree t;
     t.bounds = bounds;
     // Sizing the node array writes nothing (KdNode's default constructor), so its fresh pages
@@ -887,8 +890,8 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
         // Fragment node j > 0 goes to base + j - 1; its root goes to at.
         const Placed& p = frags[i];
         const auto place = [&](KdNode x) {
-            x.child = x.is_leaf() ? x.child + p.prim_base : p.base + x.child - 1;
-            return x;
+            return x.is_leaf() ? KdNode::leaf(x.first() + p.prim_base, x.count())
+                               : KdNode::interior(x.axis(), x.split(), p.base + x.child() - 1);
         };
         t.nodes[p.at] = place(p.frag->nodes[0]);
         for (size_t j = 1; j < p.frag->nodes.size(); ++j) t.nodes[p.base + j - 1] = place(p.frag->nodes[j]);
@@ -941,10 +944,10 @@ void walk_cells(const KdTree& tree, F&& visit) {
         const KdNode& n = tree.nodes[it.node];
         if (!visit(it.node, n, it.cell, it.depth) || n.is_leaf()) continue;
         AABB l = it.cell, r = it.cell;
-        l.hi[int(n.axis)] = n.split;
-        r.lo[int(n.axis)] = n.split;
-        stack.push_back({n.child, l, it.depth + 1});
-        stack.push_back({n.child + 1, r, it.depth + 1});
+        l.hi[int(n.axis())] = n.split();
+        r.lo[int(n.axis())] = n.split();
+        stack.push_back({n.child(), l, it.depth + 1});
+        stack.push_back({n.child() + 1, r, it.depth + 1});
     }
 }
 
@@ -959,10 +962,10 @@ KdTreeStats compute_kd_stats(const KdTree& tree, const KdTreeBuilder::Config& c)
         const double rel = root > 0 ? double(cell.area()) / root : 0.0;
         if (n.is_leaf()) {
             ++s.leaves;
-            s.references += n.count;
+            s.references += n.count();
             s.depth = std::max(s.depth, depth);
-            s.max_leaf_size = std::max(s.max_leaf_size, n.count);
-            s.sah += rel * c.intersection_cost * n.count;
+            s.max_leaf_size = std::max(s.max_leaf_size, n.count());
+            s.sah += rel * c.intersection_cost * n.count();
         } else {
             s.sah += rel * c.traversal_cost;
         }
@@ -978,10 +981,9 @@ std::string validate_kd(const KdTree& tree, size_t triangles) {
     walk_cells(tree, [&](uint32_t i, const KdNode& n, const AABB& cell, uint32_t) {
         const std::string where = "kd node " + std::to_string(i) + ": ";
         if (seen[i]++) err = where + "reached twice";
-        else if (n.axis > 3) err = where + "axis out of range";
-        else if (n.is_leaf() && size_t(n.child) + n.count > tree.prim_indices.size()) err = where + "leaf range out of range";
-        else if (!n.is_leaf() && size_t(n.child) + 1 >= tree.nodes.size()) err = where + "child out of range";
-        else if (!n.is_leaf() && !(n.split >= cell.lo[int(n.axis)] && n.split <= cell.hi[int(n.axis)]))
+        else if (n.is_leaf() && size_t(n.first()) + n.count() > tree.prim_indices.size()) err = where + "leaf range out of range";
+        else if (!n.is_leaf() && size_t(n.child()) + 1 >= tree.nodes.size()) err = where + "child out of range";
+        else if (!n.is_leaf() && !(n.split() >= cell.lo[int(n.axis())] && n.split() <= cell.hi[int(n.axis())]))
             err = where + "split outside its cell";
         return err.empty();  // stop descending once something is wrong
     });

@@ -13,7 +13,7 @@
 
 namespace bvhlab::accel {
 
-constexpr uint32_t kTreeFileVersion = 1;
+constexpr uint32_t kTreeFileVersion = 2;  // 2: kd-tree nodes are 8 bytes (were 16)
 
 /// What a cached tree was built from.
 struct TreeFileMeta {

@@ -30,12 +30,13 @@ void for_each_leaf(const KdTree& t, F&& f) {
             continue;
         }
         AABB l = cell, r = cell;
-        l.hi[int(n.axis)] = n.split;
-        r.lo[int(n.axis)] = n.split;
-        ASSERT_GE(n.split, cell.lo[int(n.axis)]);
-        ASSERT_LE(n.split, cell.hi[int(n.axis)]);
-        stack.push_back({n.child, l});
-        stack.push_back({n.child + 1, r});
+        const int k = int(n.axis());
+        l.hi[k] = n.split();
+        r.lo[k] = n.split();
+        ASSERT_GE(n.split(), cell.lo[k]);
+        ASSERT_LE(n.split(), cell.hi[k]);
+        stack.push_back({n.child(), l});
+        stack.push_back({n.child() + 1, r});
     }
 }
 
@@ -50,7 +51,7 @@ TEST(KdTreeBuilder, EveryOverlappingTriangleIsInTheLeaf) {
     for_each_leaf(t, [&](const KdNode& leaf, const AABB& cell) {
         ++leaves;
         std::vector<uint8_t> in_leaf(m.triangle_count(), 0);
-        for (uint32_t k = leaf.child; k < leaf.child + leaf.count; ++k) in_leaf[t.prim_indices[k]] = referenced[t.prim_indices[k]] = 1;
+        for (uint32_t k = leaf.first(); k < leaf.first() + leaf.count(); ++k) in_leaf[t.prim_indices[k]] = referenced[t.prim_indices[k]] = 1;
         for (uint32_t i = 0; i < m.triangle_count(); ++i) {
             if (!m.triangle_bounds(i).overlaps(cell)) continue;
             const double area = clip_triangle(m.vertex(i, 0), m.vertex(i, 1), m.vertex(i, 2), cell).area;
@@ -77,8 +78,8 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
         stack.pop_back();
         max_depth = std::max(max_depth, d);
         if (!t.nodes[i].is_leaf()) {
-            stack.push_back({t.nodes[i].child, d + 1});
-            stack.push_back({t.nodes[i].child + 1, d + 1});
+            stack.push_back({t.nodes[i].child(), d + 1});
+            stack.push_back({t.nodes[i].child() + 1, d + 1});
         }
     }
     EXPECT_LE(max_depth, 6);
@@ -116,10 +117,8 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
                 ASSERT_EQ(t.nodes.size(), ref.nodes.size()) << "small " << small << " task " << task;
                 EXPECT_EQ(t.prim_indices, ref.prim_indices) << "small " << small << " task " << task;
                 for (size_t i = 0; i < t.nodes.size(); ++i) {
-                    ASSERT_EQ(t.nodes[i].axis, ref.nodes[i].axis) << i;
-                    ASSERT_EQ(t.nodes[i].split, ref.nodes[i].split) << i;
-                    ASSERT_EQ(t.nodes[i].child, ref.nodes[i].child) << i;
-                    ASSERT_EQ(t.nodes[i].count, ref.nodes[i].count) << i;
+                    ASSERT_EQ(t.nodes[i].word, ref.nodes[i].word) << i;  // split or first entry
+                    ASSERT_EQ(t.nodes[i].bits, ref.nodes[i].bits) << i;  // axis, child or count
                 }
             }
         }
@@ -142,14 +141,17 @@ TEST(KdTreeBuilder, ValidateAndStats) {
     KdTree cycle = t;
     uint32_t interior = 0;
     while (cycle.nodes[interior].is_leaf()) ++interior;
-    cycle.nodes[cycle.nodes[interior].child].axis = 0;       // turn a child into an interior node
-    cycle.nodes[cycle.nodes[interior].child].child = interior;  // whose children lead back up
-    EXPECT_NE(validate_kd(cycle, m.triangle_count()), "");
+    // Turn a child into an interior node, with its parent's plane (on its cell's face), whose
+    // children lead back up.
+    const KdNode parent = cycle.nodes[interior];
+    cycle.nodes[parent.child()] = KdNode::interior(parent.axis(), parent.split(), interior);
+    EXPECT_NE(validate_kd(cycle, m.triangle_count()).find("reached twice"), std::string::npos);
     KdTree bad_id = t;
     bad_id.prim_indices.back() = uint32_t(m.triangle_count());
     EXPECT_NE(validate_kd(bad_id, m.triangle_count()), "");
     KdTree bad_split = t;
-    bad_split.nodes[0].split = t.bounds.hi[int(t.nodes[0].axis)] + 1.0f;
+    const KdNode root = t.nodes[0];
+    bad_split.nodes[0] = KdNode::interior(root.axis(), t.bounds.hi[int(root.axis())] + 1.0f, root.child());
     EXPECT_NE(validate_kd(bad_split, m.triangle_count()), "");
 }
 

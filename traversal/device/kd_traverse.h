@@ -56,10 +56,11 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
         while (!kd.nodes[node].is_leaf()) {
             const accel::KdNode& n = kd.nodes[node];
             if (counters) ++counters->nodes;
-            const int k = int(n.axis);
-            const float t_split = (n.split - o[k]) * inv[k];
-            const bool below_first = o[k] < n.split || (o[k] == n.split && d[k] <= 0.0f);
-            const uint32_t near = n.child + (below_first ? 0u : 1u), far = n.child + (below_first ? 1u : 0u);
+            const int k = int(n.axis());
+            const float split = n.split();
+            const float t_split = (split - o[k]) * inv[k];
+            const bool below_first = o[k] < split || (o[k] == split && d[k] <= 0.0f);
+            const uint32_t near = n.child() + (below_first ? 0u : 1u), far = n.child() + (below_first ? 1u : 0u);
             if (t_split > tf || t_split <= 0.0f) {
                 node = near;
             } else if (t_split <= tn) {
@@ -77,7 +78,7 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
         }
         const accel::KdNode& leaf = kd.nodes[node];
         if (counters) ++counters->leaves;
-        for (uint32_t i = leaf.child; i < leaf.child + leaf.count; ++i) {
+        for (uint32_t i = leaf.first(); i < leaf.first() + leaf.count(); ++i) {
             if (counters) ++counters->tri_tests;
             const uint32_t id = kd.prims[i];
             float t, u, v;
