@@ -38,6 +38,8 @@ constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
 constexpr uint32_t kMaxSmallNode = 32;
+/// Meshes from this many triangles on set up the root with parallel tasks.
+constexpr size_t kParallelMin = 4096;
 
 /// Eight floats or ints (GCC/Clang vector types): one AVX2 register, or two SSE or NEON ones.
 /// They never cross a non-inlined call, so GCC's note on their calling convention is moot.
@@ -217,6 +219,14 @@ void radix_sort_by_pos(Event* a, Event* t, size_t m) {
     }
 }
 
+/// Sorts a[0, m) by position into t, as radix_sort_by_pos(); a comparison sort when m is
+/// small (the radix sort's counters, 24 KB, cost more than sorting a few hundred events).
+void sort_by_pos(Event* a, Event* t, size_t m) {
+    if (m >= 512) return radix_sort_by_pos(a, t, m);
+    std::copy(a, a + m, t);
+    std::sort(t, t + m);  // keys are unique and ordered as the radix sort's stable output
+}
+
 /// A subtree built by one thread, in the final layout (children of a node side by side) but
 /// with fragment-local node and triangle-list indices; node 0 is its root.
 struct Fragment {
@@ -271,10 +281,13 @@ struct ThreadState {
 class Recursion {
 public:
     Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
-        : c_(c), max_depth_(max_depth), small_(c.small_node_size), corners_(mesh.triangle_count()) {
-        tbb::parallel_for(size_t(0), corners_.size(), [&](size_t t) {
+        : c_(c), max_depth_(max_depth), small_(c.small_node_size), corners_(mesh.triangle_count()),
+          parallel_(corners_.size() >= kParallelMin) {
+        const auto copy = [&](size_t t) {
             for (int i = 0; i < 3; ++i) corners_[t].v[i] = mesh.vertex(t, i);
-        });
+        };
+        if (parallel_) tbb::parallel_for(size_t(0), corners_.size(), copy);
+        else for (size_t t = 0; t < corners_.size(); ++t) copy(t);
     }
 
     /// A free Work with room for n triangles: the pooled one with the least capacity that
@@ -346,26 +359,27 @@ public:
         // Per half of the triangles, the bounds that are flat on each axis (one event each).
         const size_t half = n / 2;
         std::atomic<size_t> flat[2][3] = {};
-        w->voxel = tbb::parallel_reduce(
-            tbb::blocked_range<size_t>(0, n), AABB::empty(),
-            [&](const tbb::blocked_range<size_t>& r, AABB voxel) {
-                size_t flats[2][3] = {};
-                for (size_t t = r.begin(); t != r.end(); ++t) {
-                    AABB b = AABB::empty();
-                    for (int i = 0; i < 3; ++i) b.extend(corners_[t].v[i]);
-                    w->tris[t] = uint32_t(t);
-                    w->boxes[t] = b;
-                    voxel.extend(b);  // in triangle order, as TriangleMesh::bounds()
-                    for (int k = 0; k < 3; ++k) flats[t >= half][k] += b.lo[k] == b.hi[k];
-                }
-                for (int h = 0; h < 2; ++h)
-                    for (int k = 0; k < 3; ++k) flat[h][k] += flats[h][k];
-                return voxel;
-            },
-            [](AABB a, const AABB& b) {
-                a.extend(b);
-                return a;
-            });
+        const auto bound = [&](const tbb::blocked_range<size_t>& r, AABB voxel) {
+            size_t flats[2][3] = {};
+            for (size_t t = r.begin(); t != r.end(); ++t) {
+                AABB b = AABB::empty();
+                for (int i = 0; i < 3; ++i) b.extend(corners_[t].v[i]);
+                w->tris[t] = uint32_t(t);
+                w->boxes[t] = b;
+                voxel.extend(b);
+                for (int k = 0; k < 3; ++k) flats[t >= half][k] += b.lo[k] == b.hi[k];
+            }
+            for (int h = 0; h < 2; ++h)
+                for (int k = 0; k < 3; ++k) flat[h][k] += flats[h][k];
+            return voxel;
+        };
+        const tbb::blocked_range<size_t> all(0, n);
+        w->voxel = parallel_ ? tbb::parallel_reduce(all, AABB::empty(), bound,
+                                                    [](AABB a, const AABB& b) {
+                                                        a.extend(b);
+                                                        return a;
+                                                    })
+                             : bound(all, AABB::empty());
         std::vector<Event> scratch[3];
         const size_t lo[2] = {0, half}, hi[2] = {half, n};
         size_t second_half[3];  // per axis, where the second half's events start
@@ -374,14 +388,14 @@ public:
             w->events[k].resize(second_half[k] + 2 * (n - half) - flat[1][k]);
             scratch[k].resize(w->events[k].size());
         }
-        tbb::parallel_for(0, 6, [&](int task) {
+        run_tasks(6, [&](int task) {
             const int k = task / 2, h = task % 2;
             const size_t first = h == 0 ? 0 : second_half[k];
             Event* const a = w->events[k].data() + first;
             const Event* e = write_events(w->boxes.data(), uint32_t(lo[h]), uint32_t(hi[h]), k, a);
-            radix_sort_by_pos(a, scratch[k].data() + first, size_t(e - a));
+            sort_by_pos(a, scratch[k].data() + first, size_t(e - a));
         });
-        tbb::parallel_for(0, 3, [&](int k) {
+        run_tasks(3, [&](int k) {
             const Event* sorted = scratch[k].data();
             const size_t m = second_half[k];
             merge_events(sorted, m, sorted + m, scratch[k].size() - m, w->events[k].data());
@@ -390,6 +404,14 @@ public:
     }
 
 private:
+    /// Runs f(0) .. f(count - 1), as parallel tasks only for a large mesh: on the 32-triangle
+    /// Cornell box, TBB's task start-up had been a quarter of the whole build.
+    template <typename F>
+    void run_tasks(int count, const F& f) const {
+        if (parallel_) tbb::parallel_for(0, count, f);
+        else for (int i = 0; i < count; ++i) f(i);
+    }
+
     /// Builds the subtree of `w` into `f`, its root at f.nodes[at]. `counted`: w has the same
     /// bounds and events as the node whose find_plane() ran last on this thread (it is the
     /// child of an empty-space cut), so that sweep's counts still hold.
@@ -846,6 +868,7 @@ private:
     const bool avx2_ = c_.use_avx2 && __builtin_cpu_supports("avx2");
 #endif
     std::vector<Corners> corners_;
+    const bool parallel_;  // whether the root's setup runs as parallel tasks
     mutable tbb::enumerable_thread_specific<ThreadState> state_;
     std::atomic<uint64_t> frag_tris_{0}, frag_nodes_{0}, frag_refs_{0};  // for reserving fragments
 };
@@ -883,7 +906,8 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
     t.bounds = bounds;
     // Sizing the node array writes nothing (KdNode's default constructor), so its fresh pages
     // are first touched by the parallel copy below. On this VM a fresh page costs several
-    // microseconds: furball's 600 MB of nodes took 0.7-1.9 s when one thread zero-filled them.
+    // microseconds: furball's nodes (600 MB before they were 8 bytes) took 0.7-1.9 s when one
+    // thread zero-filled them.
     t.nodes.resize(nodes);
     for (const auto& [d, x] : interior) t.nodes[d] = x;
     const auto copy_nodes = [&](size_t i) {
@@ -896,12 +920,19 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
         t.nodes[p.at] = place(p.frag->nodes[0]);
         for (size_t j = 1; j < p.frag->nodes.size(); ++j) t.nodes[p.base + j - 1] = place(p.frag->nodes[j]);
     };
-    tbb::parallel_invoke([&] { t.prim_indices.resize(prims); },
-                         [&] { tbb::parallel_for(size_t(0), frags.size(), copy_nodes); });
-    tbb::parallel_for(size_t(0), frags.size(), [&](size_t i) {
+    const auto copy_prims = [&](size_t i) {
         const Placed& p = frags[i];
         std::copy(p.frag->prims.begin(), p.frag->prims.end(), t.prim_indices.begin() + p.prim_base);
-    });
+    };
+    if (frags.size() == 1) {  // a small mesh: no tasks
+        t.prim_indices.resize(prims);
+        copy_nodes(0);
+        copy_prims(0);
+        return t;
+    }
+    tbb::parallel_invoke([&] { t.prim_indices.resize(prims); },
+                         [&] { tbb::parallel_for(size_t(0), frags.size(), copy_nodes); });
+    tbb::parallel_for(size_t(0), frags.size(), copy_prims);
     return t;
 }
 

@@ -95,10 +95,12 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
 // The small-node plane search (direct counting, no events) must pick the plane the event sweep
 // picks, so the tree does not depend on where the builder switches between them; and the
 // parallel top levels must not change the tree either. Scenes with shared vertices (many equal
-// event positions), axis-aligned (planar) triangles and random soup.
+// event positions), axis-aligned (planar) triangles and random soup; the 6000-triangle soup
+// is above the size from which the root's setup runs as parallel tasks.
 TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
     const TriangleMesh scenes[] = {make_procedural(ProceduralKind::kStructured, 3000, 3),
                                    make_procedural(ProceduralKind::kSoup, 2000, 5),
+                                   make_procedural(ProceduralKind::kSoup, 6000, 7),
                                    load_obj(test::data_dir() + "/cornell_box.obj")};
     for (const TriangleMesh& m : scenes) {
         KdTreeBuilder::Config c;
