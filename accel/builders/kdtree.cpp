@@ -779,23 +779,26 @@ private:
     /// case, both sides of a plane cost the same and half the work is skipped.
     template <bool kFlat>
     static Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) {
-        return small_axis_body<kFlat>(w, k, cost);
+        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
     }
 #if BVHLAB_KD_AVX2
     template <bool kFlat>
     __attribute__((target("avx2"))) static Plane small_axis_avx2(const SmallWork& w, int k, const AxisCost& cost) {
-        return small_axis_body<kFlat>(w, k, cost);
+        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
     }
 #endif
+    static constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
     /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA.
-    template <bool kFlat>
+    /// kMax is the most vectors per candidate list: nodes of up to kLanes triangles (80% of
+    /// the searches on furball) get a copy with one, whose loops unroll and whose vectors
+    /// stay in registers.
+    template <bool kFlat, uint32_t kMax>
     __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k, const AxisCost& cost) {
-        constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
-        const uint32_t n = w.n, vecs = (n + kLanes - 1) / kLanes;
+        const uint32_t n = w.n, vecs = kMax == 1 ? 1 : (n + kLanes - 1) / kLanes;
         const FV inf = FV{} + INFINITY;
         // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
-        FV pos[2][kVecs];
-        IV below[2][kVecs], above[2][kVecs], planar[2][kVecs];
+        FV pos[2][kMax];
+        IV below[2][kMax], above[2][kMax], planar[2][kMax];
         for (uint32_t v = 0; v < vecs; ++v) {
             std::memcpy(&pos[0][v], &w.lo[k][kLanes * v], sizeof(FV));
             std::memcpy(&pos[1][v], &w.hi[k][kLanes * v], sizeof(FV));
@@ -811,7 +814,7 @@ private:
                     if (kFlat) planar[l][v] -= flat & (lo == pos[l][v]);
                 }
         }
-        FV left[2][kVecs], right[2][kVecs];
+        FV left[2][kMax], right[2][kMax];
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
                 const FV x = pos[l][v];
