@@ -154,6 +154,7 @@ struct Work {
 struct SmallWork {
     AABB voxel;
     uint32_t n = 0;
+    uint32_t flat = 0;  ///< bit k: some bound is flat (lo == hi) on axis k
     uint32_t tris[kMaxSmallNode];
     alignas(32) float lo[3][kMaxSmallNode];
     alignas(32) float hi[3][kMaxSmallNode];
@@ -168,13 +169,19 @@ struct SmallWork {
     }
     void add(uint32_t t, const AABB& b) {
         tris[n] = t;
-        for (int k = 0; k < 3; ++k) lo[k][n] = b.lo[k], hi[k][n] = b.hi[k];
+        for (int k = 0; k < 3; ++k) {
+            lo[k][n] = b.lo[k], hi[k][n] = b.hi[k];
+            flat |= uint32_t(b.lo[k] == b.hi[k]) << k;
+        }
         ++n;
     }
     /// Appends slot s of another small node.
     void add(const SmallWork& w, uint32_t s) {
         tris[n] = w.tris[s];
-        for (int k = 0; k < 3; ++k) lo[k][n] = w.lo[k][s], hi[k][n] = w.hi[k][s];
+        for (int k = 0; k < 3; ++k) {
+            lo[k][n] = w.lo[k][s], hi[k][n] = w.hi[k][s];
+            flat |= uint32_t(w.lo[k][s] == w.hi[k][s]) << k;
+        }
         ++n;
     }
     void pad() {
@@ -759,8 +766,7 @@ private:
         if (!(area > 0.0f) || w.n == 0) return best;
         const float inv_area = 1.0f / area;
         for (int k = 0; k < 3; ++k) {
-            bool flat = false;
-            for (uint32_t s = 0; s < w.n; ++s) flat |= w.lo[k][s] == w.hi[k][s];
+            const bool flat = w.flat >> k & 1;
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
             Plane p;
 #if BVHLAB_KD_AVX2
