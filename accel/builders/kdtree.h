@@ -23,7 +23,7 @@ public:
         uint32_t task_threshold = 2048;
         /// Nodes with at most this many triangles (0..32) keep no sorted events: their planes
         /// are found by counting directly, which is cheaper for so few and picks the same plane.
-        uint32_t small_node_size = 24;
+        uint32_t small_node_size = 32;
         /// Let the small-node search use its AVX2 copy when the CPU has one (x86-64). Off:
         /// the portable copy, for comparison; both pick the same planes.
         bool use_avx2 = true;
