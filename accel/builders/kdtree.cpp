@@ -785,19 +785,19 @@ private:
     /// case, both sides of a plane cost the same and half the work is skipped.
     template <bool kFlat>
     static Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) {
-        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
+        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : w.n <= 2 * kLanes ? small_axis_body<kFlat, 2>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
     }
 #if BVHLAB_KD_AVX2
     template <bool kFlat>
     __attribute__((target("avx2"))) static Plane small_axis_avx2(const SmallWork& w, int k, const AxisCost& cost) {
-        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
+        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : w.n <= 2 * kLanes ? small_axis_body<kFlat, 2>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
     }
 #endif
     static constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
     /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA.
     /// kMax is the most vectors per candidate list: nodes of up to kLanes triangles (80% of
-    /// the searches on furball) get a copy with one, whose loops unroll and whose vectors
-    /// stay in registers.
+    /// the searches on furball) get a copy with one, up to 2 kLanes one with two, so that
+    /// loops unroll and vectors stay in registers.
     template <bool kFlat, uint32_t kMax>
     __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k, const AxisCost& cost) {
         const uint32_t n = w.n, vecs = kMax == 1 ? 1 : (n + kLanes - 1) / kLanes;
