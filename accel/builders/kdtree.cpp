@@ -728,8 +728,9 @@ private:
             Event* kept_at[2];
             for (int i = 0; i < 2; ++i) {
                 std::vector<Event>& dst = events[i] ? child[i]->events[k] : ts.filtered;
-                dst.resize(ts.fresh[i][k].size() + in.size());  // no fill: Event's constructor
-                kept_at[i] = dst.data() + ts.fresh[i][k].size();
+                const size_t room = events[i] ? ts.fresh[i][k].size() : 0;
+                dst.resize(room + in.size());  // no fill: Event's constructor writes nothing
+                kept_at[i] = dst.data() + room;
             }
             // Both outputs are written every time and the counters decide what is kept, so
             // the loop has no branch and no store-to-load chain through a pointer table.
@@ -785,19 +786,25 @@ private:
     /// case, both sides of a plane cost the same and half the work is skipped.
     template <bool kFlat>
     static Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) {
-        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : w.n <= 2 * kLanes ? small_axis_body<kFlat, 2>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
+        return small_axis_sized<kFlat>(w, k, cost);
     }
 #if BVHLAB_KD_AVX2
     template <bool kFlat>
     __attribute__((target("avx2"))) static Plane small_axis_avx2(const SmallWork& w, int k, const AxisCost& cost) {
-        return w.n <= kLanes ? small_axis_body<kFlat, 1>(w, k, cost) : w.n <= 2 * kLanes ? small_axis_body<kFlat, 2>(w, k, cost) : small_axis_body<kFlat, kVecs>(w, k, cost);
+        return small_axis_sized<kFlat>(w, k, cost);
     }
 #endif
-    static constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
-    /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA.
-    /// kMax is the most vectors per candidate list: nodes of up to kLanes triangles (80% of
-    /// the searches on furball) get a copy with one, up to 2 kLanes one with two, so that
-    /// loops unroll and vectors stay in registers.
+    /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA,
+    /// in versions by node size: kMax is the most vectors per candidate list. Nodes of up to
+    /// kLanes triangles (four searches in five on furball) get a version with one, nodes of up
+    /// to 2 kLanes one with two, so that loops unroll and vectors stay in registers.
+    template <bool kFlat>
+    __attribute__((always_inline)) static inline Plane small_axis_sized(const SmallWork& w, int k, const AxisCost& cost) {
+        constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
+        if (w.n <= kLanes) return small_axis_body<kFlat, 1>(w, k, cost);
+        if (w.n <= 2 * kLanes) return small_axis_body<kFlat, 2>(w, k, cost);
+        return small_axis_body<kFlat, kVecs>(w, k, cost);
+    }
     template <bool kFlat, uint32_t kMax>
     __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k, const AxisCost& cost) {
         const uint32_t n = w.n, vecs = kMax == 1 ? 1 : (n + kLanes - 1) / kLanes;
