@@ -257,10 +257,13 @@ struct Plane {
     bool planar_left = true;
 };
 
-/// One plane position of a sweep: the events of each type up to and including it.
-struct Position {
-    uint32_t pos_key;  ///< decoded only for the records that are priced
-    uint32_t starts, planars, ends;
+/// One axis's sweep records, one per distinct plane position, as structure of arrays (the
+/// pricing pass loads them kLanes at a time): the position's sort key and the events of each
+/// type up to and including it. Entry 0 is the position before the first (all counts zero);
+/// position g is entry g + 1, and the arrays run kLanes entries past the last.
+struct Sweep {
+    std::vector<uint32_t> key, starts, planars, ends;
+    size_t groups = 0;  ///< the number of positions
 };
 
 /// Where split() sends a parent slot's events: its slot in each child, and per axis the event
@@ -277,8 +280,7 @@ struct Route {
 /// back once the node is split, so after warm-up the build allocates almost nothing per node.
 struct ThreadState {
     std::vector<std::unique_ptr<Work>> free_work;
-    std::vector<Position> positions[3];  ///< find_plane's records, per axis
-    size_t groups[3] = {0, 0, 0};
+    Sweep sweeps[3];  ///< find_plane's records, per axis
     std::vector<uint8_t> side;
     std::vector<Route> route;
     std::vector<uint32_t> origin[2];
@@ -543,50 +545,109 @@ private:
         const auto n = uint32_t(w.tris.size());
         ThreadState& ts = state_.local();
         for (int k = 0; k < 3; ++k) {
-            const int buffer = records == Records::kShared ? 0 : k;
-            std::vector<Position>& at = ts.positions[buffer];
-            size_t& groups = ts.groups[buffer];
-            if (records != Records::kKept) groups = count_positions(w.events[k], at);
+            Sweep& sweep = ts.sweeps[records == Records::kShared ? 0 : k];
+            if (records != Records::kKept) count_positions(w.events[k], sweep);
             const AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            // At a position: left of the plane, every bound that starts before it and every
-            // flat bound up to it; right, every bound that ends after it (so the starts at it
-            // go right). A flat bound at the position counts left for cost_left, right for
-            // cost_right.
-            uint32_t starts_before = 0, planars_before = 0;
-            for (size_t g = 0; g < groups; ++g) {
-                const Position& q = at[g];
-                const uint32_t planars = q.planars - planars_before;
-                const uint32_t left = starts_before + q.planars, right = n - q.ends - q.planars;
-                starts_before = q.starts;
-                planars_before = q.planars;
-                const float pos = from_sort_key(q.pos_key);
-                if (!(pos > cost.lo && pos < cost.hi)) continue;  // only at the two ends
-                const float cost_left = cost(pos, left, right);
-                if (cost_left < best.cost) best = {cost_left, k, pos, true};
-                if (planars == 0) continue;  // both sides cost the same
-                const float cost_right = cost(pos, left - planars, right + planars);
-                if (cost_right < best.cost) best = {cost_right, k, pos, false};
-            }
+            const bool flat = sweep.planars[sweep.groups] != 0;
+            Plane p;
+#if BVHLAB_KD_AVX2
+            if (avx2_)
+                p = flat ? price_avx2<true>(sweep, n, k, cost) : price_avx2<false>(sweep, n, k, cost);
+            else
+#endif
+                p = flat ? price<true>(sweep, n, k, cost) : price<false>(sweep, n, k, cost);
+            if (p.cost < best.cost) best = p;  // an earlier axis wins ties
         }
         return best;
     }
 
+    /// find_plane's second pass on one axis: the cheapest plane among the sweep's positions
+    /// inside the voxel, kLanes positions at a time. At a position: left of the plane, every
+    /// bound that starts before it and every flat bound up to it; right, every bound that
+    /// ends after it (so the starts at it go right). A flat bound at the position counts left
+    /// for the left-first cost, right for the right-first one; without flat bounds on the axis
+    /// (kFlat false) the two are the same. Ties go to the lower position, then left first,
+    /// as in a scalar loop that keeps only strictly cheaper planes.
+    template <bool kFlat>
+    static Plane price(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
+        return price_body<kFlat>(s, n, k, cost);
+    }
+#if BVHLAB_KD_AVX2
+    template <bool kFlat>
+    __attribute__((target("avx2"))) static Plane price_avx2(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
+        return price_body<kFlat>(s, n, k, cost);
+    }
+#endif
+    template <bool kFlat>
+    __attribute__((always_inline)) static inline Plane price_body(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
+        IV v;  // written by load (an out parameter: a vector return would change the ABI)
+        const auto load = [&v](const std::vector<uint32_t>& a, size_t i) -> const IV& {
+            std::memcpy(&v, a.data() + i, sizeof v);
+            return v;
+        };
+        IV lane;
+        for (uint32_t i = 0; i < kLanes; ++i) lane[i] = int32_t(i);
+        const FV inf = FV{} + INFINITY;
+        // Per lane: the cheapest cost seen and its candidate's order, 2 g (+ 1 right first).
+        FV best = inf;
+        IV best_at = IV{};
+        const auto groups = int32_t(s.groups);
+        for (int32_t g = 0; g < groups; g += int32_t(kLanes)) {
+            const IV key = load(s.key, size_t(g) + 1);
+            const IV planars_to = load(s.planars, size_t(g) + 1);
+            const IV left = load(s.starts, size_t(g)) + planars_to;
+            const IV right = int32_t(n) - load(s.ends, size_t(g) + 1) - planars_to;
+            // from_sort_key, kLanes at a time (keys with the top bit set are negative here)
+            const IV bits = key < 0 ? (key & 0x7fffffff) : ~key;
+            FV pos;
+            std::memcpy(&pos, &bits, sizeof pos);
+            const IV order = 2 * (g + lane);
+            const IV inside = (g + lane < groups) & (pos > cost.lo) & (pos < cost.hi);
+            const FV c = inside ? cost(pos, left, right) : inf;
+            IV cheaper = c < best;
+            best = cheaper ? c : best;
+            best_at = cheaper ? order : best_at;
+            if (kFlat) {
+                const IV planars = planars_to - load(s.planars, size_t(g));
+                const FV r = inside & (planars != 0) ? cost(pos, left - planars, right + planars) : inf;
+                cheaper = r < best;
+                best = cheaper ? r : best;
+                best_at = cheaper ? order + 1 : best_at;
+            }
+        }
+        float m = best[0];
+        for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, best[i]);
+        if (!(m < INFINITY)) return Plane{};
+        int32_t at = INT32_MAX;
+        for (uint32_t i = 0; i < kLanes; ++i)
+            if (best[i] == m) at = std::min(at, best_at[i]);
+        return {m, k, from_sort_key(s.key[size_t(at / 2) + 1]), at % 2 == 0};
+    }
+
     /// find_plane's first pass on one axis: one record per distinct position of the n
-    /// triangles' sorted events e. Returns the number of records.
-    static size_t count_positions(const std::vector<Event>& e, std::vector<Position>& at) {
+    /// triangles' sorted events e.
+    static void count_positions(const std::vector<Event>& e, Sweep& s) {
         const size_t m = e.size();
-        if (at.size() < m) at.resize(m);  // never shrunk, so never filled again
+        if (s.key.size() < m + 1 + kLanes) {  // never shrunk, so never filled again
+            for (auto* a : {&s.key, &s.starts, &s.planars, &s.ends}) a->resize(m + 1 + kLanes);
+            s.starts[0] = s.planars[0] = s.ends[0] = 0;
+        }
+        uint32_t *key = s.key.data() + 1, *starts = s.starts.data() + 1;
+        uint32_t *planars = s.planars.data() + 1, *ends = s.ends.data() + 1;
         // Running counts only, with no reset per position: each event's record is
         // overwritten until the position's last event, which keeps it.
         uint32_t counts[3] = {0, 0, 0};  // by type: ends, planars, starts
         size_t groups = 0;
         for (size_t i = 0; i < m; ++i) {
-            const uint32_t key = e[i].pos_key();
+            const uint32_t k = e[i].pos_key();
             ++counts[e[i].type()];
-            at[groups] = {key, counts[kStart], counts[kPlanar], counts[kEnd]};
-            groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != key);
+            key[groups] = k;
+            starts[groups] = counts[kStart];
+            planars[groups] = counts[kPlanar];
+            ends[groups] = counts[kEnd];
+            groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != k);
         }
-        return groups;
+        s.groups = groups;
     }
 
     enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
