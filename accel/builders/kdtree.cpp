@@ -40,6 +40,8 @@ constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 constexpr uint32_t kMaxSmallNode = 32;
 /// Meshes from this many triangles on set up the root with parallel tasks.
 constexpr size_t kParallelMin = 4096;
+/// Nodes from this many triangles on split their three axes' events as parallel tasks.
+constexpr size_t kParallelSplit = size_t(1) << 16;
 
 /// Eight floats or ints (GCC/Clang vector types): one AVX2 register, or two SSE or NEON ones.
 /// They never cross a non-inlined call, so GCC's note on their calling convention is moot.
@@ -284,7 +286,7 @@ struct ThreadState {
     std::vector<uint8_t> side;
     std::vector<Route> route;
     std::vector<uint32_t> origin[2];
-    std::vector<Event> filtered, fresh[2][3];
+    std::vector<Event> filtered[3], fresh[2][3];
 };
 
 class Recursion {
@@ -761,10 +763,12 @@ private:
             release(std::move(wp));
             return {std::move(lp), std::move(rp), false};
         }
-        for (int i = 0; i < 2; ++i) {
-            if (!events[i]) continue;
-            const std::vector<AABB>& boxes = child[i]->boxes;
-            for (int k = 0; k < 3; ++k) {
+        // Per axis (three tasks for a large node: at the root, the other thread had idled):
+        // the new events, then the kept ones, then the merge.
+        const auto axis_events = [&](int k) {
+            for (int i = 0; i < 2; ++i) {
+                if (!events[i]) continue;
+                const std::vector<AABB>& boxes = child[i]->boxes;
                 std::vector<Event>& fresh = ts.fresh[i][k];
                 fresh.clear();
                 for (size_t j = 0; j < ts.origin[i].size(); ++j) {
@@ -780,15 +784,13 @@ private:
                 }
                 std::sort(fresh.begin(), fresh.end());
             }
-        }
-        for (int k = 0; k < 3; ++k) {
             const std::vector<Event>& in = w.events[k];
             // The kept events are filtered straight into each child's array, behind room for
             // its new events, which are then merged in place (the output never overtakes the
             // unread kept events). A child without events gets a scratch array.
             Event* kept_at[2];
             for (int i = 0; i < 2; ++i) {
-                std::vector<Event>& dst = events[i] ? child[i]->events[k] : ts.filtered;
+                std::vector<Event>& dst = events[i] ? child[i]->events[k] : ts.filtered[k];
                 const size_t room = events[i] ? ts.fresh[i][k].size() : 0;
                 dst.resize(room + in.size());  // no fill: Event's constructor writes nothing
                 kept_at[i] = dst.data() + room;
@@ -814,7 +816,9 @@ private:
                 merge_events(kept_at[i], kept[i], fresh.data(), fresh.size(), dst.data());
                 dst.resize(fresh.size() + kept[i]);
             }
-        }
+        };
+        if (n >= kParallelSplit) tbb::parallel_for(0, 3, axis_events);
+        else for (int k = 0; k < 3; ++k) axis_events(k);
         release(std::move(wp));
         return {std::move(lp), std::move(rp), false};
     }
