@@ -3,14 +3,15 @@
 // sorted by (position, type); one sweep per axis finds the best plane. Triangles are then
 // classified left / right / both by their clipped bounds; only the straddling ones are clipped,
 // once to the node's voxel and then split by the plane into both children's bounds ("perfect
-// splits"), and their few new events are sorted and merged into the already sorted, filtered
-// lists of the others. Nodes of up to small_node_size triangles are built on the stack without
-// events: their planes are counted directly, eight candidates at a time (same plane, less
-// work). An empty-space cut (57-62% of the interior nodes on the scans and furball) gives its
-// parent's arrays whole to the non-empty child, which reuses the parent's sweep counts and only
-// re-prices the planes. Events refer to node-local triangle slots, so concurrent subtrees never
-// share state; below a size threshold a subtree is built by one thread into its own fragment
-// of the final node array.
+// splits"). Events whose bound the clip left in place are kept, already sorted, with the
+// others' when filtered; only the moved bounds get new events, sorted and merged in. Nodes of
+// up to small_node_size triangles are built on the stack without events: their planes are
+// counted directly, eight candidates at a time (same plane, less work). An empty-space cut
+// (57-62% of the interior nodes on the scans and furball) gives its parent's arrays whole to
+// the non-empty child, which reuses the parent's sweep counts and only re-prices the planes.
+// Events refer to node-local triangle slots, so concurrent subtrees never share state; below a
+// size threshold a subtree is built by one thread into its own fragment of the final node
+// array.
 #include "accel/builders/kdtree.h"
 
 #include <tbb/blocked_range.h>
@@ -236,6 +237,15 @@ void sort_by_pos(Event* a, Event* t, size_t m) {
     std::sort(t, t + m);  // keys are unique and ordered as the radix sort's stable output
 }
 
+/// Runs f(0) .. f(count - 1), as parallel tasks only when `parallel` (worth it for large
+/// inputs: on the 32-triangle Cornell box, TBB's task start-up had been a quarter of the
+/// whole build).
+template <typename F>
+void run_tasks(int count, bool parallel, const F& f) {
+    if (parallel) tbb::parallel_for(0, count, f);
+    else for (int i = 0; i < count; ++i) f(i);
+}
+
 /// A subtree built by one thread, in the final layout (children of a node side by side) but
 /// with fragment-local node and triangle-list indices; node 0 is its root.
 struct Fragment {
@@ -399,14 +409,14 @@ public:
             w->events[k].resize(second_half[k] + 2 * (n - half) - flat[1][k]);
             scratch[k].resize(w->events[k].size());
         }
-        run_tasks(6, [&](int task) {
+        run_tasks(6, parallel_, [&](int task) {
             const int k = task / 2, h = task % 2;
             const size_t first = h == 0 ? 0 : second_half[k];
             Event* const a = w->events[k].data() + first;
             const Event* e = write_events(w->boxes.data(), uint32_t(lo[h]), uint32_t(hi[h]), k, a);
             sort_by_pos(a, scratch[k].data() + first, size_t(e - a));
         });
-        run_tasks(3, [&](int k) {
+        run_tasks(3, parallel_, [&](int k) {
             const Event* sorted = scratch[k].data();
             const size_t m = second_half[k];
             merge_events(sorted, m, sorted + m, scratch[k].size() - m, w->events[k].data());
@@ -415,14 +425,6 @@ public:
     }
 
 private:
-    /// Runs f(0) .. f(count - 1), as parallel tasks only for a large mesh: on the 32-triangle
-    /// Cornell box, TBB's task start-up had been a quarter of the whole build.
-    template <typename F>
-    void run_tasks(int count, const F& f) const {
-        if (parallel_) tbb::parallel_for(0, count, f);
-        else for (int i = 0; i < count; ++i) f(i);
-    }
-
     /// Builds the subtree of `w` into `f`, its root at f.nodes[at]. `counted`: w has the same
     /// bounds and events as the node whose find_plane() ran last on this thread (it is the
     /// child of an empty-space cut), so that sweep's counts still hold.
@@ -582,10 +584,10 @@ private:
 #endif
     template <bool kFlat>
     __attribute__((always_inline)) static inline Plane price_body(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
-        IV v;  // written by load (an out parameter: a vector return would change the ABI)
-        const auto load = [&v](const std::vector<uint32_t>& a, size_t i) -> const IV& {
+        // Loads kLanes records from entry i (an out parameter: a vector return value would
+        // change the ABI between the two copies).
+        const auto load = [](IV& v, const std::vector<uint32_t>& a, size_t i) {
             std::memcpy(&v, a.data() + i, sizeof v);
-            return v;
         };
         IV lane;
         for (uint32_t i = 0; i < kLanes; ++i) lane[i] = int32_t(i);
@@ -595,10 +597,13 @@ private:
         IV best_at = IV{};
         const auto groups = int32_t(s.groups);
         for (int32_t g = 0; g < groups; g += int32_t(kLanes)) {
-            const IV key = load(s.key, size_t(g) + 1);
-            const IV planars_to = load(s.planars, size_t(g) + 1);
-            const IV left = load(s.starts, size_t(g)) + planars_to;
-            const IV right = int32_t(n) - load(s.ends, size_t(g) + 1) - planars_to;
+            IV key, planars_to, starts_before, ends_to;
+            load(key, s.key, size_t(g) + 1);
+            load(planars_to, s.planars, size_t(g) + 1);
+            load(starts_before, s.starts, size_t(g));
+            load(ends_to, s.ends, size_t(g) + 1);
+            const IV left = starts_before + planars_to;
+            const IV right = int32_t(n) - ends_to - planars_to;
             // from_sort_key, kLanes at a time (keys with the top bit set are negative here)
             const IV bits = key < 0 ? (key & 0x7fffffff) : ~key;
             FV pos;
@@ -610,7 +615,9 @@ private:
             best = cheaper ? c : best;
             best_at = cheaper ? order : best_at;
             if (kFlat) {
-                const IV planars = planars_to - load(s.planars, size_t(g));
+                IV planars_before;
+                load(planars_before, s.planars, size_t(g));
+                const IV planars = planars_to - planars_before;
                 const FV r = inside & (planars != 0) ? cost(pos, left - planars, right + planars) : inf;
                 cheaper = r < best;
                 best = cheaper ? r : best;
@@ -817,8 +824,7 @@ private:
                 dst.resize(fresh.size() + kept[i]);
             }
         };
-        if (n >= kParallelSplit) tbb::parallel_for(0, 3, axis_events);
-        else for (int k = 0; k < 3; ++k) axis_events(k);
+        run_tasks(3, n >= kParallelSplit, axis_events);
         release(std::move(wp));
         return {std::move(lp), std::move(rp), false};
     }

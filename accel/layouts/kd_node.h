@@ -23,8 +23,8 @@ struct alignas(8) KdNode {
     static constexpr uint32_t kMaxIndex = (1u << 30) - 1;  ///< the largest child or count
 
     /// Leaves the node unwritten, so that a node array can be sized without a zero fill that
-    /// its builder would overwrite anyway (on furball, 600 MB filled by one thread took a
-    /// tenth of the kd-tree build).
+    /// its builder would overwrite anyway (on furball, filling its nodes on one thread, 600 MB
+    /// when they were 16 bytes, had taken a tenth of the kd-tree build).
     BVHLAB_HD KdNode() {}
     BVHLAB_HD static KdNode interior(uint32_t axis, float split, uint32_t child) {
         KdNode n;
