@@ -22,10 +22,10 @@
 
 #include <algorithm>
 #include <atomic>
-#include <utility>
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <utility>
 
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
@@ -52,8 +52,13 @@ constexpr size_t kParallelSplit = size_t(1) << 16;
 constexpr uint32_t kLanes = 8;
 using FV = float __attribute__((vector_size(4 * kLanes)));
 using IV = int32_t __attribute__((vector_size(4 * kLanes)));
-inline float to_float(uint32_t x) { return float(x); }
 inline FV to_float(const IV& x) { return __builtin_convertvector(x, FV); }
+/// The smallest lane (inlined into the AVX2 copies as into the portable ones).
+__attribute__((always_inline)) inline float hmin(const FV& x) {
+    float m = x[0];
+    for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, x[i]);
+    return m;
+}
 /// x86-64 builds carry a second copy of the small-node plane search compiled for AVX2, used
 /// when the CPU has it (the portable copy runs each vector as two SSE halves).
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
@@ -512,7 +517,7 @@ private:
     /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
     /// linear in the plane position: 2 (a b + (a + b) d) for the other two extents a, b and
     /// the child's extent d along the axis.
-    /// F and I are float and uint32_t, or FV and IV for kLanes planes at once.
+    /// Evaluated for kLanes planes at once (FV positions, IV counts).
     struct AxisCost {
         float lo, hi, face, side, ct, ci, bonus;
         template <typename F, typename I>
@@ -624,8 +629,7 @@ private:
                 best_at = cheaper ? order + 1 : best_at;
             }
         }
-        float m = best[0];
-        for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, best[i]);
+        const float m = hmin(best);
         if (!(m < INFINITY)) return Plane{};
         int32_t at = INT32_MAX;
         for (uint32_t i = 0; i < kLanes; ++i)
@@ -909,11 +913,6 @@ private:
             }
         // The cheapest cost, the lowest position at that cost, and left before right, with
         // vector minima instead of a branch per candidate (they mispredicted).
-        const auto hmin = [](const FV& x) {
-            float m = x[0];
-            for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, x[i]);
-            return m;
-        };
         FV low = inf;
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
