@@ -37,8 +37,7 @@ namespace {
 enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
 constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
-/// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
-constexpr uint32_t kMaxSmallNode = 32;
+constexpr uint32_t kMaxSmallNode = KdTreeBuilder::kMaxSmallNodeSize;
 /// Meshes from this many triangles on set up the root with parallel tasks.
 constexpr size_t kParallelMin = 4096;
 /// Nodes from this many triangles on split their three axes' events as parallel tasks.
@@ -872,12 +871,14 @@ private:
     /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA,
     /// in versions by node size: kMax is the most vectors per candidate list. Nodes of up to
     /// kLanes triangles (four searches in five on furball) get a version with one, nodes of up
-    /// to 2 kLanes one with two, so that loops unroll and vectors stay in registers.
+    /// to 2 and 4 kLanes ones with two and four, so that loops unroll and vectors stay in
+    /// registers.
     template <bool kFlat>
     __attribute__((always_inline)) static inline Plane small_axis_sized(const SmallWork& w, int k, const AxisCost& cost) {
         constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
         if (w.n <= kLanes) return small_axis_body<kFlat, 1>(w, k, cost);
         if (w.n <= 2 * kLanes) return small_axis_body<kFlat, 2>(w, k, cost);
+        if (w.n <= 4 * kLanes) return small_axis_body<kFlat, 4>(w, k, cost);
         return small_axis_body<kFlat, kVecs>(w, k, cost);
     }
     template <bool kFlat, uint32_t kMax>
@@ -1033,7 +1034,8 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
     BVHLAB_CHECK(mesh.triangle_count() <= kSlotMask, "too many triangles for the kd-tree builder");
     BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");
-    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode, "kd-tree small_node_size must be at most 32");
+    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode,
+                 "kd-tree small_node_size must be at most " + std::to_string(kMaxSmallNode));
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
     Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
     std::unique_ptr<Work> root = rec.root();

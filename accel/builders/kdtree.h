@@ -13,6 +13,8 @@ namespace bvhlab::accel {
 
 class KdTreeBuilder {
 public:
+    /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
+    static constexpr uint32_t kMaxSmallNodeSize = 64;
     /// Defaults: Ct = 30 per traversal step, Ci = 20 per triangle, an empty-space bonus of 0.2
     /// and a depth limit of 8 + 1.3 log2(N). Ct/Ci = 1.5 was measured as the fastest ratio
     /// for this testbed's CPU kd traversal (experiments/NOTES.md, session 9); Wald & Havran's
@@ -23,9 +25,10 @@ public:
         float empty_bonus = 0.2f;  ///< cost x (1 - bonus) when one side is empty
         int max_depth = -1;        ///< -1: 8 + 1.3 log2(N), at most 64
         uint32_t task_threshold = 2048;
-        /// Nodes with at most this many triangles (0..32) keep no sorted events: their planes
-        /// are found by counting directly, which is cheaper for so few and picks the same plane.
-        uint32_t small_node_size = 32;
+        /// Nodes with at most this many triangles (0..kMaxSmallNodeSize) keep no sorted events:
+        /// their planes are found by counting directly, which is cheaper for so few and picks
+        /// the same plane.
+        uint32_t small_node_size = 64;
         /// Let the small-node search use its AVX2 copy when the CPU has one (x86-64). Off:
         /// the portable copy, for comparison; both pick the same planes.
         bool use_avx2 = true;

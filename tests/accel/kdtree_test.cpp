@@ -110,7 +110,7 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
         c.task_threshold = 1;
         const KdTree ref = KdTreeBuilder(c).build(m);
         ASSERT_EQ(validate_kd(ref, m.triangle_count()), "");
-        for (uint32_t small : {0u, 1u, 8u, 16u, 32u}) {
+        for (uint32_t small : {0u, 1u, 8u, 16u, 32u, 48u, 64u}) {
             for (uint32_t task : {64u, 2048u, ~0u}) {
                 c.small_node_size = small;
                 c.task_threshold = task;
@@ -126,7 +126,7 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
         }
     }
     KdTreeBuilder::Config c;
-    c.small_node_size = 33;
+    c.small_node_size = KdTreeBuilder::kMaxSmallNodeSize + 1;
     EXPECT_THROW(KdTreeBuilder(c).build(scenes[0]), Error);
 }
 
