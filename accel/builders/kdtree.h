@@ -15,14 +15,15 @@ class KdTreeBuilder {
 public:
     /// The largest Config::small_node_size (the small-node search keeps its bounds on the stack).
     static constexpr uint32_t kMaxSmallNodeSize = 64;
-    /// Defaults: Ct = 30 per traversal step, Ci = 20 per triangle, an empty-space bonus of 0.2
-    /// and a depth limit of 8 + 1.3 log2(N). Ct/Ci = 1.5 was measured as the fastest ratio
-    /// for this testbed's CPU kd traversal (experiments/NOTES.md, session 9); Wald & Havran's
-    /// K_T = 15, K_I = 20 (ratio 0.75) builds trees 1.5-3.5x larger that trace 3% slower.
+    /// Defaults: Ct = 30 per traversal step, Ci = 20 per triangle, an empty-space bonus of 0.1
+    /// and a depth limit of 8 + 1.3 log2(N). Ct/Ci = 1.5 and then the bonus 0.1 were measured
+    /// as the fastest for this testbed's CPU kd traversal (experiments/NOTES.md, session 9):
+    /// Wald & Havran's K_T = 15, K_I = 20, bonus 0.2 build trees 2-4.5x larger that trace
+    /// about 5% slower.
     struct Config {
         float traversal_cost = 30.0f;
         float intersection_cost = 20.0f;
-        float empty_bonus = 0.2f;  ///< cost x (1 - bonus) when one side is empty
+        float empty_bonus = 0.1f;  ///< cost x (1 - bonus) when one side is empty
         int max_depth = -1;        ///< -1: 8 + 1.3 log2(N), at most 64
         uint32_t task_threshold = 2048;
         /// Nodes with at most this many triangles (0..kMaxSmallNodeSize) keep no sorted events:
