@@ -7,11 +7,11 @@
 // others' when filtered; only the moved bounds get new events, sorted and merged in. Nodes of
 // up to small_node_size triangles are built on the stack without events: their planes are
 // counted directly, eight candidates at a time (same plane, less work). An empty-space cut
-// (57-62% of the interior nodes on the scans and furball) gives its parent's arrays whole to
-// the non-empty child, which reuses the parent's sweep counts and only re-prices the planes.
-// Events refer to node-local triangle slots, so concurrent subtrees never share state; below a
-// size threshold a subtree is built by one thread into its own fragment of the final node
-// array.
+// (57-62% of the interior nodes on the scans and furball with Wald & Havran's constants)
+// gives its parent's arrays whole to the non-empty child, which reuses the parent's sweep
+// counts and only re-prices the planes. Events refer to node-local triangle slots, so
+// concurrent subtrees never share state; below a size threshold a subtree is built by one
+// thread into its own fragment of the final node array.
 #include "accel/builders/kdtree.h"
 
 #include <tbb/blocked_range.h>
@@ -102,10 +102,10 @@ struct Event {
 };
 
 /// Merges two sorted event lists into out, which may also be a's array nb places before a
-/// (then every write lands below the events of a still to be read). Usually b (the straddlers' new events) is much
-/// shorter: then each of its events finds its place in a by a galloping search and the runs of
-/// a between them are block copies. Otherwise a conditional move instead of a branch per event
-/// (the new events fall anywhere among the others).
+/// (then every write lands below the events of a still to be read). Usually b (the
+/// straddlers' new events) is much shorter: then each of its events finds its place in a by a
+/// galloping search and the runs of a between them are block copies. Otherwise a conditional
+/// move instead of a branch per event (the new events fall anywhere among the others).
 void merge_events(const Event* a, size_t na, const Event* b, size_t nb, Event* out) {
     size_t i = 0, j = 0;
     if (nb * 16 < na) {
@@ -870,9 +870,9 @@ private:
 #endif
     /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA,
     /// in versions by node size: kMax is the most vectors per candidate list. Nodes of up to
-    /// kLanes triangles (four searches in five on furball) get a version with one, nodes of up
-    /// to 2 and 4 kLanes ones with two and four, so that loops unroll and vectors stay in
-    /// registers.
+    /// kLanes triangles (most searches: four in five on furball at Wald & Havran's constants)
+    /// get a version with one, nodes of up to 2 and 4 kLanes ones with two and four, so that
+    /// loops unroll and vectors stay in registers.
     template <bool kFlat>
     __attribute__((always_inline)) static inline Plane small_axis_sized(const SmallWork& w, int k, const AxisCost& cost) {
         constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
