@@ -38,10 +38,17 @@ enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
 constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 constexpr uint32_t kMaxSmallNode = KdTreeBuilder::kMaxSmallNodeSize;
+/// The most vertices of a clipped polygon that build_small keeps (a triangle clipped to a box
+/// has at most 9; more, from rounding, and the child clips the triangle anew).
+constexpr uint32_t kMaxKeptPolygon = 15;
 /// Meshes from this many triangles on set up the root with parallel tasks.
 constexpr size_t kParallelMin = 4096;
 /// Nodes from this many triangles on split their three axes' events as parallel tasks.
 constexpr size_t kParallelSplit = size_t(1) << 16;
+/// Nodes from this many triangles on prefetch the split's route entries, this many events
+/// ahead (the table, 12 bytes a slot, outgrows the L2 cache).
+constexpr size_t kPrefetchRoutes = size_t(1) << 14;
+constexpr size_t kRouteAhead = 32;
 
 /// Eight floats or ints (GCC/Clang vector types): one AVX2 register, or two SSE or NEON ones.
 /// They never cross a non-inlined call, so GCC's note on their calling convention is moot.
@@ -145,10 +152,14 @@ struct Work {
     std::vector<uint32_t> tris;
     std::vector<AABB> boxes;
     std::vector<Event> events[3];
+    /// Inside a fragment, per slot: the triangle's clipped part as SmallWork::poly holds it.
+    /// Empty above the fragments (no part kept).
+    std::vector<uint32_t> poly;
 
     void clear() {
         tris.clear();
         boxes.clear();
+        poly.clear();
         for (auto& e : events) e.clear();
     }
 };
@@ -163,6 +174,10 @@ struct SmallWork {
     uint32_t n = 0;
     uint32_t flat = 0;  ///< bit k: some bound is flat (lo == hi) on axis k
     uint32_t tris[kMaxSmallNode];
+    /// Per slot, the triangle clipped to the voxel, when this small subtree has already
+    /// clipped it: its place in the thread's PolygonArena, as (first vertex << 4) | count;
+    /// kNoPolygon when the triangle is still to be clipped.
+    uint32_t poly[kMaxSmallNode];
     alignas(32) float lo[3][kMaxSmallNode];
     alignas(32) float hi[3][kMaxSmallNode];
 
@@ -170,12 +185,14 @@ struct SmallWork {
     static SmallWork of(const Work& w) {
         SmallWork sw;
         sw.voxel = w.voxel;
-        for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s]);
+        for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s], w.poly.empty() ? kNoPolygon : w.poly[s]);
         sw.pad();
         return sw;
     }
-    void add(uint32_t t, const AABB& b) {
+    static constexpr uint32_t kNoPolygon = ~0u;
+    void add(uint32_t t, const AABB& b, uint32_t polygon) {
         tris[n] = t;
+        poly[n] = polygon;
         for (int k = 0; k < 3; ++k) {
             lo[k][n] = b.lo[k], hi[k][n] = b.hi[k];
             flat |= uint32_t(b.lo[k] == b.hi[k]) << k;
@@ -185,6 +202,7 @@ struct SmallWork {
     /// Appends slot s of another small node.
     void add(const SmallWork& w, uint32_t s) {
         tris[n] = w.tris[s];
+        poly[n] = w.poly[s];
         for (int k = 0; k < 3; ++k) {
             lo[k][n] = w.lo[k][s], hi[k][n] = w.hi[k][s];
             flat |= uint32_t(w.lo[k][s] == w.hi[k][s]) << k;
@@ -195,6 +213,30 @@ struct SmallWork {
         for (uint32_t s = n; s % kLanes != 0; ++s)
             for (int k = 0; k < 3; ++k) lo[k][s] = hi[k][s] = voxel.lo[k];
     }
+};
+
+/// The clipped polygons of one small subtree (a stack: a node's children's polygons are
+/// dropped when its subtree is done). Unfilled storage, so that making room costs nothing.
+class PolygonArena {
+public:
+    /// Room for k more vertices after the used ones (earlier pointers into the arena may move).
+    PolygonVertex* room(size_t k) {
+        if (size_ + k > cap_) {
+            const size_t cap = std::max(2 * cap_, size_ + k + 1024);
+            std::unique_ptr<PolygonVertex[]> v(new PolygonVertex[cap]);
+            std::copy(v_.get(), v_.get() + size_, v.get());
+            v_ = std::move(v);
+            cap_ = cap;
+        }
+        return v_.get() + size_;
+    }
+    const PolygonVertex* at(size_t i) const { return v_.get() + i; }
+    size_t size() const { return size_; }
+    void resize(size_t n) { size_ = n; }  // within room() only
+
+private:
+    std::unique_ptr<PolygonVertex[]> v_;
+    size_t size_ = 0, cap_ = 0;
 };
 
 /// Writes the events on axis k of bounds b[first, last), each with its index as its slot, to
@@ -301,6 +343,7 @@ struct ThreadState {
     std::vector<Route> route;
     std::vector<uint32_t> origin[2];
     std::vector<Event> filtered[3], fresh[2][3];
+    PolygonArena polygons;  ///< build_small's clipped triangles
 };
 
 class Recursion {
@@ -437,7 +480,7 @@ private:
         if (n <= small_) {
             const SmallWork sw = SmallWork::of(*w);
             release(std::move(w));
-            build_small(sw, depth, f, at);
+            build_small(sw, depth, f, at, state_.local().polygons);
             return;
         }
         const Plane p = depth < max_depth_ ? find_plane(*w, counted ? Records::kKept : Records::kKeep) : Plane{};
@@ -447,13 +490,16 @@ private:
             release(std::move(w));
             return;
         }
-        Children ch = split(std::move(w), p);
+        PolygonArena& polygons = state_.local().polygons;
+        const size_t mark = polygons.size();
+        Children ch = split(std::move(w), p, &polygons);
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = KdNode::interior(uint32_t(p.axis), p.pos, k);
         // An empty child is a leaf at once, so the other child's find_plane() is the next.
         build_fragment(std::move(ch.left), depth + 1, f, k, ch.empty_cut);
         build_fragment(std::move(ch.right), depth + 1, f, k + 1, ch.empty_cut);
+        polygons.resize(mark);
     }
 
     Plane choose_plane(const Work& w) const {
@@ -466,6 +512,36 @@ private:
         const Corners& c = corners_[t];
         return split_clipped_triangle(c.v[0], c.v[1], c.v[2], voxel, p.axis, p.pos);
     }
+    /// split_straddler() for a straddler whose clipped part is `kept` (a PolygonArena entry as
+    /// SmallWork::poly holds it; kNoPolygon: the triangle clipped to `voxel`). Its two parts
+    /// go to `polygons`, and their entries to part[0] and part[1] (kNoPolygon where a part
+    /// is not kept).
+    std::pair<AABB, AABB> split_part(uint32_t t, uint32_t kept, const AABB& voxel, const Plane& p,
+                                     PolygonArena& polygons, uint32_t (&part)[2]) const {
+        // Each part gets room for twice the polygon's vertices.
+        PolygonVertex* out = polygons.room(4 * kMaxKeptPolygon);
+        PolygonVertex clipped[12];
+        const PolygonVertex* in = clipped;
+        int m = 0;
+        if (kept == SmallWork::kNoPolygon) {
+            const Corners& c = corners_[t];
+            m = clip_triangle_polygon(c.v[0], c.v[1], c.v[2], voxel, clipped);
+        } else {
+            in = polygons.at(kept >> 4);
+            m = int(kept & 15);
+        }
+        int count[2];
+        const auto boxes = split_polygon(in, m, voxel, p.axis, p.pos, out, &count[0], out + 2 * m, &count[1]);
+        const size_t first[2] = {polygons.size(), polygons.size() + 2 * size_t(m)};
+        polygons.resize(first[1] + size_t(count[1]));
+        for (int i = 0; i < 2; ++i) {
+            const bool keep = c_.reuse_clipped_polygons && count[i] <= int(kMaxKeptPolygon) &&
+                              first[i] < (size_t(1) << 28);
+            part[i] = keep ? uint32_t(first[i]) << 4 | uint32_t(count[i]) : SmallWork::kNoPolygon;
+        }
+        return boxes;
+    }
+
     /// Starts loading triangle t's corners (a node's triangles lie anywhere in memory: on the
     /// 1M soup, waiting for them was a third of the split).
     void prefetch(uint32_t t) const {
@@ -475,8 +551,11 @@ private:
     }
 
     /// build_fragment for a node of at most small_ triangles: the same planes, clipping and
-    /// slot order as split(), with everything on the stack.
-    void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at) {
+    /// slot order as split(), with everything on the stack. A straddler's two clipped parts are
+    /// kept in `polygons` for the children, which split them again instead of clipping the
+    /// triangle to their voxel anew (same bounds to rounding: double-precision vertices,
+    /// rounded to float).
+    void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at, PolygonArena& polygons) {
         const Plane p = depth < max_depth_ ? find_plane_small(w) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
             f.nodes[at] = KdNode::leaf(uint32_t(f.prims.size()), w.n);
@@ -497,20 +576,23 @@ private:
             }
             child[side[s] - 1].add(w, s);
         }
+        const size_t mark = polygons.size();
         for (uint32_t s = 0; s < w.n; ++s) {
             if (side[s] != kBoth) continue;
             const uint32_t t = w.tris[s];
-            const auto boxes = split_straddler(t, w.voxel, p);
-            if (!boxes.first.is_empty()) child[0].add(t, boxes.first);
-            if (!boxes.second.is_empty()) child[1].add(t, boxes.second);
+            uint32_t part[2];
+            const auto boxes = split_part(t, w.poly[s], w.voxel, p, polygons, part);
+            if (!boxes.first.is_empty()) child[0].add(t, boxes.first, part[0]);
+            if (!boxes.second.is_empty()) child[1].add(t, boxes.second, part[1]);
         }
         child[0].pad();
         child[1].pad();
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = KdNode::interior(uint32_t(axis), p.pos, k);
-        build_small(child[0], depth + 1, f, k);
-        build_small(child[1], depth + 1, f, k + 1);
+        build_small(child[0], depth + 1, f, k, polygons);
+        build_small(child[1], depth + 1, f, k + 1, polygons);
+        polygons.resize(mark);
     }
 
     /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
@@ -686,8 +768,9 @@ private:
         bool empty_cut;  ///< one child is empty and the other is w, with a smaller voxel
     };
 
-    /// Splits w's triangles, bounds and events between two children.
-    Children split(std::unique_ptr<Work> wp, const Plane& p) {
+    /// Splits w's triangles, bounds and events between two children. Inside a fragment,
+    /// `polygons` keeps the straddlers' clipped parts for the children (see split_part()).
+    Children split(std::unique_ptr<Work> wp, const Plane& p, PolygonArena* polygons = nullptr) {
         ThreadState& ts = state_.local();
         const Work& w = *wp;
         const size_t n = w.tris.size();
@@ -733,6 +816,7 @@ private:
             r = {{uint32_t(to.tris.size()), uint32_t(to.tris.size())}, {keep, keep, keep}};
             to.tris.push_back(w.tris[s]);
             to.boxes.push_back(w.boxes[s]);
+            if (polygons) to.poly.push_back(w.poly.empty() ? SmallWork::kNoPolygon : w.poly[s]);
         }
         // Straddling triangles: clipped to each child's voxel, appended after the one-sided
         // ones (so that slot order, and with it the order of kept events, is preserved).
@@ -752,10 +836,14 @@ private:
                 ahead = next_straddler(ahead + 1);
             }
             const uint32_t t = w.tris[s];
-            const auto boxes = split_straddler(t, w.voxel, p);
+            uint32_t part[2];
+            const auto boxes = polygons ? split_part(t, w.poly.empty() ? SmallWork::kNoPolygon : w.poly[s], w.voxel, p,
+                                                     *polygons, part)
+                                        : split_straddler(t, w.voxel, p);
             for (int i = 0; i < 2; ++i) {
                 const AABB& box = i == 0 ? boxes.first : boxes.second;
                 if (box.is_empty()) continue;
+                if (polygons) child[i]->poly.push_back(part[i]);
                 Route& r = route[s];
                 r.slot[i] = uint32_t(child[i]->tris.size());
                 for (int k = 0; k < 3; ++k) r.keep[k] |= uint8_t(kept_events(w.boxes[s], box, k) << (3 * i));
@@ -810,7 +898,13 @@ private:
             Event* const fl = kept_at[0];
             Event* const fr = kept_at[1];
             size_t il = 0, ir = 0;
-            for (const Event& e : in) {
+            // A large node's route table is larger than the cache and the events reach it in
+            // position order, i.e. at random: its entries are fetched kRouteAhead events early.
+            const size_t m = in.size();
+            const size_t ahead = n >= kPrefetchRoutes ? std::min(m, kRouteAhead) : 0;
+            for (size_t j = 0; j < m; ++j) {
+                const Event& e = in[j];
+                if (j + ahead < m) __builtin_prefetch(&route[in[j + ahead].slot()]);
                 const Route& r = route[e.slot()];
                 const uint32_t keep = r.keep[k] >> e.type();
                 fl[il] = e.with_slot(r.slot[0]);

@@ -1,14 +1,13 @@
 // SPDX-License-Identifier: MIT
 #include "accel/core/clip.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace bvhlab::accel {
 namespace {
 
-struct P3 {
-    double v[3];
-};
+using P3 = PolygonVertex;
 
 /// Whether edge pq, whose ends lie at signed distances dp and dq from a plane, crosses it.
 bool crosses(double dp, double dq) { return (dp < 0 && dq > 0) || (dp > 0 && dq < 0); }
@@ -93,31 +92,65 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
     return r;
 }
 
-std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box, int axis, float pos) {
-    P3 buf[2][12];
-    const P3* poly = nullptr;
-    const int n = clip_to_box(a, b, c, box, buf, &poly);
-    // One pass over the clipped polygon's edges: each vertex bounds the side(s) it is on, and
-    // each edge that crosses the plane adds its crossing, exactly on the plane, to both.
+namespace {
+
+/// One pass over the polygon p[0, n)'s edges: each vertex bounds the side(s) it is on, and each
+/// edge that crosses the plane adds its crossing, exactly on the plane, to both. With kParts,
+/// the two parts' vertices are written too, in order.
+template <bool kParts>
+std::pair<AABB, AABB> split_pass(const P3* poly, int n, const AABB& box, int axis, float pos, P3* below,
+                                 int* n_below, P3* above, int* n_above) {
     AABB side[2] = {AABB::empty(), AABB::empty()};
+    int m[2] = {0, 0};
     for (int i = 0; i < n; ++i) {
         const P3& p = poly[i];
         const P3& q = poly[i + 1 == n ? 0 : i + 1];
         const double dp = p.v[axis] - double(pos), dq = q.v[axis] - double(pos);
         const Vec3 fp = to_float(p);
-        if (dp <= 0) side[0].extend(fp);
-        if (dp >= 0) side[1].extend(fp);
+        if (dp <= 0) {
+            side[0].extend(fp);
+            if (kParts) below[m[0]++] = p;
+        }
+        if (dp >= 0) {
+            side[1].extend(fp);
+            if (kParts) above[m[1]++] = p;
+        }
         if (crosses(dp, dq)) {
-            const Vec3 r = to_float(crossing(p, q, dp, dq, axis, pos));
-            side[0].extend(r);
-            side[1].extend(r);
+            const P3 r = crossing(p, q, dp, dq, axis, pos);
+            const Vec3 fr = to_float(r);
+            side[0].extend(fr);
+            side[1].extend(fr);
+            if (kParts) below[m[0]++] = above[m[1]++] = r;
         }
     }
+    if (kParts) *n_below = m[0], *n_above = m[1];
     // Rounding to float may step outside a side's box by an ulp; clamp back in.
     AABB cell[2] = {box, box};
     cell[0].hi[axis] = pos;
     cell[1].lo[axis] = pos;
     return {intersect(side[0], cell[0]), intersect(side[1], cell[1])};
+}
+
+}  // namespace
+
+std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box, int axis, float pos) {
+    P3 buf[2][12];
+    const P3* poly = nullptr;
+    const int n = clip_to_box(a, b, c, box, buf, &poly);
+    return split_pass<false>(poly, n, box, axis, pos, nullptr, nullptr, nullptr, nullptr);
+}
+
+int clip_triangle_polygon(Vec3 a, Vec3 b, Vec3 c, const AABB& box, PolygonVertex* out) {
+    P3 buf[2][12];
+    const P3* poly = nullptr;
+    const int n = clip_to_box(a, b, c, box, buf, &poly);
+    std::copy(poly, poly + n, out);
+    return n;
+}
+
+std::pair<AABB, AABB> split_polygon(const PolygonVertex* p, int n, const AABB& box, int axis, float pos,
+                                    PolygonVertex* below, int* n_below, PolygonVertex* above, int* n_above) {
+    return split_pass<true>(p, n, box, axis, pos, below, n_below, above, n_above);
 }
 
 }  // namespace bvhlab::accel

@@ -22,4 +22,21 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box);
 /// the polygon for both sides. A side the triangle does not reach is empty.
 std::pair<AABB, AABB> split_clipped_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box, int axis, float pos);
 
+/// A vertex of a clipped polygon, in double precision.
+struct PolygonVertex {
+    double v[3];
+};
+
+/// Triangle abc clipped to `box`, as split_clipped_triangle() clips it, into `out` (room for
+/// 12 vertices); returns the vertex count.
+int clip_triangle_polygon(Vec3 a, Vec3 b, Vec3 c, const AABB& box, PolygonVertex* out);
+
+/// split_clipped_triangle() for a convex polygon p[0, n) that lies in `box` (a triangle
+/// clipped to it): the bounds of its parts below and above x[axis] = pos, and the parts
+/// themselves in below[0, *n_below) and above[0, *n_above) (each with room for 2 n vertices).
+/// Splitting the parts again gives the same bounds, to rounding, as clipping the triangle to
+/// the smaller box anew.
+std::pair<AABB, AABB> split_polygon(const PolygonVertex* p, int n, const AABB& box, int axis, float pos,
+                                    PolygonVertex* below, int* n_below, PolygonVertex* above, int* n_above);
+
 }  // namespace bvhlab::accel

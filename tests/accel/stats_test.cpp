@@ -18,6 +18,53 @@ TEST(ClipTriangle, InsideOutsideAndHalf) {
     EXPECT_FLOAT_EQ(half.bounds.hi.y, 2.0f);
 }
 
+// A clipped part split again (a kd-tree's kept polygon) bounds what the triangle clipped to
+// the smaller box anew bounds, to the float rounding of its vertices; its parts are in order.
+TEST(ClipTriangle, SplitPolygonAgainMatchesClippingAnew) {
+    const Vec3 a{0.1f, 0.2f, 0.3f}, b{3.7f, 0.9f, 1.1f}, c{1.3f, 2.9f, 2.2f};
+    const AABB box{{0.5f, 0.4f, 0.2f}, {3.0f, 2.5f, 2.0f}};
+    PolygonVertex poly[12];
+    const int n = clip_triangle_polygon(a, b, c, box, poly);
+    ASSERT_GE(n, 3);
+    PolygonVertex lo[24], hi[24];
+    int n_lo = 0, n_hi = 0;
+    const auto first = split_polygon(poly, n, box, 0, 1.5f, lo, &n_lo, hi, &n_hi);
+    const auto same = [](const AABB& x, const AABB& y) {
+        return x.lo.x == y.lo.x && x.lo.y == y.lo.y && x.lo.z == y.lo.z && x.hi.x == y.hi.x && x.hi.y == y.hi.y &&
+               x.hi.z == y.hi.z;
+    };
+    const auto whole = split_clipped_triangle(a, b, c, box, 0, 1.5f);  // the same pass, bit for bit
+    EXPECT_TRUE(same(first.first, whole.first));
+    EXPECT_TRUE(same(first.second, whole.second));
+    ASSERT_GE(n_lo, 3);
+    ASSERT_GE(n_hi, 3);
+    // The lower part split again on y, against clipping the triangle to that box anew.
+    AABB left = box;
+    left.hi.x = 1.5f;
+    PolygonVertex lo2[48], hi2[48];
+    int m_lo = 0, m_hi = 0;
+    const auto again = split_polygon(lo, n_lo, left, 1, 1.2f, lo2, &m_lo, hi2, &m_hi);
+    const auto anew = split_clipped_triangle(a, b, c, left, 1, 1.2f);
+    for (int k = 0; k < 3; ++k) {
+        const float ulp = 1e-6f;
+        EXPECT_NEAR(again.first.lo[k], anew.first.lo[k], ulp) << k;
+        EXPECT_NEAR(again.first.hi[k], anew.first.hi[k], ulp) << k;
+        EXPECT_NEAR(again.second.lo[k], anew.second.lo[k], ulp) << k;
+        EXPECT_NEAR(again.second.hi[k], anew.second.hi[k], ulp) << k;
+    }
+    EXPECT_FLOAT_EQ(again.first.hi.y, 1.2f);
+    EXPECT_FLOAT_EQ(again.second.lo.y, 1.2f);
+    // Every vertex of a part lies on its side, and the two parts share the crossings.
+    for (int i = 0; i < m_lo; ++i) EXPECT_LE(lo2[i].v[1], double(1.2f));
+    for (int i = 0; i < m_hi; ++i) EXPECT_GE(hi2[i].v[1], double(1.2f));
+    // A plane below the polygon (its lowest z is the triangle's, 0.3) leaves the lower part
+    // empty and the upper one whole.
+    const auto miss = split_polygon(poly, n, box, 2, 0.25f, lo, &n_lo, hi, &n_hi);
+    EXPECT_TRUE(miss.first.is_empty());
+    EXPECT_EQ(n_lo, 0);
+    EXPECT_EQ(n_hi, n);
+}
+
 TEST(TreeStats, SahOfHandBuiltTree) {
     // Two unit triangles far apart on x; root over both, one leaf each.
     TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}, {9, 0, 0, 10, 0, 0, 9, 1, 0}});
