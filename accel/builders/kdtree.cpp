@@ -1131,10 +1131,18 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode,
                  "kd-tree small_node_size must be at most " + std::to_string(kMaxSmallNode));
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
-    Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
-    std::unique_ptr<Work> root = rec.root();
-    const AABB bounds = root->voxel;
-    std::unique_ptr<TopNode> tree = rec.build_top(std::move(root), 0);
+    AABB bounds;
+    std::unique_ptr<TopNode> tree;
+    {
+        Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
+        std::unique_ptr<Work> root = rec.root();
+        bounds = root->voxel;
+        tree = rec.build_top(std::move(root), 0);
+    }
+    // The recursion's buffers (the corners, the pooled arrays of the top levels' nodes, the
+    // sweep records; on furball ~0.5 GB) are freed before flatten() touches the final arrays,
+    // so that the OS can hand their just-freed pages back: on this VM a page the host already
+    // backs faults in ~2 us, a new one in ~10 us (experiments/NOTES.md, session 7).
     KdTree out = flatten(*tree, bounds);
     destroy_iteratively(std::move(tree));
     return out;
