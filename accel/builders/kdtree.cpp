@@ -1,17 +1,18 @@
 // SPDX-License-Identifier: MIT
-// O(N log N) SAH kd-tree build (Wald & Havran 2006). Each node keeps, per axis, its events
-// sorted by (position, type); one sweep per axis finds the best plane. Triangles are then
-// classified left / right / both by their clipped bounds; only the straddling ones are clipped,
-// once to the node's voxel and then split by the plane into both children's bounds ("perfect
-// splits"). Events whose bound the clip left in place are kept, already sorted, with the
-// others' when filtered; only the moved bounds get new events, sorted and merged in. Nodes of
-// up to small_node_size triangles are built on the stack without events: their planes are
-// counted directly, eight candidates at a time (same plane, less work). An empty-space cut
-// (57-62% of the interior nodes on the scans and furball with Wald & Havran's constants)
-// gives its parent's arrays whole to the non-empty child, which reuses the parent's sweep
-// counts and only re-prices the planes. Events refer to node-local triangle slots, so
-// concurrent subtrees never share state; below a size threshold a subtree is built by one
-// thread into its own fragment of the final node array.
+// O(N log N) SAH kd-tree build (Wald & Havran 2006). Each node keeps, per axis, its events sorted
+// by (position, type); one sweep per axis finds the best plane. Triangles are then classified as
+// left, right or both by their clipped bounds; only the straddling ones are clipped, once to the
+// node's voxel and then split by the plane into both children's bounds ("perfect splits"); inside
+// a fragment (below) the two clipped parts are kept, and a child splits its part again instead of
+// clipping the triangle anew. Events whose bound the clip left in place are kept, already sorted,
+// with the others' when filtered; only the moved bounds get new events, sorted and merged in.
+// Nodes of up to small_node_size triangles are built on the stack without events: their planes are
+// counted directly, eight candidates at a time (same plane, less work). An empty-space cut (57-62%
+// of the interior nodes on the scans and furball with Wald & Havran's constants) gives its
+// parent's arrays whole to the non-empty child, which reuses the parent's sweep counts and only
+// re-prices the planes. Events refer to node-local triangle slots, so concurrent subtrees never
+// share state; below a size threshold a subtree is built by one thread into its own fragment of
+// the final node array.
 #include "accel/builders/kdtree.h"
 
 #include <tbb/blocked_range.h>
@@ -38,7 +39,7 @@ enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
 constexpr uint32_t kSlotBits = 30;
 constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
 constexpr uint32_t kMaxSmallNode = KdTreeBuilder::kMaxSmallNodeSize;
-/// The most vertices of a clipped polygon that build_small keeps (a triangle clipped to a box
+/// The most vertices of a clipped polygon that a fragment keeps (a triangle clipped to a box
 /// has at most 9; more, from rounding, and the child clips the triangle anew).
 constexpr uint32_t kMaxKeptPolygon = 15;
 /// Meshes from this many triangles on set up the root with parallel tasks.
@@ -174,9 +175,9 @@ struct SmallWork {
     uint32_t n = 0;
     uint32_t flat = 0;  ///< bit k: some bound is flat (lo == hi) on axis k
     uint32_t tris[kMaxSmallNode];
-    /// Per slot, the triangle clipped to the voxel, when this small subtree has already
-    /// clipped it: its place in the thread's PolygonArena, as (first vertex << 4) | count;
-    /// kNoPolygon when the triangle is still to be clipped.
+    /// Per slot, the triangle clipped to the voxel, when this fragment has already clipped
+    /// it: its place in the thread's PolygonArena, as (first vertex << 4) | count; kNoPolygon
+    /// when the triangle is still to be clipped.
     uint32_t poly[kMaxSmallNode];
     alignas(32) float lo[3][kMaxSmallNode];
     alignas(32) float hi[3][kMaxSmallNode];
@@ -215,8 +216,9 @@ struct SmallWork {
     }
 };
 
-/// The clipped polygons of one small subtree (a stack: a node's children's polygons are
-/// dropped when its subtree is done). Unfilled storage, so that making room costs nothing.
+/// The clipped polygons of the fragment a thread is building (a stack: a node's children's
+/// polygons are dropped when its subtree is done). Unfilled storage, so that making room
+/// costs nothing.
 class PolygonArena {
 public:
     /// Room for k more vertices after the used ones (earlier pointers into the arena may move).
@@ -343,7 +345,7 @@ struct ThreadState {
     std::vector<Route> route;
     std::vector<uint32_t> origin[2];
     std::vector<Event> filtered[3], fresh[2][3];
-    PolygonArena polygons;  ///< build_small's clipped triangles
+    PolygonArena polygons;  ///< the clipped parts kept inside a fragment
 };
 
 class Recursion {

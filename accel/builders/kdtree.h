@@ -33,13 +33,13 @@ public:
         /// Let the small-node search use its AVX2 copy when the CPU has one (x86-64). Off:
         /// the portable copy, for comparison; both pick the same planes.
         bool use_avx2 = true;
-        /// Below small_node_size, a straddler's two clipped parts are kept and split again
-        /// in the children, instead of clipping the triangle to each child's voxel anew. The
-        /// bounds are the same up to double-precision rounding (the planes are applied in
-        /// another order), which can move a float bound by an ulp: so with it on, the tree
-        /// can differ from the one built with another small_node_size in the last bit of a
-        /// few bounds and splits. Off: every clip starts from the triangle, and the tree does
-        /// not depend on small_node_size at all (the tests check this).
+        /// Below task_threshold (inside a subtree that one thread builds), a straddler's two
+        /// clipped parts are kept and split again in the children, instead of clipping the
+        /// triangle to each child's voxel anew. The bounds are the same up to double-precision
+        /// rounding (the planes are applied in another order), which can move a float bound
+        /// by an ulp: so with it on, the tree can differ from one built with another
+        /// small_node_size or task_threshold in the last bit of a few bounds and splits. Off:
+        /// every clip starts from the triangle, and the tree depends on neither (tested).
         bool reuse_clipped_polygons = true;
     };
 
