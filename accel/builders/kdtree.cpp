@@ -603,6 +603,9 @@ private:
     /// Evaluated for kLanes planes at once (FV positions, IV counts).
     struct AxisCost {
         float lo, hi, face, side, ct, ci, bonus;
+        /// The small-node search looks for the cheapest plane's position only below this cost
+        /// (a plane that costs more loses to an earlier axis or to the leaf).
+        float below = INFINITY;
         template <typename F, typename I>
         F operator()(const F& pos, const I& nl, const I& nr) const {
             const F pl = face + side * (pos - lo), pr = face + side * (hi - pos);
@@ -931,14 +934,18 @@ private:
     /// find_plane for a node without events (at most small_ triangles): every bound inside
     /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
     /// same plane the sweep would make (ties: lower axis, then lower position, left first).
+    /// A plane that costs no less than the leaf (Ci n) is not returned: the caller makes a
+    /// leaf either way, and the search skips its position.
     Plane find_plane_small(const SmallWork& w) const {
         Plane best;
         const float area = w.voxel.area();
         if (!(area > 0.0f) || w.n == 0) return best;
         const float inv_area = 1.0f / area;
+        const float leaf = c_.intersection_cost * float(w.n);
         for (int k = 0; k < 3; ++k) {
             const bool flat = w.flat >> k & 1;
-            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
+            AxisCost cost = axis_cost(w.voxel, k, inv_area);
+            cost.below = std::min(best.cost, leaf);
             Plane p;
 #if BVHLAB_KD_AVX2
             if (avx2_)
@@ -1017,6 +1024,7 @@ private:
                 if (kFlat) low = low < right[l][v] ? low : right[l][v];
             }
         const float m = hmin(low);
+        if (!(m < cost.below)) return Plane{};
         FV at = inf;
         for (int l = 0; l < 2; ++l)
             for (uint32_t v = 0; v < vecs; ++v) {
