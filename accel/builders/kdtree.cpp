@@ -906,10 +906,10 @@ private:
             // A large node's route table is larger than the cache and the events reach it in
             // position order, i.e. at random: its entries are fetched kRouteAhead events early.
             const size_t m = in.size();
-            const size_t ahead = n >= kPrefetchRoutes ? std::min(m, kRouteAhead) : 0;
+            const size_t ahead = n >= kPrefetchRoutes ? kRouteAhead : 0;
             for (size_t j = 0; j < m; ++j) {
                 const Event& e = in[j];
-                if (j + ahead < m) __builtin_prefetch(&route[in[j + ahead].slot()]);
+                if (ahead != 0 && j + ahead < m) __builtin_prefetch(&route[in[j + ahead].slot()]);
                 const Route& r = route[e.slot()];
                 const uint32_t keep = r.keep[k] >> e.type();
                 fl[il] = e.with_slot(r.slot[0]);
