@@ -42,6 +42,8 @@ constexpr uint32_t kMaxSmallNode = KdTreeBuilder::kMaxSmallNodeSize;
 /// The most vertices of a clipped polygon that a fragment keeps (a triangle clipped to a box
 /// has at most 9; more, from rounding, and the child clips the triangle anew).
 constexpr uint32_t kMaxKeptPolygon = 15;
+/// A slot's kept-polygon entry when its triangle is still to be clipped (see SmallWork::poly).
+constexpr uint32_t kNoPolygon = ~0u;
 /// Meshes from this many triangles on set up the root with parallel tasks.
 constexpr size_t kParallelMin = 4096;
 /// Nodes from this many triangles on split their three axes' events as parallel tasks.
@@ -157,6 +159,7 @@ struct Work {
     /// Empty above the fragments (no part kept).
     std::vector<uint32_t> poly;
 
+    uint32_t polygon(size_t s) const { return poly.empty() ? kNoPolygon : poly[s]; }
     void clear() {
         tris.clear();
         boxes.clear();
@@ -186,11 +189,10 @@ struct SmallWork {
     static SmallWork of(const Work& w) {
         SmallWork sw;
         sw.voxel = w.voxel;
-        for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s], w.poly.empty() ? kNoPolygon : w.poly[s]);
+        for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s], w.polygon(s));
         sw.pad();
         return sw;
     }
-    static constexpr uint32_t kNoPolygon = ~0u;
     void add(uint32_t t, const AABB& b, uint32_t polygon) {
         tris[n] = t;
         poly[n] = polygon;
@@ -494,7 +496,7 @@ private:
         }
         PolygonArena& polygons = state_.local().polygons;
         const size_t mark = polygons.size();
-        Children ch = split(std::move(w), p, &polygons);
+        Children ch = split(std::move(w), p, c_.reuse_clipped_polygons ? &polygons : nullptr);
         const auto k = uint32_t(f.nodes.size());
         f.nodes.resize(k + 2);
         f.nodes[at] = KdNode::interior(uint32_t(p.axis), p.pos, k);
@@ -517,15 +519,19 @@ private:
     /// split_straddler() for a straddler whose clipped part is `kept` (a PolygonArena entry as
     /// SmallWork::poly holds it; kNoPolygon: the triangle clipped to `voxel`). Its two parts
     /// go to `polygons`, and their entries to part[0] and part[1] (kNoPolygon where a part
-    /// is not kept).
+    /// is not kept; with reuse_clipped_polygons off, none is, and this is split_straddler()).
     std::pair<AABB, AABB> split_part(uint32_t t, uint32_t kept, const AABB& voxel, const Plane& p,
                                      PolygonArena& polygons, uint32_t (&part)[2]) const {
+        if (!c_.reuse_clipped_polygons) {
+            part[0] = part[1] = kNoPolygon;
+            return split_straddler(t, voxel, p);
+        }
         // Each part gets room for twice the polygon's vertices.
         PolygonVertex* out = polygons.room(4 * kMaxKeptPolygon);
         PolygonVertex clipped[12];
         const PolygonVertex* in = clipped;
         int m = 0;
-        if (kept == SmallWork::kNoPolygon) {
+        if (kept == kNoPolygon) {
             const Corners& c = corners_[t];
             m = clip_triangle_polygon(c.v[0], c.v[1], c.v[2], voxel, clipped);
         } else {
@@ -537,9 +543,8 @@ private:
         const size_t first[2] = {polygons.size(), polygons.size() + 2 * size_t(m)};
         polygons.resize(first[1] + size_t(count[1]));
         for (int i = 0; i < 2; ++i) {
-            const bool keep = c_.reuse_clipped_polygons && count[i] <= int(kMaxKeptPolygon) &&
-                              first[i] < (size_t(1) << 28);
-            part[i] = keep ? uint32_t(first[i]) << 4 | uint32_t(count[i]) : SmallWork::kNoPolygon;
+            const bool keep = count[i] <= int(kMaxKeptPolygon) && first[i] < (size_t(1) << 28);
+            part[i] = keep ? uint32_t(first[i]) << 4 | uint32_t(count[i]) : kNoPolygon;
         }
         return boxes;
     }
@@ -821,7 +826,7 @@ private:
             r = {{uint32_t(to.tris.size()), uint32_t(to.tris.size())}, {keep, keep, keep}};
             to.tris.push_back(w.tris[s]);
             to.boxes.push_back(w.boxes[s]);
-            if (polygons) to.poly.push_back(w.poly.empty() ? SmallWork::kNoPolygon : w.poly[s]);
+            if (polygons) to.poly.push_back(w.polygon(s));
         }
         // Straddling triangles: clipped to each child's voxel, appended after the one-sided
         // ones (so that slot order, and with it the order of kept events, is preserved).
@@ -842,8 +847,7 @@ private:
             }
             const uint32_t t = w.tris[s];
             uint32_t part[2];
-            const auto boxes = polygons ? split_part(t, w.poly.empty() ? SmallWork::kNoPolygon : w.poly[s], w.voxel, p,
-                                                     *polygons, part)
+            const auto boxes = polygons ? split_part(t, w.polygon(s), w.voxel, p, *polygons, part)
                                         : split_straddler(t, w.voxel, p);
             for (int i = 0; i < 2; ++i) {
                 const AABB& box = i == 0 ? boxes.first : boxes.second;
