@@ -3,7 +3,10 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cfloat>
+#include <string>
+#include <utility>
 
 #include "accel/core/check.h"
 
@@ -83,19 +86,27 @@ Bvh2 convert_to_bvh2(const BuildTree& tree, const TriangleMesh& mesh) {
     auto fill_child = [&](Bvh2Node& n, int slot, const BuildNode& c, size_t ci) {
         set_child_box(n, slot, c.bounds);
         if (c.is_leaf()) {
-            n.child[slot] = ~int32_t(c.first_index);
-            n.count[slot] = c.prim_count;
+            if (c.prim_count > Bvh2Node::kMaxLeafCount)
+                throw Error("a leaf of " + std::to_string(c.prim_count) + " triangles does not fit the BVH2 layout (at most " +
+                            std::to_string(Bvh2Node::kMaxLeafCount) + ")");
+            if (c.first_index > Bvh2Node::kMaxLeafFirst)
+                throw Error("the BVH2 layout holds at most 2^25 triangle references; this tree has " +
+                            std::to_string(tree.prim_indices.size()));
+            n.child[slot] = Bvh2Node::leaf_ref(c.first_index, c.prim_count);
         } else {
             n.child[slot] = index[ci];
-            n.count[slot] = 0;
         }
+        n.reserved[slot] = 0;
     };
     if (root_leaf) {
+        // A root that is a leaf: both slots name it, the second behind an empty box. An empty
+        // (inverted) box still passes the slab test, so its triangles may be tested twice,
+        // which gives the same answer.
         Bvh2Node& n = out.nodes[0];
         fill_child(n, 0, tree.nodes[0], 0);
+        fill_child(n, 1, tree.nodes[0], 0);
         set_child_box(n, 1, AABB::empty());
-        n.child[1] = ~int32_t(0);
-        n.count[1] = 0;
+        out.depth = 1;
         return out;
     }
     for (size_t i = 0; i < tree.nodes.size(); ++i) {
@@ -104,6 +115,16 @@ Bvh2 convert_to_bvh2(const BuildTree& tree, const TriangleMesh& mesh) {
         Bvh2Node& n = out.nodes[size_t(index[i])];
         fill_child(n, 0, tree.nodes[b.first_index], b.first_index);
         fill_child(n, 1, tree.nodes[b.first_index + 1], b.first_index + 1);
+    }
+    // Depth in interior nodes, by an explicit walk (children may precede parents after
+    // reinsertion, so no single pass over the array gives it).
+    std::vector<std::pair<int32_t, uint32_t>> todo{{0, 1}};
+    while (!todo.empty()) {
+        const auto [node, depth] = todo.back();
+        todo.pop_back();
+        out.depth = std::max(out.depth, depth);
+        for (int32_t c : out.nodes[size_t(node)].child)
+            if (c >= 0) todo.push_back({c, depth + 1});
     }
     return out;
 }

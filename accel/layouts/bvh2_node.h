@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Binary BVH node in the layout of Aila & Laine (2009): both children's boxes in one node,
-// so one node fetch (four 16-byte loads on the GPU) decides which children a ray visits.
+// so one node fetch (three 16-byte loads and one 8-byte load on the GPU) decides which
+// children a ray visits.
 #pragma once
 
 #include <cstdint>
@@ -11,14 +12,27 @@
 
 namespace bvhlab::accel {
 
-/// 64 bytes. child[i] >= 0 is the index of an interior node; child[i] < 0 is a leaf whose
-/// triangles are tris[~child[i] .. ~child[i] + count[i]).
+/// 64 bytes. child[i] >= 0 is the index of an interior node; child[i] < 0 is a leaf, packed
+/// as ~(first << 6 | (count - 1)): its triangles are tris[first .. first + count). Packing the
+/// count into the reference lets the GPU kernels keep a leaf in one stack word, as Aila &
+/// Laine's kernels do (they end each leaf with a sentinel triangle instead).
 struct alignas(16) Bvh2Node {
     float c0_lo_x, c0_hi_x, c0_lo_y, c0_hi_y;  // 16 bytes: child 0, x and y slabs
     float c1_lo_x, c1_hi_x, c1_lo_y, c1_hi_y;  // 16 bytes: child 1, x and y slabs
     float c0_lo_z, c0_hi_z, c1_lo_z, c1_hi_z;  // 16 bytes: both children, z slabs
-    int32_t child[2];                          // 8 bytes
-    uint32_t count[2];                         // 8 bytes: leaf triangle counts; total 64 bytes
+    int32_t child[2];                          // 8 bytes: node index, or packed leaf
+    uint32_t reserved[2];                      // 8 bytes: zero; total 64 bytes
+
+    static constexpr uint32_t kLeafCountBits = 6;
+    static constexpr uint32_t kMaxLeafCount = 1u << kLeafCountBits;         ///< 64
+    static constexpr uint32_t kMaxLeafFirst = (1u << (31 - kLeafCountBits)) - 1;  ///< 2^25 - 1
+
+    /// A leaf reference; count in 1..kMaxLeafCount, first <= kMaxLeafFirst.
+    BVHLAB_HD static int32_t leaf_ref(uint32_t first, uint32_t count) {
+        return ~int32_t(first << kLeafCountBits | (count - 1));
+    }
+    BVHLAB_HD static uint32_t leaf_first(int32_t ref) { return uint32_t(~ref) >> kLeafCountBits; }
+    BVHLAB_HD static uint32_t leaf_count(int32_t ref) { return (uint32_t(~ref) & (kMaxLeafCount - 1)) + 1; }
 };
 static_assert(sizeof(Bvh2Node) == 64 && alignof(Bvh2Node) == 16, "Bvh2Node layout");
 
@@ -28,6 +42,9 @@ struct Bvh2 {
     std::vector<Bvh2Node> nodes;
     std::vector<WoopTriangle> tris;
     std::vector<uint32_t> tri_ids;
+    /// Interior nodes on the longest root-to-leaf path: a traversal that pushes at most one
+    /// entry per interior node needs a stack of this many entries.
+    uint32_t depth = 0;
 
     size_t bytes() const {
         return nodes.size() * sizeof(Bvh2Node) + tris.size() * sizeof(WoopTriangle) +

@@ -23,16 +23,24 @@ struct alignas(16) WoopTriangle {
     /// returns true. Parallel rays give a NaN or infinite t, which the comparisons reject.
     BVHLAB_HD BVHLAB_FORCEINLINE bool intersect(Vec3 o, Vec3 d, float tmin, float tmax, float& t_out,
                                                 float& u_out, float& v_out) const {
-        const float oz = row[0][3] - (o.x * row[0][0] + o.y * row[0][1] + o.z * row[0][2]);
-        const float dz = d.x * row[0][0] + d.y * row[0][1] + d.z * row[0][2];
+        return intersect_rows(row[0], row[1], row[2], o, d, tmin, tmax, t_out, u_out, v_out);
+    }
+
+    /// The same test on three rows held elsewhere: the GPU kernels load them as three
+    /// 16-byte read-only loads and call this, so every tracer shares one triangle test.
+    BVHLAB_HD BVHLAB_FORCEINLINE static bool intersect_rows(const float* r0, const float* r1, const float* r2,
+                                                            Vec3 o, Vec3 d, float tmin, float tmax, float& t_out,
+                                                            float& u_out, float& v_out) {
+        const float oz = r0[3] - (o.x * r0[0] + o.y * r0[1] + o.z * r0[2]);
+        const float dz = d.x * r0[0] + d.y * r0[1] + d.z * r0[2];
         const float t = oz / dz;
         if (!(t > tmin && t < tmax)) return false;
-        const float ox = row[1][3] + o.x * row[1][0] + o.y * row[1][1] + o.z * row[1][2];
-        const float dx = d.x * row[1][0] + d.y * row[1][1] + d.z * row[1][2];
+        const float ox = r1[3] + o.x * r1[0] + o.y * r1[1] + o.z * r1[2];
+        const float dx = d.x * r1[0] + d.y * r1[1] + d.z * r1[2];
         const float u = ox + t * dx;
         if (!(u >= 0.0f)) return false;
-        const float oy = row[2][3] + o.x * row[2][0] + o.y * row[2][1] + o.z * row[2][2];
-        const float dy = d.x * row[2][0] + d.y * row[2][1] + d.z * row[2][2];
+        const float oy = r2[3] + o.x * r2[0] + o.y * r2[1] + o.z * r2[2];
+        const float dy = d.x * r2[0] + d.y * r2[1] + d.z * r2[2];
         const float v = oy + t * dy;
         if (!(v >= 0.0f && u + v <= 1.0f)) return false;
         t_out = t;

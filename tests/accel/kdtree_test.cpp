@@ -10,6 +10,7 @@
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "tests/support/test_support.h"
+#include "accel/layouts/kd_convert.h"
 #include "traversal/cpu/kd_trace.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
@@ -194,20 +195,19 @@ TEST_P(KdTraversal, ShortStackEqualsFullStackAndEmbree) {
     pc.camera = trav::framing_camera(m);
     pc.primary = {160, 120, 1, 0};
     trav::RayProtocol proto(m, oracle, pc);
-    const trav::KdTracer full(t, m, 64);
+    const KdLayout full = convert_to_kd_layout(t, m);
     for (int type = 0; type < 4; ++type) {
         SCOPED_TRACE(trav::ray_type_name(trav::RayType(type)));
         const trav::RaySet set = proto.make(trav::RayType(type));
         std::vector<trav::Hit> ref, ours;
-        trace_kd_cpu(full, set.rays, set.query, ours);
+        trav::trace_kd_cpu(full, 64, set.rays, set.query, ours);
         oracle.trace(set.rays, set.query, ref);
         const trav::CompareReport rep = trav::compare_hits(m, set.rays, set.query, ours, ref,
                                                            [&](const trav::Ray& r) { return oracle.intersect(r); });
         EXPECT_EQ(rep.mismatches, 0u);
         for (int k = 1; k <= 8; ++k) {
-            const trav::KdTracer shorty(t, m, k);
             std::vector<trav::Hit> h;
-            trace_kd_cpu(shorty, set.rays, set.query, h);
+            trav::trace_kd_cpu(full, k, set.rays, set.query, h);
             size_t differ = 0;
             for (size_t i = 0; i < h.size(); ++i)
                 differ += h[i].tri != ours[i].tri || (h[i].is_hit() && h[i].t != ours[i].t);
@@ -228,11 +228,11 @@ TEST(KdTraversal, CornellBoxAgreesWithEmbree) {
     pc.primary = {160, 120, 1, 0};
     trav::RayProtocol proto(m, oracle, pc);
     for (int k : {1, 64}) {
-        const trav::KdTracer kd(KdTreeBuilder().build(m), m, k);
+        const KdLayout kd = convert_to_kd_layout(KdTreeBuilder().build(m), m);
         for (int type = 0; type < 4; ++type) {
             const trav::RaySet set = proto.make(trav::RayType(type));
             std::vector<trav::Hit> ours, ref;
-            trace_kd_cpu(kd, set.rays, set.query, ours);
+            trav::trace_kd_cpu(kd, k, set.rays, set.query, ours);
             oracle.trace(set.rays, set.query, ref);
             EXPECT_EQ(trav::compare_hits(m, set.rays, set.query, ours, ref,
                                          [&](const trav::Ray& r) { return oracle.intersect(r); })

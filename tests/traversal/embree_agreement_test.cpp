@@ -10,6 +10,7 @@
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/kd_convert.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/cpu/kd_trace.h"
@@ -112,13 +113,12 @@ TEST(EmbreeAgreement, BenchmarkScenes) {
             SCOPED_TRACE(accel::builder_name(b));
             expect_agreement(mesh, cam, e.ao_length, 160, 120, b);
         }
-        const accel::KdTree kd = accel::KdTreeBuilder().build(mesh);
+        const accel::KdLayout kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);
         for (int stack : {64, 2}) {
             SCOPED_TRACE("kdtree stack " + std::to_string(stack));
-            const KdTracer tracer(kd, mesh, stack);
             expect_agreement_with(mesh, cam, e.ao_length, 160, 120,
                                   [&](const RaySet& set, std::vector<Hit>& hits) {
-                                      trace_kd_cpu(tracer, set.rays, set.query, hits);
+                                      trace_kd_cpu(kd, stack, set.rays, set.query, hits);
                                   });
         }
     }

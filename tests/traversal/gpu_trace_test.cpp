@@ -1,16 +1,20 @@
 // SPDX-License-Identifier: MIT
-// GPU tests (ctest label "gpu"): the plain CUDA kernel runs the same traverse_bvh2 as the CPU
-// tracer; its hits must match the CPU's and agree with Embree. Skips without a device.
+// GPU tests (ctest label "gpu"), parameterised over the kernel registry: a new kernel is
+// tested without new test code. Every kernel x {closest, any} x {binned, SBVH, or the
+// kd-tree for kd kernels} on generated scenes and the Cornell box must agree with Embree
+// (0 real mismatches) and write every hit (the tracer poisons the hit buffer before each
+// launch). Each test skips with the reason when there is no device.
 #include <gtest/gtest.h>
 
 #include "accel/builders/builder.h"
+#include "accel/builders/kdtree.h"
 #include "accel/core/check.h"
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/kd_convert.h"
 #include "tests/support/test_support.h"
-#include "traversal/cpu/cpu_trace.h"
-#include "traversal/launch.h"
+#include "traversal/gpu/gpu_tracer.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
 
@@ -26,72 +30,164 @@ std::string no_gpu_reason() {
 #define BVHLAB_SKIP_WITHOUT_GPU()                                       \
     if (const std::string why = no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 
-void expect_gpu_matches(const accel::TriangleMesh& mesh, const Camera& cam, uint32_t w, uint32_t h) {
-    accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, mesh, {}).tree, mesh);
-    EmbreeOracle oracle(mesh);
-    ProtocolConfig cfg;
-    cfg.camera = cam;
-    cfg.primary = {w, h, 1, 0};
-    RayProtocol proto(mesh, oracle, cfg);
-    GpuBvh2 gpu(bvh);
-    for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
-        SCOPED_TRACE(ray_type_name(t));
-        RaySet set = proto.make(t);
-        std::vector<Hit> g, c, ref;
-        gpu.trace(set.rays, set.query, g);
-        trace_cpu(bvh, set.rays, set.query, c);
-        ASSERT_EQ(g.size(), set.rays.size());
-        // Same code on both sides; only FMA contraction on the device may move a t by an ulp
-        // and flip an edge case, so ids must match on all but a handful of rays.
-        size_t differ = 0;
-        for (size_t i = 0; i < g.size(); ++i) differ += g[i].tri != c[i].tri;
-        EXPECT_LE(differ, set.rays.size() / 10000 + 2);
-        oracle.trace(set.rays, set.query, ref);
-        CompareReport rep = compare_hits(mesh, set.rays, set.query, g, ref, [&](const Ray& r) { return oracle.intersect(r); });
-        EXPECT_EQ(rep.mismatches, 0u);
+Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder) {
+    Structure s;
+    s.layout = layout;
+    if (layout == Layout::kBvh2) {
+        s.name = std::string("bvh2/") + accel::builder_name(builder);
+        s.bvh2 = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
+    } else {
+        s.name = "kdtree";
+        s.kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);
     }
+    return s;
+}
+
+struct TestScene {
+    std::string name;
+    accel::TriangleMesh mesh;
+    Camera camera;
+    uint32_t width, height;
+};
+
+std::vector<TestScene> test_scenes() {
+    std::vector<TestScene> out;
+    TestScene cb{"cornell-box", accel::load_obj(test::data_dir() + "/cornell_box.obj"), {}, 128, 96};
+    cb.camera.eye = {278, 273, -800};
+    cb.camera.target = {278, 273, 0};
+    cb.camera.fov_y_deg = 39.3f;
+    out.push_back(std::move(cb));
+    for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
+        accel::TriangleMesh m = accel::make_procedural(kind, 30000, 7);
+        const Camera cam = framing_camera(m);
+        out.push_back({kind == accel::ProceduralKind::kSoup ? "soup" : "structured", std::move(m), cam, 160, 120});
+    }
+    return out;
+}
+
+/// Every hit written (no poison left) and a real triangle id or a miss.
+size_t unwritten_or_invalid(const std::vector<Hit>& hits, size_t triangles) {
+    size_t bad = 0;
+    for (const Hit& h : hits) bad += !(h.tri == -1 || (h.tri >= 0 && size_t(h.tri) < triangles));
+    return bad;
+}
+
+std::vector<std::string> kernel_names() {
+    std::vector<std::string> names;
+    for (const KernelInfo& k : registered_kernels()) names.push_back(k.name);
+    return names;
+}
+
+std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
+    std::string s = info.param;
+    for (char& c : s)
+        if (c == '-') c = '_';
+    return s;
 }
 
 }  // namespace
 
-TEST(GpuTrace, CornellBoxMatchesCpuAndEmbree) {
-    BVHLAB_SKIP_WITHOUT_GPU();
-    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
-    Camera cam;
-    cam.eye = {278, 273, -800};
-    cam.target = {278, 273, 0};
-    cam.fov_y_deg = 39.3f;
-    expect_gpu_matches(mesh, cam, 256, 192);
-}
+class GpuKernel : public ::testing::TestWithParam<std::string> {};
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(GpuKernel);
 
-TEST(GpuTrace, GeneratedScenesMatchCpuAndEmbree) {
+TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
-        accel::TriangleMesh mesh = accel::make_procedural(kind, 100000, 7);
-        expect_gpu_matches(mesh, framing_camera(mesh), 320, 240);
+    const KernelInfo& kernel = find_kernel(GetParam());
+    for (const TestScene& scene : test_scenes()) {
+        SCOPED_TRACE(scene.name);
+        EmbreeOracle oracle(scene.mesh);
+        ProtocolConfig cfg;
+        cfg.camera = scene.camera;
+        cfg.primary = {scene.width, scene.height, 1, 0};
+        RayProtocol proto(scene.mesh, oracle, cfg);
+        std::vector<accel::BuilderKind> builders{accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh};
+        if (kernel.layout == Layout::kKd) builders = {accel::BuilderKind::kBinned};  // one kd-tree
+        for (accel::BuilderKind builder : builders) {
+            const Structure s = make_structure(scene.mesh, kernel.layout, builder);
+            SCOPED_TRACE(s.name);
+            auto device = std::make_shared<const DeviceStructure>(s);
+            std::vector<GpuTraceOptions> options{{}};
+            if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
+            for (const GpuTraceOptions& opt : options) {
+                SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
+                auto tracer = make_gpu_tracer(device, kernel, opt);
+                // primary and diffuse are closest-hit queries, AO and shadow any-hit ones.
+                for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
+                    SCOPED_TRACE(ray_type_name(t));
+                    const RaySet set = proto.make(t);
+                    std::vector<Hit> ours, ref;
+                    tracer->trace(set, ours);
+                    ASSERT_EQ(ours.size(), set.rays.size());
+                    EXPECT_EQ(unwritten_or_invalid(ours, scene.mesh.triangle_count()), 0u);
+                    oracle.trace(set.rays, set.query, ref);
+                    const CompareReport rep = compare_hits(scene.mesh, set.rays, set.query, ours, ref,
+                                                           [&](const Ray& r) { return oracle.intersect(r); });
+                    EXPECT_EQ(rep.mismatches, 0u);
+                    EXPECT_LE(rep.ties, set.rays.size() / 1000 + 1);
+                }
+            }
+        }
     }
 }
 
-TEST(GpuTrace, EmptyRaySetAndReuse) {
+TEST_P(GpuKernel, OddCountsEmptySetsAndTheDeviceCount) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kSoup, 100, 1);
-    accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, mesh, {}).tree, mesh);
-    GpuBvh2 gpu(bvh);
-    std::vector<Hit> hits{Hit::miss()};
-    gpu.trace({}, Query::kClosest, hits);
-    EXPECT_TRUE(hits.empty());
-    std::vector<Ray> rays(1000, Ray{{0.5f, 0.5f, -1.0f}, 0.0f, {0, 0, 1}, INFINITY});
-    gpu.trace(rays, Query::kAny, hits);
-    EXPECT_EQ(hits.size(), 1000u);
+    const KernelInfo& kernel = find_kernel(GetParam());
+    const accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kSoup, 2000, 3);
+    const Structure s = make_structure(mesh, kernel.layout, accel::BuilderKind::kBinned);
+    auto device = std::make_shared<const DeviceStructure>(s);
+    auto tracer = make_gpu_tracer(device, kernel);
+    EmbreeOracle oracle(mesh);
+    ProtocolConfig cfg;
+    cfg.camera = framing_camera(mesh);
+    cfg.primary = {37, 29, 1, 0};  // 1073 rays: not a multiple of the warp or block size
+    RayProtocol proto(mesh, oracle, cfg);
+    const RaySet set = proto.make(RayType::kPrimary);
+    for (size_t n : {size_t(0), size_t(1), size_t(31), size_t(33), set.rays.size()}) {
+        SCOPED_TRACE(n);
+        const std::vector<Ray> rays(set.rays.begin(), set.rays.begin() + long(n));
+        std::vector<Hit> ours, ref;
+        tracer->trace({rays, Query::kClosest}, ours);
+        ASSERT_EQ(ours.size(), n);
+        oracle.trace(rays, Query::kClosest, ref);
+        EXPECT_EQ(compare_hits(mesh, rays, Query::kClosest, ours, ref, [&](const Ray& r) { return oracle.intersect(r); })
+                      .mismatches,
+                  0u);
+    }
+    // A queue whose device count is below its capacity: rays past the count stay untouched
+    // (poisoned), the first `count` are traced. This is how a wavefront renderer calls it.
+    RayQueue queue;
+    queue.upload(set.rays);
+    queue.set_count(100);
+    queue.poison_hits();
+    DeviceBuffer<uint32_t> next(1);
+    next.fill_bytes(0);
+    launch_on_queue(*device, kernel, queue, Query::kClosest, next.data());
+    std::vector<Hit> hits;
+    queue.download_hits(hits, set.rays.size());
+    std::vector<Hit> ref;
+    oracle.trace(set.rays, Query::kClosest, ref);
+    for (size_t i = 0; i < hits.size(); ++i) {
+        if (i < 100) {
+            EXPECT_EQ(hits[i].tri, ref[i].tri) << i;
+        } else {
+            EXPECT_EQ(hits[i].tri, 0x7F7F7F7F) << i;
+        }
+    }
 }
+
+INSTANTIATE_TEST_SUITE_P(Registry, GpuKernel, ::testing::ValuesIn(kernel_names()), param_name);
 
 TEST(GpuTrace, ReportsWhyWithoutDevice) {
     std::string why;
     if (gpu_available(&why)) GTEST_SKIP() << "a GPU is present: " << gpu_description();
     EXPECT_FALSE(why.empty());
-    accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1);
-    accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, mesh, {}).tree, mesh);
-    EXPECT_THROW(GpuBvh2 g(bvh), Error);
+    Structure s;
+    s.bvh2 = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned,
+                                                       accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1), {})
+                                        .tree,
+                                    accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1));
+    EXPECT_THROW(DeviceStructure d(s), Error);
 }
 
 }  // namespace bvhlab::trav

@@ -12,7 +12,7 @@ namespace bvhlab::cli {
 
 void print_build_table(const Scene& s, const Built& b) {
     const auto& r = b.record;
-    if (b.kd) {
+    if (b.is_kd()) {
         std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
         std::printf("builder      SAH kd-tree (Wald-Havran O(N log N))  build %.1f ms, depth %llu of %d\n",
                     b.result.build_ms, (unsigned long long)r["depth"].get<uint64_t>(), r["max_depth"].get<int>());
@@ -22,7 +22,8 @@ void print_build_table(const Scene& s, const Built& b) {
         std::printf("kd SAH       %.2f (Ct = %g, Ci = %g, empty bonus %g)\n", r["sah"].get<double>(),
                     r["sah_constants"]["traversal"].get<double>(), r["sah_constants"]["intersection"].get<double>(),
                     r["sah_constants"]["empty_bonus"].get<double>());
-        std::printf("bytes        %zu; traversal %s\n", r["bytes"].get<size_t>(), b.kernel.c_str());
+        std::printf("bytes        %zu (tree), %zu (kd layout + Woop triangles)\n", r["bytes"].get<size_t>(),
+                    b.structure.bytes());
         return;
     }
     std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
@@ -35,7 +36,7 @@ void print_build_table(const Scene& s, const Built& b) {
     std::printf("SAH          %.4f (Ct = Ci = 1, root-normalised)\n", b.stats.sah);
     if (b.stats.epo >= 0) std::printf("EPO          %.4f\n", b.stats.epo);
     std::printf("bytes        %llu (BuildTree), %zu (bvh2 layout + Woop triangles)\n",
-                (unsigned long long)b.stats.bytes, b.bvh.bytes());
+                (unsigned long long)b.stats.bytes, b.structure.bytes());
 }
 
 void register_build(CLI::App& app, Globals& g) {
@@ -58,14 +59,14 @@ void register_build(CLI::App& app, Globals& g) {
             meta.scene_hash = s.hash;
             if (b.loaded_meta) {  // re-saving a loaded file keeps its provenance
                 meta = *b.loaded_meta;
-            } else if (b.kd) {
+            } else if (b.is_kd()) {
                 meta.kdtree = true;
                 meta.kd = o->build.kd;
             } else {
                 meta.builder = o->build.kind();
                 meta.options = o->build.opts;
             }
-            if (b.kd) accel::write_kd_file(o->out, b.kd->tree, meta);
+            if (b.is_kd()) accel::write_kd_file(o->out, b.structure.kd.tree, meta);
             else accel::write_tree_file(o->out, b.result.tree, meta);
             b.record["structure_file"] = o->out;
         }

@@ -8,7 +8,7 @@
 
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
-#include "traversal/cpu/cpu_trace.h"
+#include "traversal/tracer.h"
 
 namespace bvhlab::cli {
 namespace {
@@ -57,7 +57,7 @@ void register_quality(CLI::App& app, Globals& g) {
             std::vector<trav::TraversalCounters> c;
             {
                 Stage st(g, std::string("counting traversal work of ") + trav::ray_type_name(t) + " rays");
-                trace_cpu_any(b, set, hits, &c);
+                trav::trace_cpu_counted(b.structure, o->build.kd_stack, set, hits, &c);
             }
             std::vector<uint32_t> nodes(c.size()), leaves(c.size()), tris(c.size());
             for (size_t i = 0; i < c.size(); ++i) {
@@ -66,8 +66,8 @@ void register_quality(CLI::App& app, Globals& g) {
                 tris[i] = c[i].tri_tests;
             }
             nlohmann::json j = base_record("ray_cost", s);
-            j["structure"] = b.structure;
-            j["kernel"] = b.kernel;
+            j["structure"] = b.structure.name;
+            j["kernel"] = trav::make_cpu_tracer(b.structure, o->build.kd_stack)->name();
             j["ray_type"] = trav::ray_type_name(t);
             j["rays"] = set.rays.size();
             j["nodes"] = distribution(std::move(nodes));
@@ -75,7 +75,7 @@ void register_quality(CLI::App& app, Globals& g) {
             j["tri_tests"] = distribution(std::move(tris));
             j["sah"] = b.stats.sah;
             j["epo"] = b.record["epo"];
-            if (b.kd) j["sah_constants"] = b.record["sah_constants"];
+            if (b.is_kd()) j["sah_constants"] = b.record["sah_constants"];
             j["protocol"] = protocol_json(o->rays.for_scene(s));
             if (g.json) {
                 emit(j);

@@ -21,6 +21,7 @@ void register_run(CLI::App& app, Globals& g) {
         BuildOptions build;
         RayOptions rays;
         BenchSettings bench{3, 1};
+        TraceOptions trace;
         trav::CompareConfig cc;
     };
     auto o = std::make_shared<Opts>();
@@ -32,10 +33,9 @@ void register_run(CLI::App& app, Globals& g) {
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
-    add_device_option(*sub, o->bench.device);
+    o->trace.add_to(*sub);
     sub->callback([o, &g] {
-        std::string why;
-        if (o->bench.device == "gpu" && !trav::gpu_available(&why)) throw Error("--device gpu: " + why);
+        o->trace.validate(o->build);
         std::vector<std::string> scenes = o->scenes;
         if (scenes.empty()) {
             scenes.push_back(data_dir() + "/cornell_box.obj");
@@ -54,21 +54,23 @@ void register_run(CLI::App& app, Globals& g) {
             Row row{s.name, b.record, {}, {}};
             if (g.json) emit(b.record);
             trav::EmbreeOracle oracle(s.mesh);
+            auto tracers = make_tracers(b, o->trace, o->build, &oracle);
             trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
             for (trav::RayType t : types) {
-                trav::RaySet set = proto.make(t);
-                std::vector<trav::Hit> hits;
-                nlohmann::json bj = bench_ray_set(s, b, set, trav::ray_type_name(t), o->bench, g, &hits);
-                nlohmann::json vj = verify_ray_set(s, oracle, set, hits, trav::ray_type_name(t), b.structure, o->cc, g,
-                                                   o->bench.device, b.kernel);
-                bj["protocol"] = vj["protocol"] = protocol_json(o->rays.for_scene(s));
-                if (g.json) {
-                    emit(bj);
-                    emit(vj);
+                const trav::RaySet set = proto.make(t);
+                const CheckedSet cs = check_set(oracle, set, trav::ray_type_name(t));
+                for (auto& tracer : tracers) {
+                    nlohmann::json vj;
+                    nlohmann::json bj = bench_ray_set(s, b, *tracer, oracle, cs, o->bench, o->cc, g, nullptr, &vj);
+                    bj["protocol"] = vj["protocol"] = protocol_json(o->rays.for_scene(s));
+                    if (g.json) {
+                        emit(bj);
+                        emit(vj);
+                    }
+                    if (vj["mismatches"].get<size_t>() > 0) g_exit_code = 1;
+                    row.bench.push_back(bj);
+                    row.verify.push_back(vj);
                 }
-                if (vj["mismatches"].get<size_t>() > 0) g_exit_code = 1;
-                row.bench.push_back(bj);
-                row.verify.push_back(vj);
             }
             if (!g.json) {
                 std::printf("\n== %s ==\n", s.name.c_str());
@@ -93,7 +95,8 @@ void register_run(CLI::App& app, Globals& g) {
                 const double epo = r.build["epo"].is_null() ? -1.0 : r.build["epo"].get<double>();
                 std::printf("%-16s %10zu %8.3f %8.3f %9.1f", r.scene.c_str(), r.build["triangles"].get<size_t>(),
                             r.build["sah"].get<double>(), epo, r.build["build_ms"].get<double>());
-                for (const auto& bj : r.bench) std::printf(" %10.2f", bj["mrays_per_s"].get<double>());
+                for (const auto& bj : r.bench)
+                    std::printf(" %10.2f", bj["status"] == "ok" ? bj["mrays_per_s"].get<double>() : 0.0);
                 std::printf(" %10zu\n", mism);
             }
         }

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// `bvhlab verify`: every hit against Embree, ray by ray; exit 1 on any real mismatch.
+// `bvhlab verify`: every hit against Embree, ray by ray, for one tracer or every GPU kernel
+// (--kernel all); exit 1 on any real mismatch.
 #include <cstdio>
 #include <memory>
 
@@ -11,22 +12,24 @@
 namespace bvhlab::cli {
 
 void print_verify_header() {
-    std::printf("%-10s %12s %12s %8s %10s   %s\n", "rays", "count", "agree", "ties", "mismatches", "ties: shared-edge/near-edge/interval-end/coincident");
+    std::printf("%-10s %-24s %12s %12s %8s %10s   %s\n", "rays", "kernel", "count", "agree", "ties", "mismatches",
+                "ties: shared-edge/near-edge/interval-end/coincident");
 }
 
 void print_verify_row(const nlohmann::json& j) {
-    std::printf("%-10s %12zu %12zu %8zu %10zu   %zu/%zu/%zu/%zu\n", j["ray_type"].get<std::string>().c_str(),
-                j["rays"].get<size_t>(), j["agree"].get<size_t>(), j["ties"].get<size_t>(),
-                j["mismatches"].get<size_t>(), j["ties_shared_edge"].get<size_t>(),
+    std::printf("%-10s %-24s %12zu %12zu %8zu %10zu   %zu/%zu/%zu/%zu\n", j["ray_type"].get<std::string>().c_str(),
+                j["kernel"].get<std::string>().c_str(), j["rays"].get<size_t>(), j["agree"].get<size_t>(),
+                j["ties"].get<size_t>(), j["mismatches"].get<size_t>(), j["ties_shared_edge"].get<size_t>(),
                 j["ties_near_edge"].get<size_t>(), j["ties_interval_end"].get<size_t>(),
                 j["ties_coincident"].get<size_t>());
 }
 
 void register_verify(CLI::App& app, Globals& g) {
     struct Opts {
-        std::string scene, types = "all", rays_file, hits_file, device = "cpu";
+        std::string scene, types = "all", rays_file, hits_file;
         BuildOptions build;
         RayOptions rays;
+        TraceOptions trace;
         trav::CompareConfig cc;
     };
     auto o = std::make_shared<Opts>();
@@ -35,48 +38,54 @@ void register_verify(CLI::App& app, Globals& g) {
     auto* types = sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
     auto* file = sub->add_option("--rays", o->rays_file, "verify on this ray file instead of protocol rays")->check(CLI::ExistingFile);
     file->excludes(types);
-    sub->add_option("--hits", o->hits_file, "check this hit file (e.g. from another tool) instead of bvhlab's tracer")
-        ->check(CLI::ExistingFile)
-        ->needs(file);
+    auto* hits = sub->add_option("--hits", o->hits_file, "check this hit file (e.g. from another tool) instead of bvhlab's tracer")
+                     ->check(CLI::ExistingFile)
+                     ->needs(file);
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
-    add_device_option(*sub, o->device);
-    sub->callback([o, &g, file] {
-        std::string why;
-        if (o->device == "gpu" && !trav::gpu_available(&why)) throw Error("--device gpu: " + why);
+    o->trace.add_to(*sub);
+    sub->callback([o, &g, file, hits] {
+        o->trace.validate(o->build);
+        if (hits->count() && (o->trace.kernel_flag->count() || o->trace.device != "cpu"))
+            throw Error("--hits checks a hit file; --device and --kernel choose a tracer, which it does not use");
         Scene s = load_scene(o->scene, g);
         trav::EmbreeOracle oracle(s.mesh);
         std::vector<nlohmann::json> rows;
-        if (file->count()) {
-            trav::RaySet set = trav::read_ray_file(o->rays_file);
-            std::vector<trav::Hit> ours;
-            std::string structure = "hit-file", kernel = "hit-file";
-            if (!o->hits_file.empty()) {
-                trav::HitSet hs = trav::read_hit_file(o->hits_file);
-                if (hs.hits.size() != set.rays.size())
-                    throw Error("hit file has " + std::to_string(hs.hits.size()) + " hits for " +
-                                std::to_string(set.rays.size()) + " rays");
-                if (hs.query != set.query) throw Error("hit file and ray file disagree on the query (closest vs any)");
-                ours = std::move(hs.hits);
-            } else {
-                o->build.epo = false;
-                Built b = build_scene(s, o->build, g);
-                ours = trace_on(b, set, o->device);
-                structure = b.structure;
-                kernel = b.kernel;
-            }
-            rows.push_back(verify_ray_set(s, oracle, set, ours, "file", structure, o->cc, g, o->device, kernel));
+        auto check_one = [&](const CheckedSet& cs, const std::vector<trav::Hit>& ours, nlohmann::json fields) {
+            Stage st(g, "verifying " + std::to_string(cs.set.rays.size()) + " " + cs.ray_type + " rays (" +
+                            fields["kernel"].get<std::string>() + ") against Embree");
+            nlohmann::json j = verify_hits(s, oracle, cs, ours, o->cc, g);
+            j.update(fields);
+            rows.push_back(std::move(j));
+        };
+        if (hits->count()) {
+            const trav::RaySet set = trav::read_ray_file(o->rays_file);
+            trav::HitSet hs = trav::read_hit_file(o->hits_file);
+            if (hs.hits.size() != set.rays.size())
+                throw Error("hit file has " + std::to_string(hs.hits.size()) + " hits for " +
+                            std::to_string(set.rays.size()) + " rays");
+            if (hs.query != set.query) throw Error("hit file and ray file disagree on the query (closest vs any)");
+            check_one(check_set(oracle, set, "file"), hs.hits,
+                      {{"device", "file"}, {"structure", "hit-file"}, {"layout", nullptr}, {"kernel", "hit-file"}});
         } else {
             o->build.epo = false;
             Built b = build_scene(s, o->build, g);
-            trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
-            for (trav::RayType t : parse_ray_types(o->types)) {
-                trav::RaySet set = proto.make(t);
-                const std::vector<trav::Hit> ours = trace_on(b, set, o->device);
-                rows.push_back(verify_ray_set(s, oracle, set, ours, trav::ray_type_name(t), b.structure, o->cc, g,
-                                              o->device, b.kernel));
-                rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
+            auto tracers = make_tracers(b, o->trace, o->build, nullptr);
+            auto verify_set = [&](const trav::RaySet& set, const std::string& type) {
+                const CheckedSet cs = check_set(oracle, set, type);
+                for (auto& t : tracers) {
+                    std::vector<trav::Hit> ours;
+                    t->trace(set, ours);
+                    check_one(cs, ours, tracer_fields(b, *t));
+                    if (!file->count()) rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
+                }
+            };
+            if (file->count()) {
+                verify_set(trav::read_ray_file(o->rays_file), "file");
+            } else {
+                trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
+                for (trav::RayType t : parse_ray_types(o->types)) verify_set(proto.make(t), trav::ray_type_name(t));
             }
         }
         if (!g.json) print_verify_header();

@@ -161,7 +161,7 @@ void BuildOptions::add_to(CLI::App& app) {
                                   "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits)")
                        ->check(CLI::IsMember({"binned", "sweep", "sbvh"}))
                        ->capture_default_str();
-    auto* st = app.add_option("--structure", structure,
+    auto* st = structure_flag = app.add_option("--structure", structure,
                               "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building");
     st->excludes(builder_flag);
     config_flags = {
@@ -194,7 +194,7 @@ void BuildOptions::add_to(CLI::App& app) {
         if (v == "bvh" || v == "binned") builder = "binned";
         else if (v == "sweep" || v == "sbvh") builder = v;
     });
-    app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
+    kd_stack_flag = app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
         ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
         ->capture_default_str();
     kd_flags = {
@@ -218,6 +218,24 @@ std::string BuildOptions::structure_file() const {
         structure == "sbvh" || structure == "kdtree")
         return {};
     return structure;
+}
+
+void BuildOptions::check_applicable() const {
+    if (!structure_file().empty()) return;
+    // config_flags: --bins, --max-leaf, --min-leaf, --alpha, --budget, --spatial-bins, --reinsert.
+    auto refuse = [](const CLI::Option* f, const std::string& why) {
+        if (f->count()) throw Error(f->get_name() + " " + why);
+    };
+    if (is_kdtree()) {
+        for (const CLI::Option* f : config_flags) refuse(f, "applies to BVH builders, not --structure kdtree");
+        return;
+    }
+    for (const CLI::Option* f : kd_flags) refuse(f, "applies to --structure kdtree, not a BVH");
+    refuse(kd_stack_flag, "applies to kd-trees, not a BVH");
+    const accel::BuilderKind k = kind();
+    if (k != accel::BuilderKind::kSbvh)
+        for (size_t i : {3, 4, 5}) refuse(config_flags[i], "applies to --builder sbvh, not " + builder);
+    if (k == accel::BuilderKind::kSweep) refuse(config_flags[0], "does not apply to the sweep builder (it has no bins)");
 }
 
 void RayOptions::add_to(CLI::App& app) {

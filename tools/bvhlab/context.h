@@ -80,6 +80,8 @@ struct BuildOptions {
     std::vector<CLI::Option*> kd_flags;         ///< kd flags whose explicit values a cache must match
     std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
     CLI::Option* builder_flag = nullptr;
+    CLI::Option* structure_flag = nullptr;
+    CLI::Option* kd_stack_flag = nullptr;
 
     bool is_kdtree() const { return structure == "kdtree"; }
 
@@ -87,6 +89,10 @@ struct BuildOptions {
     accel::BuilderKind kind() const { return accel::parse_builder_kind(builder); }
     /// The structure file named by --structure, or "" when --structure names a builder.
     std::string structure_file() const;
+    /// Refuses, with a one-line bvhlab::Error, an option given explicitly that the chosen
+    /// builder does not use (--bins with a kd-tree, --alpha with binned, --kd-ct with a BVH).
+    /// Structure files are checked against their own config when loaded.
+    void check_applicable() const;
 };
 
 /// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.

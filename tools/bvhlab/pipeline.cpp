@@ -4,13 +4,14 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "accel/core/check.h"
 #include "accel/builders/kdtree.h"
-#include "traversal/device/kd_traverse.h"
+#include "accel/core/check.h"
 #include "accel/core/validate.h"
 #include "accel/io/tree_file.h"
 #include "accel/layouts/bvh2_convert.h"
-#include "traversal/cpu/cpu_trace.h"
+#include "accel/layouts/kd_convert.h"
+#include "traversal/device/kd_traverse.h"
+#include "traversal/gpu/gpu_tracer.h"
 
 namespace bvhlab::cli {
 
@@ -37,6 +38,11 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
                         ", but " + accel::describe_config(asked) + " was asked for");
         return f;
     }
+    for (const CLI::Option* flag : opts.kd_flags)
+        if (flag->count())
+            throw Error("structure file '" + file + "' holds a BVH, but kd-tree option " + flag->get_name() + " was given");
+    if (opts.kd_stack_flag->count())
+        throw Error("structure file '" + file + "' holds a BVH; --kd-stack applies to kd-trees");
     accel::BuilderOptions asked = f.meta.options;
     const accel::BuilderOptions& given = opts.opts;
     // Only what the user said explicitly must match; everything else comes from the file.
@@ -76,7 +82,6 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
         throw Error((cached ? "structure file '" + file + "' holds" : std::string("the kd-tree builder produced")) +
                     " an invalid kd-tree: " + err);
     const accel::KdTreeStats ks = accel::compute_kd_stats(tree, builder.config());
-    b.structure = "kdtree";
     b.record = base_record("build", scene);
     b.record["builder"] = "kdtree";
     b.record["structure"] = "kdtree";
@@ -97,9 +102,10 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
     b.record["build_ms"] = b.result.build_ms;
     b.record["machine"] = machine_description();
     b.stats.sah = ks.sah;
-    b.kd = std::make_shared<trav::KdTracer>(std::move(tree), scene.mesh, opts.kd_stack);
-    b.kernel = opts.kd_stack == trav::kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(opts.kd_stack);
-    b.record["kernel"] = b.kernel;
+    b.structure.name = "kdtree";
+    b.structure.layout = trav::Layout::kKd;
+    b.structure.kd = accel::convert_to_kd_layout(std::move(tree), scene.mesh);
+    b.record["layout_bytes"] = b.structure.bytes();
     if (cached) {
         b.record["structure_file"] = file;
         b.loaded_meta = cached->meta;
@@ -108,9 +114,9 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
 }
 
 Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
+    opts_in.check_applicable();
     if (opts_in.is_kdtree()) return build_kdtree(scene, opts_in, g, nullptr, "");
     Built b;
-    b.kernel = "cpu-bvh2-stack";
     BuildOptions opts = opts_in;
     const std::string file = opts.structure_file();
     if (!file.empty()) {
@@ -135,12 +141,14 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
         Stage st(g, opts.epo ? "computing SAH and EPO" : "computing SAH");
         b.stats = accel::compute_stats(b.result.tree, scene.mesh, opts.opts.config, opts.epo);
     }
-    b.bvh = accel::convert_to_bvh2(b.result.tree, scene.mesh);
-    b.structure = "bvh2/" + builder;
+    b.structure.name = "bvh2/" + builder;
+    b.structure.layout = trav::Layout::kBvh2;
+    b.structure.bvh2 = accel::convert_to_bvh2(b.result.tree, scene.mesh);
     b.record = base_record("build", scene);
     b.record.update(stats_json(b.stats, b.result, builder, scene.mesh));
-    b.record["structure"] = b.structure;
-    b.record["layout_bytes"] = b.bvh.bytes();
+    b.record["structure"] = b.structure.name;
+    b.record["layout_bytes"] = b.structure.bytes();
+    b.record["layout_depth"] = b.structure.depth();
     if (builder != "sweep") b.record["bins"] = opts.opts.num_bins;
     if (builder == "sbvh") {
         b.record["alpha"] = opts.opts.sbvh_alpha;
@@ -154,110 +162,114 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
     return b;
 }
 
-std::string kernel_name(const Built& built, const std::string& device) {
-    return device == "gpu" ? "gpu-bvh2-stack-plain" : built.kernel;
-}
-
-void trace_cpu_any(const Built& built, const trav::RaySet& set, std::vector<trav::Hit>& hits,
-                   std::vector<trav::TraversalCounters>* counters) {
-    if (built.kd) {
-        trav::trace_kd_cpu(*built.kd, set.rays, set.query, hits, counters);
-    } else {
-        trav::trace_cpu(built.bvh, set.rays, set.query, hits, counters);
-    }
-}
-
-static trav::GpuBvh2& gpu_of(Built& built) {
-    if (built.kd) throw Error("--device gpu: kd-trees have no GPU kernel yet; use --device cpu");
-    if (!built.gpu) built.gpu = std::make_shared<trav::GpuBvh2>(built.bvh);
-    return *built.gpu;
-}
-
-std::vector<trav::Hit> trace_on(Built& built, const trav::RaySet& set, const std::string& device) {
-    std::vector<trav::Hit> hits;
-    if (device == "gpu") {
-        gpu_of(built).trace(set.rays, set.query, hits);
-    } else {
-        trace_cpu_any(built, set, hits);
-    }
-    return hits;
-}
-
-void add_device_option(CLI::App& app, std::string& device) {
-    app.add_option("--device", device, "cpu (TBB, stack traversal) or gpu (CUDA, plain kernel)")
-        ->check(CLI::IsMember({"cpu", "gpu"}))
+void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
+    std::vector<std::string> devices{"cpu", "gpu"};
+    if (allow_embree) devices.push_back("embree");
+    app.add_option("--device", device,
+                   allow_embree ? "cpu (TBB over the shared traversal), gpu (a CUDA kernel) or embree (Embree 3 on every "
+                                  "core: rtcIntersect1/rtcOccluded1 and the 16-wide packet calls, the faster reported)"
+                                : "cpu (TBB over the shared traversal) or gpu (a CUDA kernel, see --kernel)")
+        ->check(CLI::IsMember(devices))
         ->capture_default_str();
+    kernel_flag = app.add_option("--kernel", kernel,
+                                 "GPU kernel (`bvhlab kernels` lists them) or all; default: speculative for BVHs, "
+                                 "kd-full-stack or kd-short-stack (with --kd-stack 1..8) for kd-trees");
+    block_flag = app.add_option("--block-size", block_size, "GPU threads per block (default: the kernel's)")
+                     ->check(CLI::Range(32, 1024));
 }
 
-nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySet& set,
-                             const std::string& ray_type, const BenchSettings& bs, const Globals& g,
-                             std::vector<trav::Hit>* hits_out) {
-    std::vector<trav::Hit> hits;
-    std::vector<double> ms;
-    const bool gpu = bs.device == "gpu";
-    Stage st(g, "tracing " + std::to_string(set.rays.size()) + " " + ray_type + " rays on " + bs.device + " (" +
-                    std::to_string(bs.warmup) + " warm-up + " + std::to_string(bs.runs) + " runs)");
-    // GPU runs time the kernel alone (CUDA events); rays are uploaded once, outside the timing.
-    if (gpu) gpu_of(built).upload_rays(set.rays);
-    for (int i = 0; i < bs.warmup + bs.runs; ++i) {
-        double t;
-        if (gpu) {
-            t = gpu_of(built).trace(set.query);
-        } else {
-            const auto t0 = std::chrono::steady_clock::now();
-            trace_cpu_any(built, set, hits);
-            t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        }
-        if (i >= bs.warmup) ms.push_back(t);
-        st.progress(size_t(i + 1), size_t(bs.warmup + bs.runs));
+void TraceOptions::validate(const BuildOptions& build) const {
+    if (device != "gpu") {
+        if (kernel_flag->count()) throw Error("--kernel chooses a GPU kernel; it needs --device gpu");
+        if (block_flag->count()) throw Error("--block-size applies to GPU kernels; it needs --device gpu");
     }
-    if (gpu) gpu_of(built).download_hits(hits);
-    std::sort(ms.begin(), ms.end());
-    const double median = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
-    size_t nhit = 0;
-    for (const auto& h : hits) nhit += h.is_hit();
-    nlohmann::json j = base_record("bench", scene);
-    j["ray_type"] = ray_type;
-    j["query"] = set.query == trav::Query::kAny ? "any" : "closest";
-    j["rays"] = set.rays.size();
-    j["hit_fraction"] = set.rays.empty() ? 0.0 : double(nhit) / double(set.rays.size());
-    j["runs"] = bs.runs;
-    j["median_ms"] = median;
-    j["min_ms"] = ms.front();
-    j["mrays_per_s"] = median > 0 ? double(set.rays.size()) / (median * 1e3) : 0.0;
-    j["device"] = bs.device;
-    j["gpu"] = gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr);
-    j["driver"] = gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr);
-    j["structure"] = built.structure;
-    j["kernel"] = kernel_name(built, bs.device);
-    j["timing"] = gpu ? "kernel only (CUDA events)" : "wall clock of the parallel trace";
-    j["machine"] = machine_description();
-    if (hits_out) *hits_out = std::move(hits);
-    return j;
+    if (device == "embree" && build.structure_flag->count())
+        throw Error("--structure does not apply to --device embree (Embree builds its own BVH)");
+    if (device == "gpu") {
+        std::string why;
+        if (!trav::gpu_available(&why)) throw Error("--device gpu: " + why);
+    }
 }
 
-nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
-                              const std::vector<trav::Hit>& ours, const std::string& ray_type,
-                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g,
-                              const std::string& device, const std::string& kernel) {
-    std::vector<trav::Hit> ref;
-    trav::CompareReport rep;
-    {
-        Stage st(g, "verifying " + std::to_string(set.rays.size()) + " " + ray_type + " rays against Embree");
-        oracle.trace(set.rays, set.query, ref);
-        rep = trav::compare_hits(scene.mesh, set.rays, set.query, ours, ref,
-                                 [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
+namespace {
+
+/// The default GPU kernel of a structure: the fastest BVH2 kernel as measured on the H100
+/// (experiments/NOTES.md), or the kd kernel that matches --kd-stack.
+std::string default_kernel(const Built& b, int kd_stack) {
+    if (!b.is_kd()) return "speculative";
+    return kd_stack == trav::kKdFullStack ? "kd-full-stack" : "kd-short-stack";
+}
+
+}  // namespace
+
+std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,
+                                                       const trav::EmbreeOracle* oracle) {
+    std::vector<std::unique_ptr<trav::Tracer>> out;
+    if (b.kd_stack_flag->count() && !built.is_kd()) throw Error("--kd-stack applies to kd-trees, not BVHs");
+    if (t.device == "cpu") {
+        out.push_back(trav::make_cpu_tracer(built.structure, b.kd_stack));
+        return out;
     }
+    if (t.device == "embree") {
+        BVHLAB_CHECK(oracle != nullptr, "an Embree tracer needs the oracle");
+        out.push_back(trav::make_embree_tracer(*oracle, false));
+        out.push_back(trav::make_embree_tracer(*oracle, true));
+        return out;
+    }
+    std::vector<trav::KernelInfo> kernels;
+    if (t.kernel == "all") {
+        for (const trav::KernelInfo& k : trav::registered_kernels())
+            if (k.layout == built.structure.layout) kernels.push_back(k);
+    } else {
+        kernels.push_back(trav::find_kernel(t.kernel.empty() ? default_kernel(built, b.kd_stack) : t.kernel));
+    }
+    trav::GpuTraceOptions go;
+    go.block_size = t.block_size;
+    // --kd-stack 1..8 sizes the short stack; a full-stack kernel takes none.
+    const bool short_given = b.kd_stack_flag->count() && b.kd_stack != trav::kKdFullStack;
+    go.kd_stack = short_given ? b.kd_stack : 4;
+    for (const trav::KernelInfo& k : kernels) {
+        trav::check_kernel_fits(k, built.structure.layout, built.structure.depth(), go);
+        if (t.kernel != "all" && b.kd_stack_flag->count() && !k.short_stack && built.is_kd() && short_given)
+            throw Error(std::string("--kd-stack ") + std::to_string(b.kd_stack) + " sizes a short stack; kernel '" +
+                        k.name + "' has a full stack (use kd-short-stack)");
+        if (b.kd_stack_flag->count() && k.short_stack && !short_given)
+            throw Error(std::string("kernel '") + k.name + "' takes a short stack of 1..8 entries (--kd-stack), not 64");
+    }
+    if (!built.device) built.device = std::make_shared<trav::DeviceStructure>(built.structure);
+    for (const trav::KernelInfo& k : kernels) out.push_back(trav::make_gpu_tracer(built.device, k, go));
+    return out;
+}
+
+CheckedSet check_set(const trav::EmbreeOracle& oracle, const trav::RaySet& set, const std::string& ray_type) {
+    CheckedSet cs{set, ray_type, {}};
+    oracle.trace(set.rays, set.query, cs.reference);
+    return cs;
+}
+
+nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer) {
+    const std::string device = tracer.device();
+    const bool gpu = device == "gpu", embree = device == "embree";
+    return {{"device", device},
+            {"structure", embree ? std::string("embree/robust-high") : built.structure.name},
+            {"layout", embree ? "embree" : trav::layout_name(built.structure.layout)},
+            {"kernel", tracer.name()},
+            {"gpu", gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr)},
+            {"driver", gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr)}};
+}
+
+nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle, const CheckedSet& cs,
+                           const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc, const Globals& g) {
+    trav::CompareReport rep = trav::compare_hits(scene.mesh, cs.set.rays, cs.set.query, ours, cs.reference,
+                                                 [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
+    (void)g;
     for (const auto& d : rep.first_mismatches) {
         std::fprintf(stderr, "[bvhlab] MISMATCH %s ray %zu: ours tri %d t %.9g, embree tri %d t %.9g: %s\n",
-                     ray_type.c_str(), d.ray, d.ours.tri, d.ours.t, d.oracle.tri, d.oracle.t, d.reason.c_str());
+                     cs.ray_type.c_str(), d.ray, d.ours.tri, d.ours.t, d.oracle.tri, d.oracle.t, d.reason.c_str());
     }
     nlohmann::json j = base_record("verify", scene);
-    j["ray_type"] = ray_type;
-    j["query"] = set.query == trav::Query::kAny ? "any" : "closest";
-    j["structure"] = structure;
-    j["device"] = device;
-    j["kernel"] = structure == "hit-file" ? "hit-file" : (device == "gpu" ? "gpu-bvh2-stack-plain" : kernel);
+    j["ray_type"] = cs.ray_type;
+    j["query"] = cs.set.query == trav::Query::kAny ? "any" : "closest";
     j["rays"] = rep.rays;
     j["agree"] = rep.agree;
     j["ties"] = rep.ties;
@@ -269,6 +281,80 @@ nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& orac
     j["max_rel_dt"] = rep.max_rel_dt;
     j["edge_eps"] = cc.edge_eps;
     j["t_rel_tol"] = cc.t_rel_tol;
+    return j;
+}
+
+nlohmann::json work_per_ray(const Built& built, int kd_stack, const trav::RaySet& set) {
+    std::vector<trav::Hit> hits;
+    std::vector<trav::TraversalCounters> c;
+    trav::trace_cpu_counted(built.structure, kd_stack, set, hits, &c);
+    double nodes = 0, leaves = 0, tris = 0, restarts = 0;
+    for (const auto& x : c) {
+        nodes += x.nodes;
+        leaves += x.leaves;
+        tris += x.tri_tests;
+        restarts += x.restarts;
+    }
+    const double n = c.empty() ? 1.0 : double(c.size());
+    return {{"nodes", nodes / n}, {"leaves", leaves / n}, {"tri_tests", tris / n}, {"restarts", restarts / n}};
+}
+
+nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Tracer& tracer,
+                             const trav::EmbreeOracle& oracle, const CheckedSet& cs, const BenchSettings& bs,
+                             const trav::CompareConfig& cc, const Globals& g, std::vector<trav::Hit>* hits_out,
+                             nlohmann::json* verify_record) {
+    const std::string device = tracer.device();
+    const bool gpu = device == "gpu";
+    nlohmann::json j = base_record("bench", scene);
+    j["ray_type"] = cs.ray_type;
+    j["query"] = cs.set.query == trav::Query::kAny ? "any" : "closest";
+    j["rays"] = cs.set.rays.size();
+    j.update(tracer_fields(built, tracer));
+    j["machine"] = machine_description();
+    std::vector<trav::Hit> hits;
+    Stage st(g, tracer.name() + ": " + std::to_string(cs.set.rays.size()) + " " + cs.ray_type + " rays on " + device +
+                    " (check against Embree, " + std::to_string(bs.warmup) + " warm-up, " + std::to_string(bs.runs) +
+                    " runs)");
+    // Check before timing: a tracer that disagrees with Embree is reported, never timed.
+    tracer.set_rays(cs.set.rays, cs.set.query);
+    tracer.run();
+    tracer.hits(hits);
+    nlohmann::json check = verify_hits(scene, oracle, cs, hits, cc, g);
+    check.update(tracer_fields(built, tracer));
+    if (verify_record) *verify_record = check;
+    j["check"] = {{"mismatches", check["mismatches"]}, {"ties", check["ties"]}};
+    if (check["mismatches"].get<size_t>() > 0) {
+        j["status"] = "failed";
+        j["mrays_per_s"] = nullptr;
+        if (hits_out) *hits_out = std::move(hits);
+        return j;
+    }
+    std::vector<double> ms;
+    for (int i = 0; i < bs.warmup + bs.runs; ++i) {
+        const double t = tracer.run();
+        if (i >= bs.warmup) ms.push_back(t);
+        st.progress(size_t(i + 1), size_t(bs.warmup + bs.runs));
+    }
+    tracer.hits(hits);
+    std::sort(ms.begin(), ms.end());
+    const double median = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
+    size_t nhit = 0;
+    for (const auto& h : hits) nhit += h.is_hit();
+    j["status"] = "ok";
+    j["hit_fraction"] = cs.set.rays.empty() ? 0.0 : double(nhit) / double(cs.set.rays.size());
+    j["runs"] = bs.runs;
+    j["warmup"] = bs.warmup;
+    j["median_ms"] = median;
+    j["min_ms"] = ms.front();
+    j["max_ms"] = ms.back();
+    j["mrays_per_s"] = median > 0 ? double(cs.set.rays.size()) / (median * 1e3) : 0.0;
+    j["timing"] = gpu ? "kernel only (CUDA events)" : "wall clock of the parallel trace";
+    if (gpu) {
+        const trav::SmClock clk = trav::gpu_sm_clock();
+        j["sm_clock_mhz"] = clk.current_mhz ? nlohmann::json(clk.current_mhz) : nlohmann::json(nullptr);
+        j["sm_clock_max_mhz"] = clk.max_mhz;
+    }
+    if (hits_out) *hits_out = std::move(hits);
     return j;
 }
 

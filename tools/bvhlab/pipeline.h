@@ -1,69 +1,96 @@
 // SPDX-License-Identifier: MIT
-// The steps the subcommands compose: build (+ validate + stats + layout), benchmark a ray
-// set, verify a ray set against Embree. Each returns its JSON record.
+// The steps the subcommands compose: build (+ validate + stats + layout) into one structure
+// object, choose the tracers (--device, --kernel), benchmark a ray set (checked against
+// Embree before it is timed), verify a ray set against Embree. Each returns its JSON record.
 #pragma once
 
 #include <nlohmann/json.hpp>
 
+#include <memory>
 #include <optional>
 
 #include "accel/io/tree_file.h"
-
-#include "accel/layouts/bvh2_node.h"
 #include "tools/bvhlab/context.h"
+#include "traversal/gpu/device_structure.h"
 #include "traversal/oracle/compare.h"
-#include "traversal/cpu/kd_trace.h"
-#include "traversal/launch.h"
 #include "traversal/oracle/embree_oracle.h"
+#include "traversal/tracer.h"
 
 namespace bvhlab::cli {
 
+/// One structure, whatever its kind: the layout every tracer takes, its figures, and its GPU
+/// upload once a GPU tracer asked for it.
 struct Built {
-    accel::BuildResult result;
+    accel::BuildResult result;  ///< the BuildTree of a BVH (empty for a kd-tree)
     accel::TreeStats stats;
-    accel::Bvh2 bvh;
-    std::string structure;  ///< e.g. "bvh2/binned"
+    trav::Structure structure;
     nlohmann::json record;  ///< the "build" JSON line
-    std::shared_ptr<trav::GpuBvh2> gpu;  ///< uploaded on first GPU use
-    std::shared_ptr<trav::KdTracer> kd;  ///< set instead of bvh for --structure kdtree
-    std::string kernel;                  ///< CPU kernel name, e.g. cpu-bvh2-stack
-    std::optional<accel::TreeFileMeta> loaded_meta;  ///< provenance when loaded from a structure file
+    std::shared_ptr<const trav::DeviceStructure> device;  ///< uploaded on first GPU use
+    std::optional<accel::TreeFileMeta> loaded_meta;       ///< provenance when loaded from a structure file
+
+    bool is_kd() const { return structure.layout == trav::Layout::kKd; }
 };
 
-/// Traces a set on the CPU with whatever structure `built` holds; fills counters if non-null.
-void trace_cpu_any(const Built& built, const trav::RaySet& set, std::vector<trav::Hit>& hits,
-                   std::vector<trav::TraversalCounters>* counters = nullptr);
-
-/// Builds, validates (throws on an invalid tree), computes statistics and converts to Bvh2.
+/// Builds, validates (throws on an invalid tree), computes statistics and converts to the
+/// traversal layout.
 Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g);
 
-struct BenchSettings {
-    int runs = 5;
-    int warmup = 1;
-    std::string device = "cpu";  ///< cpu or gpu
+/// Which tracers a command uses: --device, --kernel, --block-size (and --kd-stack, which
+/// BuildOptions holds).
+struct TraceOptions {
+    std::string device = "cpu";  ///< cpu, gpu, or (bench only) embree
+    std::string kernel;          ///< GPU kernel name, "all", or "" for the structure's default
+    int block_size = 0;          ///< GPU threads per block; 0 = the kernel's default
+    CLI::Option* kernel_flag = nullptr;
+    CLI::Option* block_flag = nullptr;
+
+    /// Adds --device (with `embree` when allow_embree), --kernel and --block-size.
+    void add_to(CLI::App& app, bool allow_embree = false);
+    /// Refuses options that do not apply (one-line bvhlab::Error), and a GPU that is missing.
+    void validate(const BuildOptions& build) const;
 };
 
-/// Traces a set once on `device` (cpu or gpu) and returns the hits.
-std::vector<trav::Hit> trace_on(Built& built, const trav::RaySet& set, const std::string& device);
+/// The tracers of one command over `built`: one for the CPU, one per kernel on the GPU (all
+/// of the structure's layout for --kernel all), Embree's for --device embree (`oracle`
+/// required then). Throws bvhlab::Error for a kernel that does not fit.
+std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,
+                                                       const trav::EmbreeOracle* oracle);
 
-/// Name of the kernel that traces `built` on a device, for the JSON records.
-std::string kernel_name(const Built& built, const std::string& device);
+/// A ray set with Embree's answers, computed once and shared by every tracer checked on it.
+struct CheckedSet {
+    const trav::RaySet& set;
+    std::string ray_type;
+    std::vector<trav::Hit> reference;
+};
 
-/// Adds --device (cpu or gpu).
-void add_device_option(CLI::App& app, std::string& device);
+/// Embree's answers for a set (the reference of every check on it).
+CheckedSet check_set(const trav::EmbreeOracle& oracle, const trav::RaySet& set, const std::string& ray_type);
 
-/// Times trace_cpu over the set; the record has mrays_per_s (from the median run) and the
-/// provenance keys. `hits` receives the last run's hits.
-nlohmann::json bench_ray_set(const Scene& scene, Built& built, const trav::RaySet& set,
-                             const std::string& ray_type, const BenchSettings& bs, const Globals& g,
-                             std::vector<trav::Hit>* hits = nullptr);
+/// The fields that name what traced: device, structure, layout, kernel, and on the GPU the
+/// GPU and driver.
+nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer);
 
 /// Compares `ours` with Embree's answers; the record has rays, agree, ties, mismatches.
 /// Prints the first mismatches on stderr.
-nlohmann::json verify_ray_set(const Scene& scene, const trav::EmbreeOracle& oracle, const trav::RaySet& set,
-                              const std::vector<trav::Hit>& ours, const std::string& ray_type,
-                              const std::string& structure, const trav::CompareConfig& cc, const Globals& g,
-                              const std::string& device = "cpu", const std::string& kernel = "cpu-bvh2-stack");
+nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle, const CheckedSet& cs,
+                           const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc, const Globals& g);
+
+struct BenchSettings {
+    int runs = 10;
+    int warmup = 1;
+};
+
+/// Traces the set once and checks every hit against Embree; a tracer with a real mismatch
+/// gets a record with "status": "failed" and is never timed. Otherwise: warm-up, then the
+/// median of `runs` timed runs. `hits` receives the last run's hits.
+nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Tracer& tracer,
+                             const trav::EmbreeOracle& oracle, const CheckedSet& cs, const BenchSettings& bs,
+                             const trav::CompareConfig& cc, const Globals& g, std::vector<trav::Hit>* hits = nullptr,
+                             nlohmann::json* verify_record = nullptr);
+
+/// Per-ray work of the structure's own traversal on the set (nodes, leaves, triangle tests
+/// and short-stack restarts, means), counted on the CPU.
+nlohmann::json work_per_ray(const Built& built, int kd_stack, const trav::RaySet& set);
 
 /// Adds --edge-eps and --t-tol.
 void add_compare_options(CLI::App& app, trav::CompareConfig& cc);

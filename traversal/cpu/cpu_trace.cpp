@@ -3,6 +3,10 @@
 
 #include <tbb/parallel_for.h>
 
+#include <string>
+
+#include "accel/core/check.h"
+
 namespace bvhlab::trav {
 namespace {
 
@@ -25,6 +29,9 @@ void trace_all(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query
 
 void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
                std::vector<TraversalCounters>* counters) {
+    if (bvh.depth > uint32_t(kBvh2StackSize))
+        throw Error("BVH of depth " + std::to_string(bvh.depth) + " is deeper than the traversal stack of " +
+                    std::to_string(kBvh2StackSize) + " entries");
     hits.resize(rays.size());
     if (counters) {
         counters->assign(rays.size(), TraversalCounters{});

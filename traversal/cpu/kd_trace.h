@@ -4,25 +4,16 @@
 
 #include <vector>
 
-#include "accel/core/mesh.h"
-#include "accel/layouts/kd_node.h"
-#include "accel/layouts/woop_tri.h"
+#include "accel/layouts/kd_convert.h"
 #include "traversal/device/bvh2_traverse.h"
 #include "traversal/device/ray.h"
 
 namespace bvhlab::trav {
 
-/// A kd-tree with the Woop triangles its traversal needs (one per mesh triangle). Owns them.
-struct KdTracer {
-    accel::KdTree tree;
-    std::vector<accel::WoopTriangle> tris;
-    int stack_limit = 64;  ///< 64 = full stack; 1..8 = short stack with restart
-
-    KdTracer(accel::KdTree t, const accel::TriangleMesh& mesh, int stack = 64);
-};
-
-/// Traces every ray; fills `counters` too when it is non-null.
-void trace_kd_cpu(const KdTracer& kd, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
-                  std::vector<TraversalCounters>* counters = nullptr);
+/// Traces every ray with a full stack (stack_limit = 64) or a short stack with restart
+/// (1..8); fills `counters` too when it is non-null. Throws bvhlab::Error for another stack
+/// size, or a tree deeper than the full stack.
+void trace_kd_cpu(const accel::KdLayout& kd, int stack_limit, const std::vector<Ray>& rays, Query query,
+                  std::vector<Hit>& hits, std::vector<TraversalCounters>* counters = nullptr);
 
 }  // namespace bvhlab::trav

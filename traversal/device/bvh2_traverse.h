@@ -11,7 +11,8 @@
 
 namespace bvhlab::trav {
 
-/// Traversal stack depth; builders guarantee trees shallower than this (BuildConfig::max_depth).
+/// Stack entries of the shared traversal. Trees deeper than this (Bvh2::depth) are refused by
+/// the tracers before any ray is traced; builders stay below it (BuildConfig::max_depth).
 constexpr int kBvh2StackSize = 64;
 
 /// Per-ray work counters, filled when a non-null pointer is given.
@@ -19,6 +20,14 @@ struct TraversalCounters {
     uint32_t nodes = 0;     ///< interior nodes fetched
     uint32_t leaves = 0;    ///< leaves whose box the ray entered
     uint32_t tri_tests = 0; ///< triangle intersection tests
+    uint32_t restarts = 0;  ///< short-stack restarts from the root (kd-tree short stack)
+};
+
+/// A BVH2 layout as traversal sees it: plain pointers, host or device memory.
+struct Bvh2View {
+    const accel::Bvh2Node* nodes;
+    const accel::WoopTriangle* tris;
+    const uint32_t* tri_ids;  ///< mesh triangle id of each entry of tris
 };
 
 /// Reciprocal with Aila & Laine's guard: components closer to 0 than 2^-80 are clamped, so
@@ -75,8 +84,9 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
                 continue;
             }
             if (counters) ++counters->leaves;
-            const uint32_t first = uint32_t(~ref);
-            for (uint32_t k = first; k < first + n.count[c]; ++k) {
+            const uint32_t first = accel::Bvh2Node::leaf_first(ref);
+            const uint32_t end = first + accel::Bvh2Node::leaf_count(ref);
+            for (uint32_t k = first; k < end; ++k) {
                 if (counters) ++counters->tri_tests;
                 float t, u, v;
                 if (tris[k].intersect(o, d, ray.tmin, tmax, t, u, v)) {
@@ -89,7 +99,6 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
         if (nnext == 2) {
             // Visit the nearer child first; the farther one waits on the stack.
             const bool swap = tnext[1] < tnext[0];
-            BVHLAB_DCHECK(sp < kBvh2StackSize);
             stack[sp++] = next[swap ? 0 : 1];
             node = next[swap ? 1 : 0];
         } else if (nnext == 1) {
@@ -100,6 +109,12 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
         }
     }
     return hit;
+}
+
+/// The same over a view.
+template <bool kAnyHit>
+BVHLAB_HD BVHLAB_FORCEINLINE Hit traverse_bvh2(const Bvh2View& v, const Ray& ray, TraversalCounters* counters = nullptr) {
+    return traverse_bvh2<kAnyHit>(v.nodes, v.tris, v.tri_ids, ray, counters);
 }
 
 }  // namespace bvhlab::trav

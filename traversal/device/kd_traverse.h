@@ -15,7 +15,7 @@
 
 namespace bvhlab::trav {
 
-constexpr int kKdFullStack = 64;  ///< enough for any tree (depth <= 64)
+constexpr int kKdFullStack = 64;  ///< full-stack entries; deeper trees are refused by the tracers
 constexpr int kKdMaxShortStack = 8;
 
 /// A kd-tree as traversal sees it. `tris` holds one Woop triangle per mesh triangle id.
@@ -101,6 +101,7 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
         } else if (dropped && tf < t_exit && tf < best && tf > restarted_at) {
             // Entries were dropped (short stack): restart from the root past this leaf. The
             // dropped entries were the oldest, i.e. the farthest, so nothing before tf is lost.
+            if (counters) ++counters->restarts;
             node = 0;
             tn = restarted_at = tf;
             tf = t_exit;

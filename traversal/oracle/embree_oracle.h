@@ -8,6 +8,7 @@
 
 #include "accel/core/mesh.h"
 #include "traversal/device/ray.h"
+#include "traversal/tracer.h"
 
 namespace bvhlab::trav {
 
@@ -28,11 +29,18 @@ public:
     /// Traces a whole ray set in parallel (TBB), one rtc*1 call per ray. Any-hit results
     /// carry tri = 0 for "occluded" (Embree does not say which triangle) and -1 for a miss.
     void trace(const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits) const;
+    /// The same with 16-wide packets (rtcIntersect16 / rtcOccluded16) of consecutive rays.
+    void trace16(const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits) const;
 
     struct Impl;  // Embree handles; public only so the error callback can name it
 
 private:
     std::unique_ptr<Impl> impl_;
 };
+
+/// Embree as a tracer for `bvhlab bench --device embree`, on every core (TBB): one ray per
+/// call ("embree-rtcIntersect1") or 16-wide packets ("embree-rtcIntersect16"). Any-hit hits
+/// carry tri 0, as trace() gives them. `oracle` must outlive the tracer.
+std::unique_ptr<Tracer> make_embree_tracer(const EmbreeOracle& oracle, bool packets16);
 
 }  // namespace bvhlab::trav

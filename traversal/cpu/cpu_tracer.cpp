@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: MIT
+// The CPU tracers behind make_cpu_tracer: the shared traversals under TBB, wall-clock timed.
+#include <chrono>
+
+#include "accel/core/check.h"
+#include "traversal/cpu/cpu_trace.h"
+#include "traversal/cpu/kd_trace.h"
+#include "traversal/device/kd_traverse.h"
+#include "traversal/tracer.h"
+
+namespace bvhlab::trav {
+
+const char* layout_name(Layout layout) { return layout == Layout::kBvh2 ? "bvh2" : "kdtree"; }
+
+void trace_cpu_counted(const Structure& s, int kd_stack, const RaySet& set, std::vector<Hit>& hits,
+                       std::vector<TraversalCounters>* counters) {
+    if (s.layout == Layout::kBvh2) {
+        trace_cpu(s.bvh2, set.rays, set.query, hits, counters);
+    } else {
+        trace_kd_cpu(s.kd, kd_stack, set.rays, set.query, hits, counters);
+    }
+}
+
+namespace {
+
+class CpuTracer final : public Tracer {
+public:
+    CpuTracer(const Structure& s, int kd_stack) : s_(s), kd_stack_(kd_stack) {
+        if (s.layout == Layout::kBvh2) {
+            name_ = "cpu-bvh2-stack";
+            if (s.depth() > uint32_t(kBvh2StackSize))
+                throw Error("BVH of depth " + std::to_string(s.depth()) + " is deeper than the CPU traversal stack of " +
+                            std::to_string(kBvh2StackSize) + " entries");
+        } else {
+            name_ = kd_stack == kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(kd_stack);
+            if (kd_stack == kKdFullStack && s.depth() > uint32_t(kKdFullStack))
+                throw Error("kd-tree of depth " + std::to_string(s.depth()) + " is deeper than the full stack");
+        }
+    }
+    std::string name() const override { return name_; }
+    std::string device() const override { return "cpu"; }
+    void set_rays(const std::vector<Ray>& rays, Query query) override {
+        set_.rays = rays;
+        set_.query = query;
+    }
+    double run() override {
+        const auto t0 = std::chrono::steady_clock::now();
+        trace_cpu_counted(s_, kd_stack_, set_, hits_, nullptr);
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    }
+    void hits(std::vector<Hit>& out) const override { out = hits_; }
+
+private:
+    const Structure& s_;
+    int kd_stack_;
+    std::string name_;
+    RaySet set_;
+    std::vector<Hit> hits_;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracer> make_cpu_tracer(const Structure& structure, int kd_stack) {
+    return std::make_unique<CpuTracer>(structure, kd_stack);
+}
+
+}  // namespace bvhlab::trav

@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: MIT
+// A Structure uploaded to the GPU, whatever its layout, with the plain view struct that its
+// kernels take (Bvh2View or KdView, written once for host and device).
+#pragma once
+
+#include "accel/core/aabb.h"
+#include "traversal/device/bvh2_traverse.h"
+#include "traversal/device/kd_traverse.h"
+#include "traversal/gpu/device_buffer.h"
+#include "traversal/structure.h"
+
+namespace bvhlab::trav {
+
+class DeviceStructure {
+public:
+    /// Uploads the structure's layout. Throws bvhlab::Error (CudaError) on failure.
+    explicit DeviceStructure(const Structure& s);
+
+    Layout layout() const { return layout_; }
+    uint32_t depth() const { return depth_; }
+    size_t bytes() const;
+    const std::string& name() const { return name_; }
+
+    /// The device view of a BVH2 layout (null pointers for a kd layout).
+    Bvh2View bvh2() const { return {bvh_nodes_.data(), bvh_tris_.data(), bvh_ids_.data()}; }
+    /// The device view of a kd layout (null pointers for a BVH2 layout).
+    KdView kd() const { return {kd_nodes_.data(), kd_prims_.data(), kd_tris_.data(), kd_bounds_}; }
+
+private:
+    Layout layout_;
+    uint32_t depth_;
+    std::string name_;
+    DeviceBuffer<accel::Bvh2Node> bvh_nodes_;
+    DeviceBuffer<accel::WoopTriangle> bvh_tris_;
+    DeviceBuffer<uint32_t> bvh_ids_;
+    DeviceBuffer<accel::KdNode> kd_nodes_;
+    DeviceBuffer<uint32_t> kd_prims_;
+    DeviceBuffer<accel::WoopTriangle> kd_tris_;
+    AABB kd_bounds_ = AABB::empty();
+};
+
+}  // namespace bvhlab::trav

@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: MIT
+// The GPU runtime of a build without CUDA: every entry point says so.
+#include "accel/core/check.h"
+#include "traversal/gpu/device_buffer.h"
+
+namespace bvhlab::trav {
+
+namespace {
+const char* const kNoCuda = "this bvhlab was built without CUDA (nvcc was not found at configure time)";
+}
+
+bool gpu_available(std::string* why) {
+    if (why) *why = kNoCuda;
+    return false;
+}
+std::string gpu_description() { return "none"; }
+std::string gpu_driver() { return "none"; }
+SmClock gpu_sm_clock() { return {}; }
+int gpu_sm_count() { throw Error(kNoCuda); }
+
+namespace detail {
+void* device_malloc(size_t) { throw Error(kNoCuda); }
+void device_free(void*) noexcept {}
+void copy_to_device(void*, const void*, size_t) { throw Error(kNoCuda); }
+void copy_to_host(void*, const void*, size_t) { throw Error(kNoCuda); }
+void fill_device_bytes(void*, uint8_t, size_t, void*) { throw Error(kNoCuda); }
+}  // namespace detail
+
+DeviceTimer::DeviceTimer() { throw Error(kNoCuda); }
+DeviceTimer::~DeviceTimer() = default;
+void DeviceTimer::start(void*) { throw Error(kNoCuda); }
+float DeviceTimer::stop(void*) { throw Error(kNoCuda); }
+
+}  // namespace bvhlab::trav
