@@ -1,27 +1,103 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# One batched GPU session over an installed bvhlab (cmake --install): GPU tests, verification
-# of the GPU kernel against Embree, and GPU + CPU benchmarks, as logs and JSON lines in OUT.
-# Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT [SCENE ...]
+# One batched GPU session over an installed bvhlab (cmake --install), as logs and JSON lines
+# in OUT (at most 8 files, so that a lent machine can send them all back). Phases:
+#   tests     the gpu-labelled tests (every registered kernel x structure x query)
+#   bench     the anchors' ray files (bvhlab rays at the default seed: 480x320x16 4x4-tiled
+#             primary, protocol diffuse), every kernel on binned, SBVH and kd-trees, checked
+#             against Embree before timing, and Embree on every core on the same rays
+#   verify    every kernel against Embree on the protocol's four ray types
+#   profile   ncu metrics of every kernel on bunny primary and furball diffuse; block sizes
+#   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
+# Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
 set -uo pipefail
-prefix=$1 scenes=$2 out=$3
-shift 3
+prefix=$1 scenes=$2 out=$3 phases=$4
+shift 4
 names=("$@")
 [ ${#names[@]} -gt 0 ] || names=(stanford-bunny dragon-100k buddha-100k furball)
 export BVHLAB_SCENES=$scenes BVHLAB_DATA=$prefix/share/bvhlab/data
 mkdir -p "$out"
 bin=$prefix/bin
+rays=${BVHLAB_RAYS_DIR:-/tmp/bvhlab-rays}
+mkdir -p "$rays"
 status=0
-{ nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv 2>&1; "$bin/bvhlab" --version; } | tee "$out/machine.txt"
-"$bin/bvhlab_gpu_tests" 2>&1 | tee "$out/gpu_tests.log" | tail -3 || status=1
-grep -q "FAILED" "$out/gpu_tests.log" && status=1
-for s in "${names[@]}"; do
-    # Protocol rays (1024x768, AO 8, diffuse 4, shadow 1), every hit checked against Embree.
-    "$bin/bvhlab" -q verify "$s" --device gpu --json >>"$out/verify.jsonl" || status=1
-    "$bin/bvhlab" -q bench "$s" --device gpu --runs 10 --json >>"$out/bench.jsonl" || status=1
-    # The tinybvh comparison setting for primary rays: 480x320 pixels, 16 spp, 4x4 tiles.
-    "$bin/bvhlab" -q bench "$s" --device gpu --types primary --width 480 --height 320 --spp 16 --tile 4 \
-        --runs 10 --json >>"$out/bench.jsonl" || status=1
-done
-echo "gpu_run.sh: status $status"
+has() { [[ ",$phases," == *",$1,"* || "$phases" == all ]]; }
+log() { echo "[gpu_run $(date +%T)] $*" | tee -a "$out/summary.txt"; }
+
+{ nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.max.sm --format=csv 2>&1
+  "$bin/bvhlab" --version; nproc; } >"$out/machine.txt" 2>&1
+
+# The anchors' ray files (../shared/anchors/README.md), made here once per machine.
+make_rays() {
+    local s=$1
+    [ -s "$rays/$s-primary.rays" ] || "$bin/bvhlab" -q rays "$s" --type primary --width 480 --height 320 --spp 16 \
+        --tile 4 -o "$rays/$s-primary.rays" || status=1
+    [ -s "$rays/$s-diffuse.rays" ] || "$bin/bvhlab" -q rays "$s" --type diffuse -o "$rays/$s-diffuse.rays" || status=1
+}
+
+if has tests; then
+    log "tests"
+    "$bin/bvhlab_gpu_tests" >"$out/gpu_tests.log" 2>&1 || status=1
+    tail -3 "$out/gpu_tests.log" | tee -a "$out/summary.txt"
+fi
+
+if has bench; then
+    for s in "${names[@]}"; do
+        make_rays "$s"
+        for r in primary diffuse; do
+            log "bench $s $r"
+            f=$rays/$s-$r.rays
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel all --json >>"$out/bench.jsonl" || status=1
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel all --structure sbvh --json >>"$out/bench.jsonl" || status=1
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel all --structure kdtree --kd-stack 4 --json \
+                >>"$out/bench.jsonl" || status=1
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device embree --json >>"$out/bench.jsonl" || status=1
+        done
+    done
+fi
+
+if has verify; then
+    for s in cornell-box "${names[@]}"; do
+        log "verify $s"
+        "$bin/bvhlab" -q verify "$s" --device gpu --kernel all --json >>"$out/verify.jsonl" || status=1
+        "$bin/bvhlab" -q verify "$s" --device gpu --kernel all --structure kdtree --kd-stack 2 --json \
+            >>"$out/verify.jsonl" || status=1
+    done
+fi
+
+if has profile; then
+    metrics=gpu__time_duration.sum,sm__cycles_elapsed.avg.per_second,smsp__inst_executed.sum,smsp__thread_inst_executed.sum
+    metrics+=,smsp__thread_inst_executed_per_inst_executed.ratio,sm__inst_issued.avg.pct_of_peak_sustained_active
+    metrics+=,sm__warps_active.avg.pct_of_peak_sustained_active,launch__registers_per_thread,launch__grid_size,launch__block_size
+    metrics+=,l1tex__t_sector_hit_rate.pct,lts__t_sector_hit_rate.pct,l1tex__t_bytes.sum,lts__t_bytes.sum,dram__bytes_read.sum
+    metrics+=,dram__throughput.avg.pct_of_peak_sustained_elapsed,l1tex__throughput.avg.pct_of_peak_sustained_active
+    metrics+=,lts__throughput.avg.pct_of_peak_sustained_elapsed,smsp__average_warp_latency_issue_stalled_long_scoreboard.ratio
+    for sr in stanford-bunny:primary furball:diffuse; do
+        s=${sr%%:*} r=${sr##*:}
+        make_rays "$s"
+        log "ncu $s $r"
+        ncu --metrics "$metrics" --csv --page raw -k regex:"per_ray_kernel|persistent_kernel" \
+            "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --runs 1 --warmup 0 --json \
+            >>"$out/ncu.csv" 2>>"$out/profile.log" || status=1
+        for k in speculative persistent-speculative speculative-fma; do
+            for b in 64 128 256; do
+                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel "$k" --block-size $b --json \
+                    >>"$out/blocks.jsonl" 2>>"$out/profile.log" || status=1
+            done
+        done
+    done
+fi
+
+if has sanitize; then
+    for tool in memcheck racecheck; do
+        log "compute-sanitizer $tool"
+        for st in bvh kdtree; do
+            compute-sanitizer --tool $tool --error-exitcode 3 "$bin/bvhlab" -q verify cornell-box --device gpu \
+                --kernel all --structure $st --width 64 --height 48 --json >>"$out/sanitizer.log" 2>&1 || status=1
+        done
+    done
+    grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$out/sanitizer.log" | tee -a "$out/summary.txt"
+fi
+
+log "status $status"
 exit $status
