@@ -4,6 +4,8 @@
 #include "accel/builders/kdtree.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
@@ -130,6 +132,26 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
     KdTreeBuilder::Config c;
     c.small_node_size = KdTreeBuilder::kMaxSmallNodeSize + 1;
     EXPECT_THROW(KdTreeBuilder(c).build(scenes[0]), Error);
+}
+
+// The tree must not depend on how many threads build it. Found on the 16-core GPU host:
+// furball's kd-tree there had 24x the triangle tests per ray of the 2-thread VM's, because a
+// thread waiting inside a large node's parallel split stole another node's task, whose
+// split() overwrote the per-thread scratch the waiting split was still using. Nodes reach
+// the parallel split at 64K triangles, so the scene is larger than that; a 16-thread arena,
+// oversubscribed on a 2-core machine, steals at least as eagerly as 16 cores.
+TEST(KdTreeBuilder, SixteenThreadsBuildTheTreeOneThreadBuilds) {
+    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 300000, 21);
+    KdTreeBuilder::Config c;
+    c.reuse_clipped_polygons = false;  // bit-identical trees across thread counts
+    KdTree one, sixteen;
+    tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 16);
+    tbb::task_arena(1).execute([&] { one = KdTreeBuilder(c).build(m); });
+    for (int round = 0; round < 3; ++round) {
+        tbb::task_arena(16).execute([&] { sixteen = KdTreeBuilder(c).build(m); });
+        ASSERT_EQ(sixteen.nodes.size(), one.nodes.size()) << "round " << round;
+        ASSERT_EQ(sixteen.prim_indices, one.prim_indices) << "round " << round;
+    }
 }
 
 // With the default reuse_clipped_polygons, below small_node_size a straddler's clipped parts
