@@ -23,18 +23,6 @@ static_assert(sizeof(Vec3) == 12, "Vec3 must be three packed floats");
 BVHLAB_HD BVHLAB_FORCEINLINE float min_f(float a, float b) { return a < b ? a : b; }
 BVHLAB_HD BVHLAB_FORCEINLINE float max_f(float a, float b) { return a > b ? a : b; }
 
-/// a / b. On the device, a times the correctly rounded reciprocal (__frcp_rn): at most one
-/// more rounding than IEEE division, which nvcc otherwise compiles to a ~20-instruction
-/// sequence with a slow path; each triangle test and each ray's setup divides. The host keeps
-/// the plain division.
-BVHLAB_HD BVHLAB_FORCEINLINE float div_f(float a, float b) {
-#if defined(__CUDA_ARCH__)
-    return a * __frcp_rn(b);
-#else
-    return a / b;
-#endif
-}
-
 BVHLAB_HD inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 BVHLAB_HD inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 BVHLAB_HD inline Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }

@@ -33,7 +33,7 @@ struct alignas(16) WoopTriangle {
                                                             float& u_out, float& v_out) {
         const float oz = r0[3] - (o.x * r0[0] + o.y * r0[1] + o.z * r0[2]);
         const float dz = d.x * r0[0] + d.y * r0[1] + d.z * r0[2];
-        const float t = div_f(oz, dz);
+        const float t = oz / dz;
         if (!(t > tmin && t < tmax)) return false;
         const float ox = r1[3] + o.x * r1[0] + o.y * r1[1] + o.z * r1[2];
         const float dx = d.x * r1[0] + d.y * r1[1] + d.z * r1[2];

@@ -34,7 +34,7 @@ struct Bvh2View {
 /// slab distances stay finite (never 0 * inf = NaN).
 BVHLAB_HD BVHLAB_FORCEINLINE Vec3 safe_reciprocal(Vec3 d) {
     const float eps = 8.271806e-25f;  // 2^-80
-    auto inv = [eps](float x) { return div_f(1.0f, fabsf(x) > eps ? x : copysignf(eps, x)); };
+    auto inv = [eps](float x) { return 1.0f / (fabsf(x) > eps ? x : copysignf(eps, x)); };
     return {inv(d.x), inv(d.y), inv(d.z)};
 }
 
