@@ -19,8 +19,12 @@ public:
     virtual ~Tracer() = default;
     /// The kernel's name for figures, e.g. "cpu-bvh2-stack" or "speculative".
     virtual std::string name() const = 0;
-    /// "cpu" or "gpu".
+    /// "cpu", "gpu" or "embree".
     virtual std::string device() const = 0;
+    /// GPU threads per block (0 off the GPU).
+    virtual int block_size() const { return 0; }
+    /// Short-stack entries of a kd-tree traversal with restart (0 for a full stack).
+    virtual int short_stack() const { return 0; }
     /// Makes `rays` the set that run() traces (a GPU tracer uploads them here).
     virtual void set_rays(const std::vector<Ray>& rays, Query query) = 0;
     /// Traces the set once and returns the milliseconds it took: kernel time from CUDA events

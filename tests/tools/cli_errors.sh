@@ -75,6 +75,21 @@ expect_error kd-bad-bonus "kd-bonus" build "$data/cornell_box.obj" --structure k
 expect_error kdtree-no-gpu-or-bad-stack "kd-stack" verify "$data/cornell_box.obj" --structure kdtree --kd-stack 9
 expect_error builder-and-structure "excludes" verify "$data/cornell_box.obj" --structure sbvh --builder binned
 
+# Tracer choice (--device, --kernel, --block-size, --kd-stack) and options that do not apply.
+expect_error kernel-needs-gpu "--kernel.*--device gpu" bench "$data/cornell_box.obj" --kernel speculative
+expect_error block-needs-gpu "--block-size.*--device gpu" verify "$data/cornell_box.obj" --block-size 64
+expect_error embree-no-structure "--structure does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --structure sbvh
+expect_error bad-device "device" bench "$data/cornell_box.obj" --device tpu
+expect_error embree-not-for-verify "device" verify "$data/cornell_box.obj" --device embree
+expect_error kd-stack-on-bvh "--kd-stack applies to kd-trees" bench "$data/cornell_box.obj" --kd-stack 4
+expect_error bins-on-kdtree "--bins applies to BVH builders, not --structure kdtree" verify "$data/cornell_box.obj" --structure kdtree --bins 4
+expect_error max-leaf-on-kdtree "--max-leaf applies to BVH builders" build "$data/cornell_box.obj" --structure kdtree --max-leaf 4
+expect_error kd-ct-on-bvh "--kd-ct applies to --structure kdtree" build "$data/cornell_box.obj" --kd-ct 10
+expect_error alpha-on-binned "--alpha applies to --builder sbvh, not binned" build "$data/cornell_box.obj" --alpha 0.5
+expect_error spatial-bins-on-sweep "--spatial-bins applies to --builder sbvh, not sweep" build "$data/cornell_box.obj" --builder sweep --spatial-bins 4
+expect_error bins-on-sweep "--bins does not apply to the sweep builder" build "$data/cornell_box.obj" --structure sweep --bins 8
+expect_error gpu-kernel-unavailable "device gpu: (no|this bvhlab)" verify "$data/cornell_box.obj" --device gpu --kernel all
+
 # The good path still works and --json prints parseable lines.
 if "$bin" -q build "$data/cornell_box.obj" --json | python3 -c 'import json,sys; j=json.loads(sys.stdin.read()); assert j["triangles"]==32 and j["nodes"]>0 and "sah" in j and "epo" in j and j["builder"]=="binned"'; then
     pass=$((pass + 1))

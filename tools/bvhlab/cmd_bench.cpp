@@ -8,7 +8,6 @@
 #include "accel/core/check.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
-#include "traversal/gpu/registry.h"
 #include "traversal/rays/ray_file.h"
 
 namespace bvhlab::cli {
@@ -79,9 +78,7 @@ void register_bench(CLI::App& app, Globals& g) {
             for (auto& t : tracers) {
                 nlohmann::json j = bench_ray_set(s, b, *t, oracle, cs, o->bench, o->cc, g, hits_out);
                 if (t->device() == "gpu") {
-                    const int stack = b.is_kd() && trav::find_kernel(t->name()).short_stack
-                                          ? (o->build.kd_stack_flag->count() ? o->build.kd_stack : 4)
-                                          : 64;
+                    const int stack = t->short_stack() ? t->short_stack() : 64;
                     if (!work.count(stack)) work[stack] = work_per_ray(b, stack, set);
                     j["work_per_ray"] = work[stack];
                     j["work_counted_by"] = "the structure's shared traversal on the CPU, same rays";

@@ -254,6 +254,8 @@ nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer) {
             {"structure", embree ? std::string("embree/robust-high") : built.structure.name},
             {"layout", embree ? "embree" : trav::layout_name(built.structure.layout)},
             {"kernel", tracer.name()},
+            {"block_size", gpu ? nlohmann::json(tracer.block_size()) : nlohmann::json(nullptr)},
+            {"short_stack", tracer.short_stack() ? nlohmann::json(tracer.short_stack()) : nlohmann::json(nullptr)},
             {"gpu", gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr)},
             {"driver", gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr)}};
 }

@@ -44,6 +44,8 @@ public:
     }
     std::string name() const override { return k_.name; }
     std::string device() const override { return "gpu"; }
+    int block_size() const override { return opts_.block_size ? opts_.block_size : k_.default_block; }
+    int short_stack() const override { return k_.short_stack ? opts_.kd_stack : 0; }
     void set_rays(const std::vector<Ray>& rays, Query query) override {
         queue_.upload(rays);
         count_ = rays.size();

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Kernel 'persistent-speculative-fma': speculative-fma in persistent threads: warps fetch 32 rays at a time from a global counter
+// Kernel 'persistent-speculative-fma': speculative-fma in persistent threads: warps fetch 32 rays at a time from a global counter until the queue is empty.
 #include "traversal/device/bvh2_while_while.cuh"
 #include "traversal/kernels/launch_helpers.cuh"
 
@@ -14,6 +14,6 @@ void launch(const LaunchArgs& a) {
 
 }  // namespace
 
-BVHLAB_REGISTER_KERNEL({"persistent-speculative-fma", Layout::kBvh2, "speculative-fma in persistent threads: warps fetch 32 rays at a time from a global counter", kBvh2StackSize, false, 128, launch});
+BVHLAB_REGISTER_KERNEL({"persistent-speculative-fma", Layout::kBvh2, "speculative-fma in persistent threads: warps fetch 32 rays at a time from a global counter until the queue is empty", kBvh2StackSize, false, 128, launch});
 
 }  // namespace bvhlab::trav

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Kernel 'persistent-while-while': while-while in persistent threads: warps fetch 32 rays at a time from a global counter until the queue is empty
+// Kernel 'persistent-while-while': while-while in persistent threads: warps fetch 32 rays at a time from a global counter until the queue is empty.
 #include "traversal/device/bvh2_while_while.cuh"
 #include "traversal/kernels/launch_helpers.cuh"
 

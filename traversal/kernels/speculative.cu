@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Kernel 'speculative': while-while with postponed leaf tests: lanes keep traversing until every lane of the warp has a leaf (warp vote)
+// Kernel 'speculative': while-while with postponed leaf tests: lanes keep traversing until every lane of the warp has a leaf (warp vote).
 #include "traversal/device/bvh2_while_while.cuh"
 #include "traversal/kernels/launch_helpers.cuh"
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Kernel 'speculative-fma': speculative with one-FMA slab distances (o * inv precomputed; exit distance widened by the rounding bound)
+// Kernel 'speculative-fma': speculative with one-FMA slab distances: near and far planes picked by the direction sign, per-axis rounding slack.
 #include "traversal/device/bvh2_while_while.cuh"
 #include "traversal/kernels/launch_helpers.cuh"
 
@@ -14,6 +14,6 @@ void launch(const LaunchArgs& a) {
 
 }  // namespace
 
-BVHLAB_REGISTER_KERNEL({"speculative-fma", Layout::kBvh2, "speculative with one-FMA slab distances (o * inv precomputed; exit distance widened by the rounding bound)", kBvh2StackSize, false, 128, launch});
+BVHLAB_REGISTER_KERNEL({"speculative-fma", Layout::kBvh2, "speculative with one-FMA slab distances: near and far planes picked by the direction sign, per-axis rounding slack", kBvh2StackSize, false, 128, launch});
 
 }  // namespace bvhlab::trav

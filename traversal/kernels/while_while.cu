@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Kernel 'while-while': Aila-Laine while-while: separate loops for interior nodes and leaf tests, one thread per ray, 16-byte read-only loads
+// Kernel 'while-while': Aila-Laine while-while: separate loops for interior nodes and leaf tests, one thread per ray, 16-byte read-only loads.
 #include "traversal/device/bvh2_while_while.cuh"
 #include "traversal/kernels/launch_helpers.cuh"
 
