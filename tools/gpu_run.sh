@@ -7,7 +7,7 @@
 #             primary, protocol diffuse), every kernel on binned, SBVH and kd-trees, checked
 #             against Embree before timing, and Embree on every core on the same rays
 #   verify    every kernel against Embree on the protocol's four ray types
-#   profile   ncu metrics of every kernel on bunny primary and furball diffuse; block sizes
+#   profile   ncu metrics of every kernel on bunny primary and furball diffuse
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
 set -uo pipefail
@@ -79,12 +79,6 @@ if has profile; then
         ncu --metrics "$metrics" --csv --page raw -k regex:"per_ray_kernel|persistent_kernel" \
             "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --runs 1 --warmup 0 --json \
             >>"$out/ncu.csv" 2>>"$out/profile.log" || status=1
-        for k in speculative persistent-speculative speculative-fma; do
-            for b in 64 128 256; do
-                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel "$k" --block-size $b --json \
-                    >>"$out/blocks.jsonl" 2>>"$out/profile.log" || status=1
-            done
-        done
     done
 fi
 
