@@ -8,6 +8,8 @@
 
 #include <cuda_runtime.h>
 
+#include <type_traits>
+
 #include "traversal/device/bvh2_traverse.h"
 
 namespace bvhlab::trav {
@@ -72,6 +74,29 @@ struct FmaSlabs {
     }
 };
 
+/// The traversal stack in local memory (the compiler's stack frame, cached in L1).
+struct LocalStack {
+    int32_t s[kBvh2StackSize + 1];
+    __device__ __forceinline__ int32_t& operator[](int i) { return s[i]; }
+};
+
+/// The traversal stack in shared memory: kBvh2StackSize + 1 words per thread, entry i of
+/// thread t at [i * blockDim.x + t] so that a warp's pushes hit 32 different banks. Needs
+/// (kBvh2StackSize + 1) * 4 bytes of dynamic shared memory per thread.
+struct SharedStack {
+    int32_t* base;
+    uint32_t stride;
+    __device__ __forceinline__ SharedStack() {
+        extern __shared__ int32_t bvhlab_stack_smem[];
+        base = bvhlab_stack_smem + threadIdx.x;
+        stride = blockDim.x;
+    }
+    __device__ __forceinline__ int32_t& operator[](int i) { return base[uint32_t(i) * stride]; }
+};
+
+/// Dynamic shared memory per thread of a kernel whose stack is a SharedStack.
+constexpr uint32_t kSharedStackBytes = (kBvh2StackSize + 1) * sizeof(int32_t);
+
 template <bool kFma>
 __device__ __forceinline__ auto make_slabs(const Ray& r, Vec3 inv) {
     if constexpr (kFma) return FmaSlabs(r.org, inv);
@@ -88,7 +113,8 @@ __device__ __forceinline__ auto make_slabs(const Ray& r, Vec3 inv) {
 ///   leaves together, so the leaf loop runs with more lanes busy.
 /// - kFmaSlabs: slab distances as one FMA each, lo * inv - o * inv with o * inv computed once
 ///   per ray, instead of (lo - o) * inv; see FmaSlabs for why no box is lost.
-template <bool kAnyHit, bool kSpeculative, bool kFmaSlabs>
+/// - kSharedStack: the stack in shared memory instead of local memory (SharedStack).
+template <bool kAnyHit, bool kSpeculative, bool kFmaSlabs, bool kSharedStack = false>
 __device__ __forceinline__ Hit trace_while_while(const Bvh2View& v, const Ray& ray) {
     // Above every node index, below every leaf reference as unsigned: the loop conditions
     // below are one unsigned compare each.
@@ -98,7 +124,7 @@ __device__ __forceinline__ Hit trace_while_while(const Bvh2View& v, const Ray& r
     const float tmin = ray.tmin;
     float t_hit = ray.tmax, u_hit = 0.0f, v_hit = 0.0f;
     int32_t k_hit = -1;  // index into tris of the closest hit so far
-    int32_t stack[kBvh2StackSize + 1];
+    std::conditional_t<kSharedStack, ww_detail::SharedStack, ww_detail::LocalStack> stack;
     stack[0] = kSentinel;
     int sp = 0;
     int32_t node = 0;  // the root
@@ -159,11 +185,11 @@ __device__ __forceinline__ Hit trace_while_while(const Bvh2View& v, const Ray& r
 }
 
 /// The while-while family as a per-ray functor for launch_per_ray / launch_persistent.
-template <bool kAnyHit, bool kSpeculative, bool kFmaSlabs>
+template <bool kAnyHit, bool kSpeculative, bool kFmaSlabs, bool kSharedStack = false>
 struct WhileWhileTrace {
     Bvh2View view;
     __device__ __forceinline__ Hit operator()(const Ray& r) const {
-        return trace_while_while<kAnyHit, kSpeculative, kFmaSlabs>(view, r);
+        return trace_while_while<kAnyHit, kSpeculative, kFmaSlabs, kSharedStack>(view, r);
     }
 };
 

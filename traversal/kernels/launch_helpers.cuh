@@ -56,12 +56,24 @@ __global__ void persistent_kernel(RayQueueView q, uint32_t* next_ray, PerRay f) 
 
 inline int block_of(const LaunchArgs& a, int default_block) { return a.block_size ? a.block_size : default_block; }
 
+/// Dynamic shared memory for `block` threads of `smem_per_thread` bytes each; raises the
+/// kernel's limit when that is over the default 48 KB.
+template <class Kernel>
+size_t shared_bytes(Kernel kernel, int block, uint32_t smem_per_thread) {
+    const size_t bytes = size_t(block) * smem_per_thread;
+    if (bytes > 48 * 1024)
+        BVHLAB_CUDA_CHECK(cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(bytes)));
+    return bytes;
+}
+
+/// One thread per ray. `smem_per_thread`: dynamic shared memory the functor uses per thread.
 template <class PerRay>
-void launch_per_ray(const LaunchArgs& a, int default_block, const PerRay& f) {
+void launch_per_ray(const LaunchArgs& a, int default_block, const PerRay& f, uint32_t smem_per_thread = 0) {
     const int block = block_of(a, default_block);
     const uint32_t grid = (a.capacity + uint32_t(block) - 1) / uint32_t(block);
     if (grid == 0) return;
-    per_ray_kernel<<<grid, block, 0, static_cast<cudaStream_t>(a.stream)>>>(a.queue, f);
+    const size_t smem = shared_bytes(per_ray_kernel<PerRay>, block, smem_per_thread);
+    per_ray_kernel<<<grid, block, smem, static_cast<cudaStream_t>(a.stream)>>>(a.queue, f);
     BVHLAB_CHECK_LAUNCH();
 }
 
