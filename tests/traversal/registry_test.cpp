@@ -59,6 +59,10 @@ TEST(KernelRegistry, RefusesWhatAKernelCannotTrace) {
     EXPECT_THROW(check_kernel_fits(full, Layout::kKd, 10, {}), Error);     // wrong layout
     EXPECT_THROW(check_kernel_fits(full, Layout::kBvh2, 10, {4, 48}), Error);  // block not whole warps
     EXPECT_NO_THROW(check_kernel_fits(full, Layout::kBvh2, 10, {4, 256}));
+    KernelInfo bounded = full;
+    bounded.max_block = 128;  // a kernel compiled with __launch_bounds__(128, ...)
+    EXPECT_NO_THROW(check_kernel_fits(bounded, Layout::kBvh2, 10, {4, 128}));
+    EXPECT_THROW(check_kernel_fits(bounded, Layout::kBvh2, 10, {4, 256}), Error);
     EXPECT_NO_THROW(check_kernel_fits(shorty, Layout::kKd, 1000, {1, 0}));  // restarts: any depth
     EXPECT_THROW(check_kernel_fits(shorty, Layout::kKd, 10, {9, 0}), Error);
     EXPECT_THROW(check_kernel_fits(shorty, Layout::kKd, 10, {0, 0}), Error);

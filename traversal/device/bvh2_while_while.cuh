@@ -19,6 +19,7 @@ namespace ww_detail {
 /// The exact form: slab_entry, shared with the CPU.
 struct ExactSlabs {
     Vec3 o, inv;
+    ExactSlabs() = default;
     __device__ __forceinline__ ExactSlabs(Vec3 org, Vec3 inv_dir) : o(org), inv(inv_dir) {}
     __device__ __forceinline__ float entry(float lox, float hix, float loy, float hiy, float loz, float hiz,
                                            float tmin, float tmax) const {
@@ -44,6 +45,7 @@ struct FmaSlabs {
     Vec3 inv, inv_far;        // reciprocal direction; widened by (1 + 2^-21) for far planes
     Vec3 ood_near, ood_far;   // o * inv plus / minus the slack (widened for far planes)
     bool neg_x, neg_y, neg_z;  // direction negative: the near plane is hi
+    FmaSlabs() = default;
     __device__ __forceinline__ FmaSlabs(Vec3 org, Vec3 inv_dir) : inv(inv_dir) {
         constexpr float kWiden = 1.0000005f;  // 1 + 2^-21: the far side's relative rounding
         auto axis = [&](float o, float iv, float& near_off, float& far_off, float& iv_far) {
@@ -105,91 +107,131 @@ __device__ __forceinline__ auto make_slabs(const Ray& r, Vec3 inv) {
 
 }  // namespace ww_detail
 
-/// Closest (kAnyHit = false) or any hit of `ray`. Stack: kBvh2StackSize entries plus a
-/// sentinel at the bottom, so popping needs no emptiness test. The build-time choices, each
-/// measured in experiments/NOTES.md:
+/// The traversal stack of the while-while family: local memory, or shared memory.
+template <bool kSharedStack>
+using WhileWhileStack = std::conditional_t<kSharedStack, ww_detail::SharedStack, ww_detail::LocalStack>;
+
+/// Where a ray stands in the while-while traversal, in plain values (a struct holding these
+/// and the stack array had nvcc keep every field in local memory, and one without the array
+/// still took 6 registers more than plain locals).
+/// Above every node index, below every leaf reference as unsigned: the loop conditions are one
+/// unsigned compare each.
+constexpr int32_t kWhileWhileSentinel = 0x76543210;
+
+/// One step of Aila & Laine's while-while traversal: the node loop until this lane (or,
+/// speculative, every lane) has a leaf, then the leaf loop. The ray is done when `node` is
+/// kWhileWhileSentinel. A kernel may hand a finished lane a new ray between steps (dynamic
+/// fetch) while the others go on. Stack: kBvh2StackSize entries plus the sentinel at the
+/// bottom, so popping needs no emptiness test. The build-time choices, each measured in
+/// experiments/NOTES.md:
 /// - kSpeculative: postponed leaf tests (section 4 of the paper). A lane that has found a
 ///   leaf keeps traversing until every active lane of its warp has one, then the warp tests
 ///   leaves together, so the leaf loop runs with more lanes busy.
-/// - kFmaSlabs: slab distances as one FMA each, lo * inv - o * inv with o * inv computed once
-///   per ray, instead of (lo - o) * inv; see FmaSlabs for why no box is lost.
-/// - kSharedStack: the stack in shared memory instead of local memory (SharedStack).
-template <bool kAnyHit, bool kSpeculative, bool kFmaSlabs, bool kSharedStack = false>
-__device__ __forceinline__ Hit trace_while_while(const Bvh2View& v, const Ray& ray) {
-    // Above every node index, below every leaf reference as unsigned: the loop conditions
-    // below are one unsigned compare each.
-    constexpr int32_t kSentinel = 0x76543210;
-    const Vec3 o = ray.org, d = ray.dir;
-    const auto slabs = ww_detail::make_slabs<kFmaSlabs>(ray, safe_reciprocal(ray.dir));
-    const float tmin = ray.tmin;
-    float t_hit = ray.tmax, u_hit = 0.0f, v_hit = 0.0f;
-    int32_t k_hit = -1;  // index into tris of the closest hit so far
-    std::conditional_t<kSharedStack, ww_detail::SharedStack, ww_detail::LocalStack> stack;
-    stack[0] = kSentinel;
-    int sp = 0;
-    int32_t node = 0;  // the root
-    int32_t leaf = 0;  // a postponed leaf (< 0), or 0 for none
+/// - Slabs = FmaSlabs: slab distances as one FMA each, lo * inv - o * inv with o * inv computed
+///   once per ray, instead of (lo - o) * inv (ExactSlabs); see FmaSlabs for why no box is lost.
+/// - Stack = SharedStack: the stack in shared memory instead of local memory.
+template <bool kAnyHit, bool kSpeculative, class Slabs, class Stack>
+__device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3 d, const Slabs& slabs, float tmin,
+                                                 float& t_hit, float& u_hit, float& v_hit, int32_t& k_hit,
+                                                 Stack& stack, int& sp, int32_t& node, int32_t& leaf) {
     const float4* nodes = reinterpret_cast<const float4*>(v.nodes);
     const float4* tris = reinterpret_cast<const float4*>(v.tris);
-
-    while (node != kSentinel) {
-        // Inner loop 1: interior nodes until this lane (or, speculative, every lane) has a leaf.
-        while (uint32_t(node) < uint32_t(kSentinel)) {
-            const float4 c0 = __ldg(nodes + 4 * node + 0);  // child 0: lo.x hi.x lo.y hi.y
-            const float4 c1 = __ldg(nodes + 4 * node + 1);  // child 1: lo.x hi.x lo.y hi.y
-            const float4 zz = __ldg(nodes + 4 * node + 2);  // lo.z hi.z of child 0, then child 1
-            const int2 ch = __ldg(reinterpret_cast<const int2*>(nodes + 4 * node + 3));
-            const float t0 = slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, tmin, t_hit);
-            const float t1 = slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, tmin, t_hit);
-            const bool hit0 = t0 != INFINITY, hit1 = t1 != INFINITY;
-            if (!hit0 && !hit1) {
-                node = stack[sp--];
-            } else {
-                // Near child first; on equal entry distances child 0, as traverse_bvh2 does.
-                const bool first0 = hit0 && (!hit1 || t0 <= t1);
-                node = first0 ? ch.x : ch.y;
-                if (hit0 && hit1) stack[++sp] = first0 ? ch.y : ch.x;
-            }
-            // Postpone the first leaf found and keep looking for interior nodes.
-            if (node < 0 && leaf >= 0) {
-                leaf = node;
-                node = stack[sp--];
-            }
-            if constexpr (kSpeculative) {
-                if (!__any_sync(__activemask(), leaf >= 0)) break;
-            } else {
-                if (leaf < 0) break;
-            }
+    while (uint32_t(node) < uint32_t(kWhileWhileSentinel)) {
+        const float4 c0 = __ldg(nodes + 4 * node + 0);  // child 0: lo.x hi.x lo.y hi.y
+        const float4 c1 = __ldg(nodes + 4 * node + 1);  // child 1: lo.x hi.x lo.y hi.y
+        const float4 zz = __ldg(nodes + 4 * node + 2);  // lo.z hi.z of child 0, then child 1
+        const int2 ch = __ldg(reinterpret_cast<const int2*>(nodes + 4 * node + 3));
+        const float t0 = slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, tmin, t_hit);
+        const float t1 = slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, tmin, t_hit);
+        const bool hit0 = t0 != INFINITY, hit1 = t1 != INFINITY;
+        if (!hit0 && !hit1) {
+            node = stack[sp--];
+        } else {
+            // Near child first; on equal entry distances child 0, as traverse_bvh2 does.
+            const bool first0 = hit0 && (!hit1 || t0 <= t1);
+            node = first0 ? ch.x : ch.y;
+            if (hit0 && hit1) stack[++sp] = first0 ? ch.y : ch.x;
         }
-        // Inner loop 2: the postponed leaf, then any leaves popped right behind it.
-        while (leaf < 0) {
-            const uint32_t first = accel::Bvh2Node::leaf_first(leaf);
-            const uint32_t end = first + accel::Bvh2Node::leaf_count(leaf);
-            for (uint32_t k = first; k < end; ++k) {
-                const float4 r0 = __ldg(tris + 3 * k + 0), r1 = __ldg(tris + 3 * k + 1), r2 = __ldg(tris + 3 * k + 2);
-                float t, u, w;
-                if (accel::WoopTriangle::intersect_rows(&r0.x, &r1.x, &r2.x, o, d, tmin, t_hit, t, u, w)) {
-                    if constexpr (kAnyHit) return {int32_t(__ldg(v.tri_ids + k)), t, u, w};
-                    t_hit = t;
-                    u_hit = u;
-                    v_hit = w;
-                    k_hit = int32_t(k);
-                }
-            }
+        // Postpone the first leaf found and keep looking for interior nodes.
+        if (node < 0 && leaf >= 0) {
             leaf = node;
-            if (node < 0) node = stack[sp--];
+            node = stack[sp--];
+        }
+        if constexpr (kSpeculative) {
+            if (!__any_sync(__activemask(), leaf >= 0)) break;
+        } else {
+            if (leaf < 0) break;
         }
     }
-    if (k_hit < 0) return Hit::miss();
-    return {int32_t(__ldg(v.tri_ids + k_hit)), t_hit, u_hit, v_hit};
+    // The postponed leaf, then any leaves popped right behind it.
+    while (leaf < 0) {
+        const uint32_t first = accel::Bvh2Node::leaf_first(leaf);
+        const uint32_t end = first + accel::Bvh2Node::leaf_count(leaf);
+        for (uint32_t k = first; k < end; ++k) {
+            const float4 r0 = __ldg(tris + 3 * k + 0), r1 = __ldg(tris + 3 * k + 1), r2 = __ldg(tris + 3 * k + 2);
+            float t, u, w;
+            if (accel::WoopTriangle::intersect_rows(&r0.x, &r1.x, &r2.x, o, d, tmin, t_hit, t, u, w)) {
+                t_hit = t;
+                u_hit = u;
+                v_hit = w;
+                k_hit = int32_t(k);
+                if constexpr (kAnyHit) {  // any hit ends the ray
+                    node = kWhileWhileSentinel;
+                    leaf = 0;
+                    return;
+                }
+            }
+        }
+        leaf = node;
+        if (node < 0) node = stack[sp--];
+    }
 }
 
-/// The while-while family as a per-ray functor for launch_per_ray / launch_persistent.
+/// The while-while family as a per-ray functor (launch_per_ray, launch_persistent), and as a
+/// resumable one (State, Stack, start, step, done, result) for launch_dynamic_fetch.
 template <bool kAnyHit, bool kSpeculative, bool kFmaSlabs, bool kSharedStack = false>
 struct WhileWhileTrace {
+    using Slabs = std::conditional_t<kFmaSlabs, ww_detail::FmaSlabs, ww_detail::ExactSlabs>;
+    using Stack = WhileWhileStack<kSharedStack>;
+    /// A ray in flight, for dynamic fetch.
+    struct State {
+        Vec3 o, d;
+        Slabs slabs;
+        float tmin, t_hit, u_hit, v_hit;
+        int32_t k_hit, node, leaf;
+        int sp;
+    };
     Bvh2View view;
+
     __device__ __forceinline__ Hit operator()(const Ray& r) const {
-        return trace_while_while<kAnyHit, kSpeculative, kFmaSlabs, kSharedStack>(view, r);
+        const auto slabs = ww_detail::make_slabs<kFmaSlabs>(r, safe_reciprocal(r.dir));
+        float t_hit = r.tmax, u_hit = 0.0f, v_hit = 0.0f;
+        int32_t k_hit = -1, node = 0, leaf = 0;  // node 0: the root; leaf 0: none postponed
+        Stack stack;
+        stack[0] = kWhileWhileSentinel;
+        int sp = 0;
+        while (node != kWhileWhileSentinel)
+            while_while_step<kAnyHit, kSpeculative>(view, r.org, r.dir, slabs, r.tmin, t_hit, u_hit, v_hit, k_hit, stack,
+                                                    sp, node, leaf);
+        return hit(k_hit, t_hit, u_hit, v_hit);
+    }
+
+    __device__ __forceinline__ void start(State& s, Stack& stack, const Ray& r) const {
+        s = {r.org, r.dir, ww_detail::make_slabs<kFmaSlabs>(r, safe_reciprocal(r.dir)), r.tmin, r.tmax, 0.0f, 0.0f,
+             -1, 0, 0, 0};
+        stack[0] = kWhileWhileSentinel;
+    }
+    __device__ __forceinline__ void step(State& s, Stack& stack) const {
+        while_while_step<kAnyHit, kSpeculative>(view, s.o, s.d, s.slabs, s.tmin, s.t_hit, s.u_hit, s.v_hit, s.k_hit,
+                                                stack, s.sp, s.node, s.leaf);
+    }
+    __device__ __forceinline__ bool done(const State& s) const { return s.node == kWhileWhileSentinel; }
+    __device__ __forceinline__ Hit result(const State& s) const { return hit(s.k_hit, s.t_hit, s.u_hit, s.v_hit); }
+
+private:
+    __device__ __forceinline__ Hit hit(int32_t k, float t, float u, float w) const {
+        if (k < 0) return Hit::miss();
+        return {int32_t(__ldg(view.tri_ids + k)), t, u, w};
     }
 };
 

@@ -16,8 +16,9 @@ void check_kernel_fits(const KernelInfo& k, Layout layout, uint32_t depth, const
     if (k.short_stack && (opts.kd_stack < 1 || opts.kd_stack > kKdMaxShortStack))
         throw Error(std::string("kernel '") + k.name + "' takes a short stack of 1..8 entries, not " +
                     std::to_string(opts.kd_stack));
-    if (opts.block_size != 0 && (opts.block_size < 32 || opts.block_size > 1024 || opts.block_size % 32 != 0))
-        throw Error("block size must be a multiple of 32 in 32..1024, not " + std::to_string(opts.block_size));
+    if (opts.block_size != 0 && (opts.block_size < 32 || opts.block_size > k.max_block || opts.block_size % 32 != 0))
+        throw Error(std::string("kernel '") + k.name + "' takes a block size that is a multiple of 32 in 32.." +
+                    std::to_string(k.max_block) + ", not " + std::to_string(opts.block_size));
 }
 
 namespace {

@@ -40,6 +40,7 @@ struct KernelInfo {
     bool short_stack;         ///< takes a short-stack size (--kd-stack 1..8)
     int default_block;        ///< threads per block unless asked otherwise
     void (*launch)(const LaunchArgs&);  ///< asynchronous on args.stream; throws CudaError
+    int max_block = 1024;     ///< the largest block it launches (its __launch_bounds__)
 };
 
 /// Adds a kernel; throws bvhlab::Error on a duplicate name. Returns true (for static init).

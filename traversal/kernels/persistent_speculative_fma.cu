@@ -5,6 +5,6 @@
 namespace bvhlab::trav {
 
 BVHLAB_REGISTER_KERNEL({"persistent-speculative-fma", Layout::kBvh2, "speculative-fma in persistent threads: warps fetch 32 rays at a time from a global counter until the queue is empty", kBvh2StackSize, false, 128,
-                        launch_while_while<true, true, true, false>});
+                        launch_while_while<true, true, Fetch::kPersistent, false>});
 
 }  // namespace bvhlab::trav

@@ -5,6 +5,6 @@
 namespace bvhlab::trav {
 
 BVHLAB_REGISTER_KERNEL({"speculative-fma", Layout::kBvh2, "speculative with one-FMA slab distances: near and far planes picked by the direction sign, per-axis rounding slack", kBvh2StackSize, false, 128,
-                        launch_while_while<true, true, false, false>});
+                        launch_while_while<true, true, Fetch::kPerRay, false>});
 
 }  // namespace bvhlab::trav

@@ -8,14 +8,22 @@
 
 namespace bvhlab::trav {
 
-template <bool kSpeculative, bool kFmaSlabs, bool kPersistent, bool kSharedStack = false>
+/// How a while-while kernel hands out rays.
+enum class Fetch { kPerRay, kPersistent, kDynamic };
+
+/// kMinBlocks > 0: a one-thread-per-ray launch with __launch_bounds__(128, kMinBlocks).
+template <bool kSpeculative, bool kFmaSlabs, Fetch kFetch, bool kSharedStack = false, int kMinBlocks = 0>
 void launch_while_while(const LaunchArgs& a) {
     constexpr int kBlock = 128;  // 64 and 256 were within 2% (experiments/NOTES.md)
     constexpr uint32_t kSmem = kSharedStack ? ww_detail::kSharedStackBytes : 0;
-    static_assert(!(kPersistent && kSharedStack), "the persistent launch takes no shared memory");
+    // Lanes start new rays at dynamic fetch once this many of the warp's 32 are idle.
+    constexpr uint32_t kFetchThreshold = 8;
+    static_assert(kFetch == Fetch::kPerRay || !kSharedStack, "only the per-ray launch takes shared memory");
     for_query(a, [&](auto any) {
         const WhileWhileTrace<decltype(any)::value, kSpeculative, kFmaSlabs, kSharedStack> f{a.bvh2};
-        if constexpr (kPersistent) launch_persistent(a, kBlock, f);
+        if constexpr (kFetch == Fetch::kPersistent) launch_persistent(a, kBlock, f);
+        else if constexpr (kFetch == Fetch::kDynamic) launch_dynamic_fetch(a, kBlock, f, kFetchThreshold);
+        else if constexpr (kMinBlocks > 0) launch_per_ray<kBlock, kMinBlocks>(a, kBlock, f, kSmem);
         else launch_per_ray(a, kBlock, f, kSmem);
     });
 }
