@@ -76,7 +76,7 @@ if has profile; then
         s=${sr%%:*} r=${sr##*:}
         make_rays "$s"
         log "ncu $s $r"
-        ncu --metrics "$metrics" --csv --page raw -k regex:"per_ray_kernel|persistent_kernel" \
+        ncu --metrics "$metrics" --csv --page raw -k regex:"per_ray_kernel|persistent_kernel|dynamic_fetch_kernel" \
             "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --runs 1 --warmup 0 --json \
             >>"$out/ncu.csv" 2>>"$out/profile.log" || status=1
     done
