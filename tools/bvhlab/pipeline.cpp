@@ -172,7 +172,7 @@ void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
         ->check(CLI::IsMember(devices))
         ->capture_default_str();
     kernel_flag = app.add_option("--kernel", kernel,
-                                 "GPU kernel (`bvhlab kernels` lists them) or all; default: while-while-fma for BVHs, "
+                                 "GPU kernel (`bvhlab kernels` lists them) or all; default: dynamic-speculative-fma for BVHs, "
                                  "kd-full-stack or kd-short-stack (with --kd-stack 1..8) for kd-trees");
     block_flag = app.add_option("--block-size", block_size, "GPU threads per block (default: the kernel's)")
                      ->check(CLI::Range(32, 1024));
@@ -193,10 +193,11 @@ void TraceOptions::validate(const BuildOptions& build) const {
 
 namespace {
 
-/// The default GPU kernel of a structure: the fastest BVH2 kernel as measured on the H100
+/// The default GPU kernel of a structure: the fastest BVH2 kernel as measured on the H100 (the
+/// best on every diffuse set and on furball; within 4% of while-while-fma on primary rays)
 /// (experiments/NOTES.md), or the kd kernel that matches --kd-stack.
 std::string default_kernel(const Built& b, int kd_stack) {
-    if (!b.is_kd()) return "while-while-fma";
+    if (!b.is_kd()) return "dynamic-speculative-fma";
     return kd_stack == trav::kKdFullStack ? "kd-full-stack" : "kd-short-stack";
 }
 
