@@ -9,6 +9,8 @@
 #   verify    every kernel against Embree on the protocol's four ray types
 #   profile   ncu metrics of every kernel on bunny primary and furball diffuse
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
+#   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
+#   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
 set -uo pipefail
 prefix=$1 scenes=$2 out=$3 phases=$4
@@ -80,6 +82,26 @@ if has profile; then
             "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --runs 1 --warmup 0 --json \
             >>"$out/ncu.csv" 2>>"$out/profile.log" || status=1
     done
+fi
+
+if has threshold; then
+    for s in stanford-bunny dragon-100k furball; do
+        make_rays "$s"
+        for r in primary diffuse; do
+            log "fetch thresholds $s $r"
+            for th in 2 4 8 16 24; do
+                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel dynamic-speculative-fma \
+                    --fetch-threshold $th --json >>"$out/threshold.jsonl" || status=1
+            done
+        done
+    done
+fi
+
+if has sass; then
+    # Closest-hit while-while-fma (per ray) and dynamic-speculative-fma, for instruction counting.
+    cuobjdump -sass "$bin/bvhlab" | awk '/Function :/ { keep = /per_ray_kernelINS0_15WhileWhileTraceILb0ELb0ELb1ELb0E/ ||
+        /dynamic_fetch_kernelINS0_15WhileWhileTraceILb0ELb1ELb1ELb0E/ } keep' >"$out/sass.txt" || status=1
+    log "sass: $(grep -c "Function :" "$out/sass.txt") functions, $(wc -l <"$out/sass.txt") lines"
 fi
 
 if has sanitize; then

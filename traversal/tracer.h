@@ -25,6 +25,8 @@ public:
     virtual int block_size() const { return 0; }
     /// Short-stack entries of a kd-tree traversal with restart (0 for a full stack).
     virtual int short_stack() const { return 0; }
+    /// Idle lanes that start new rays, for dynamic-fetch kernels (0 otherwise).
+    virtual int fetch_threshold() const { return 0; }
     /// Makes `rays` the set that run() traces (a GPU tracer uploads them here).
     virtual void set_rays(const std::vector<Ray>& rays, Query query) = 0;
     /// Traces the set once and returns the milliseconds it took: kernel time from CUDA events

@@ -78,6 +78,8 @@ expect_error builder-and-structure "excludes" verify "$data/cornell_box.obj" --s
 # Tracer choice (--device, --kernel, --block-size, --kd-stack) and options that do not apply.
 expect_error kernel-needs-gpu "--kernel.*--device gpu" bench "$data/cornell_box.obj" --kernel speculative
 expect_error block-needs-gpu "--block-size.*--device gpu" verify "$data/cornell_box.obj" --block-size 64
+expect_error fetch-needs-gpu "--fetch-threshold.*--device gpu" bench "$data/cornell_box.obj" --fetch-threshold 4
+expect_error fetch-range "fetch-threshold" bench "$data/cornell_box.obj" --device gpu --fetch-threshold 40
 expect_error embree-no-structure "--structure does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --structure sbvh
 expect_error bad-device "device" bench "$data/cornell_box.obj" --device tpu
 expect_error embree-not-for-verify "device" verify "$data/cornell_box.obj" --device embree

@@ -63,6 +63,14 @@ TEST(KernelRegistry, RefusesWhatAKernelCannotTrace) {
     bounded.max_block = 128;  // a kernel compiled with __launch_bounds__(128, ...)
     EXPECT_NO_THROW(check_kernel_fits(bounded, Layout::kBvh2, 10, {4, 128}));
     EXPECT_THROW(check_kernel_fits(bounded, Layout::kBvh2, 10, {4, 256}), Error);
+    GpuTraceOptions fetch;
+    fetch.fetch_threshold = 16;
+    EXPECT_THROW(check_kernel_fits(full, Layout::kBvh2, 10, fetch), Error);  // not a dynamic-fetch kernel
+    KernelInfo dynamic = full;
+    dynamic.dynamic_fetch = true;
+    EXPECT_NO_THROW(check_kernel_fits(dynamic, Layout::kBvh2, 10, fetch));
+    fetch.fetch_threshold = 33;
+    EXPECT_THROW(check_kernel_fits(dynamic, Layout::kBvh2, 10, fetch), Error);
     EXPECT_NO_THROW(check_kernel_fits(shorty, Layout::kKd, 1000, {1, 0}));  // restarts: any depth
     EXPECT_THROW(check_kernel_fits(shorty, Layout::kKd, 10, {9, 0}), Error);
     EXPECT_THROW(check_kernel_fits(shorty, Layout::kKd, 10, {0, 0}), Error);

@@ -176,12 +176,16 @@ void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
                                  "kd-full-stack or kd-short-stack (with --kd-stack 1..8) for kd-trees");
     block_flag = app.add_option("--block-size", block_size, "GPU threads per block (default: the kernel's)")
                      ->check(CLI::Range(32, 1024));
+    fetch_flag = app.add_option("--fetch-threshold", fetch_threshold,
+                                "dynamic-fetch kernels: idle lanes of a warp (1..32) that start new rays (default 8)")
+                     ->check(CLI::Range(1, 32));
 }
 
 void TraceOptions::validate(const BuildOptions& build) const {
     if (device != "gpu") {
         if (kernel_flag->count()) throw Error("--kernel chooses a GPU kernel; it needs --device gpu");
         if (block_flag->count()) throw Error("--block-size applies to GPU kernels; it needs --device gpu");
+        if (fetch_flag->count()) throw Error("--fetch-threshold applies to GPU kernels; it needs --device gpu");
     }
     if (device == "embree" && build.structure_flag->count())
         throw Error("--structure does not apply to --device embree (Embree builds its own BVH)");
@@ -226,11 +230,15 @@ std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const Trac
     }
     trav::GpuTraceOptions go;
     go.block_size = t.block_size;
+    go.fetch_threshold = t.fetch_threshold;
     // --kd-stack 1..8 sizes the short stack; a full-stack kernel takes none.
     const bool short_given = b.kd_stack_flag->count() && b.kd_stack != trav::kKdFullStack;
     go.kd_stack = short_given ? b.kd_stack : 4;
     for (const trav::KernelInfo& k : kernels) {
-        trav::check_kernel_fits(k, built.structure.layout, built.structure.depth(), go);
+        // --fetch-threshold with --kernel all applies to the dynamic-fetch kernels among them.
+        trav::GpuTraceOptions ko = go;
+        if (t.kernel == "all" && !k.dynamic_fetch) ko.fetch_threshold = 0;
+        trav::check_kernel_fits(k, built.structure.layout, built.structure.depth(), ko);
         if (t.kernel != "all" && b.kd_stack_flag->count() && !k.short_stack && built.is_kd() && short_given)
             throw Error(std::string("--kd-stack ") + std::to_string(b.kd_stack) + " sizes a short stack; kernel '" +
                         k.name + "' has a full stack (use kd-short-stack)");
@@ -238,7 +246,11 @@ std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const Trac
             throw Error(std::string("kernel '") + k.name + "' takes a short stack of 1..8 entries (--kd-stack), not 64");
     }
     if (!built.device) built.device = std::make_shared<trav::DeviceStructure>(built.structure);
-    for (const trav::KernelInfo& k : kernels) out.push_back(trav::make_gpu_tracer(built.device, k, go));
+    for (const trav::KernelInfo& k : kernels) {
+        trav::GpuTraceOptions ko = go;
+        if (!k.dynamic_fetch) ko.fetch_threshold = 0;
+        out.push_back(trav::make_gpu_tracer(built.device, k, ko));
+    }
     return out;
 }
 
@@ -257,6 +269,7 @@ nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer) {
             {"kernel", tracer.name()},
             {"block_size", gpu ? nlohmann::json(tracer.block_size()) : nlohmann::json(nullptr)},
             {"short_stack", tracer.short_stack() ? nlohmann::json(tracer.short_stack()) : nlohmann::json(nullptr)},
+            {"fetch_threshold", tracer.fetch_threshold() ? nlohmann::json(tracer.fetch_threshold()) : nlohmann::json(nullptr)},
             {"gpu", gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr)},
             {"driver", gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr)}};
 }

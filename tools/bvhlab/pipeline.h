@@ -41,8 +41,10 @@ struct TraceOptions {
     std::string device = "cpu";  ///< cpu, gpu, or (bench only) embree
     std::string kernel;          ///< GPU kernel name, "all", or "" for the structure's default
     int block_size = 0;          ///< GPU threads per block; 0 = the kernel's default
+    int fetch_threshold = 0;     ///< dynamic-fetch kernels: idle lanes that start new rays; 0 = default
     CLI::Option* kernel_flag = nullptr;
     CLI::Option* block_flag = nullptr;
+    CLI::Option* fetch_flag = nullptr;
 
     /// Adds --device (with `embree` when allow_embree), --kernel and --block-size.
     void add_to(CLI::App& app, bool allow_embree = false);

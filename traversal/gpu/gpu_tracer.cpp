@@ -16,6 +16,10 @@ void check_kernel_fits(const KernelInfo& k, Layout layout, uint32_t depth, const
     if (k.short_stack && (opts.kd_stack < 1 || opts.kd_stack > kKdMaxShortStack))
         throw Error(std::string("kernel '") + k.name + "' takes a short stack of 1..8 entries, not " +
                     std::to_string(opts.kd_stack));
+    if (opts.fetch_threshold != 0 && !k.dynamic_fetch)
+        throw Error(std::string("a fetch threshold applies to the dynamic-fetch kernels, not '") + k.name + "'");
+    if (opts.fetch_threshold < 0 || opts.fetch_threshold > 32)
+        throw Error("the fetch threshold is 1..32 idle lanes, not " + std::to_string(opts.fetch_threshold));
     if (opts.block_size != 0 && (opts.block_size < 32 || opts.block_size > k.max_block || opts.block_size % 32 != 0))
         throw Error(std::string("kernel '") + k.name + "' takes a block size that is a multiple of 32 in 32.." +
                     std::to_string(k.max_block) + ", not " + std::to_string(opts.block_size));
@@ -32,6 +36,7 @@ LaunchArgs make_args(const DeviceStructure& s, RayQueue& queue, Query query, uin
     a.query = query;
     a.kd_stack = opts.kd_stack;
     a.block_size = opts.block_size;
+    a.fetch_threshold = uint32_t(opts.fetch_threshold);
     a.d_next_ray = d_next_ray;
     a.stream = stream;
     return a;
@@ -47,6 +52,9 @@ public:
     std::string device() const override { return "gpu"; }
     int block_size() const override { return opts_.block_size ? opts_.block_size : k_.default_block; }
     int short_stack() const override { return k_.short_stack ? opts_.kd_stack : 0; }
+    int fetch_threshold() const override {
+        return k_.dynamic_fetch ? (opts_.fetch_threshold ? opts_.fetch_threshold : kDefaultFetchThreshold) : 0;
+    }
     void set_rays(const std::vector<Ray>& rays, Query query) override {
         queue_.upload(rays);
         count_ = rays.size();

@@ -26,8 +26,12 @@ struct LaunchArgs {
     int kd_stack = 0;                ///< short-stack entries (kernels with short_stack)
     int block_size = 0;              ///< threads per block; 0 = the kernel's default
     uint32_t* d_next_ray = nullptr;  ///< a device counter zeroed before each launch (persistent kernels)
+    uint32_t fetch_threshold = 0;    ///< idle lanes that trigger a dynamic fetch; 0 = the kernel's default
     void* stream = nullptr;          ///< cudaStream_t; null = the default stream
 };
+
+/// Idle lanes of a warp that start new rays in the dynamic-fetch kernels unless asked otherwise.
+constexpr uint32_t kDefaultFetchThreshold = 8;
 
 /// A kernel whose stack never overflows (it restarts instead).
 constexpr uint32_t kNoStackLimit = UINT32_MAX;
@@ -41,6 +45,7 @@ struct KernelInfo {
     int default_block;        ///< threads per block unless asked otherwise
     void (*launch)(const LaunchArgs&);  ///< asynchronous on args.stream; throws CudaError
     int max_block = 1024;     ///< the largest block it launches (its __launch_bounds__)
+    bool dynamic_fetch = false;  ///< takes a fetch threshold (--fetch-threshold 1..32)
 };
 
 /// Adds a kernel; throws bvhlab::Error on a duplicate name. Returns true (for static init).

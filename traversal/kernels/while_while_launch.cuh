@@ -16,13 +16,12 @@ template <bool kSpeculative, bool kFmaSlabs, Fetch kFetch, bool kSharedStack = f
 void launch_while_while(const LaunchArgs& a) {
     constexpr int kBlock = 128;  // 64 and 256 were within 2% (experiments/NOTES.md)
     constexpr uint32_t kSmem = kSharedStack ? ww_detail::kSharedStackBytes : 0;
-    // Lanes start new rays at dynamic fetch once this many of the warp's 32 are idle.
-    constexpr uint32_t kFetchThreshold = 8;
     static_assert(kFetch == Fetch::kPerRay || !kSharedStack, "only the per-ray launch takes shared memory");
     for_query(a, [&](auto any) {
         const WhileWhileTrace<decltype(any)::value, kSpeculative, kFmaSlabs, kSharedStack> f{a.bvh2};
         if constexpr (kFetch == Fetch::kPersistent) launch_persistent(a, kBlock, f);
-        else if constexpr (kFetch == Fetch::kDynamic) launch_dynamic_fetch(a, kBlock, f, kFetchThreshold);
+        else if constexpr (kFetch == Fetch::kDynamic)
+            launch_dynamic_fetch(a, kBlock, f, a.fetch_threshold ? a.fetch_threshold : kDefaultFetchThreshold);
         else if constexpr (kMinBlocks > 0) launch_per_ray<kBlock, kMinBlocks>(a, kBlock, f, kSmem);
         else launch_per_ray(a, kBlock, f, kSmem);
     });
