@@ -19,9 +19,24 @@ static_assert(sizeof(Vec3) == 12, "Vec3 must be three packed floats");
 
 /// min/max as compare-and-select. Unlike fminf/fmaxf these have no NaN rules, so host
 /// compilers inline them as minss/maxss instead of calling libm (30% of build time when not).
-/// With a NaN operand they return the second argument.
-BVHLAB_HD BVHLAB_FORCEINLINE float min_f(float a, float b) { return a < b ? a : b; }
-BVHLAB_HD BVHLAB_FORCEINLINE float max_f(float a, float b) { return a > b ? a : b; }
+/// With a NaN operand they return the second argument on the host. On the device they are
+/// fminf/fmaxf, one FMNMX each: the compare-select took an FSETP and an FSEL, 24 instructions
+/// of ~98 per BVH2 node visit (experiments/NOTES.md, session 12). The two differ only for a
+/// NaN operand, which no traversal produces (slab distances stay numbers, see slab_entry).
+BVHLAB_HD BVHLAB_FORCEINLINE float min_f(float a, float b) {
+#if defined(__CUDA_ARCH__)
+    return fminf(a, b);
+#else
+    return a < b ? a : b;
+#endif
+}
+BVHLAB_HD BVHLAB_FORCEINLINE float max_f(float a, float b) {
+#if defined(__CUDA_ARCH__)
+    return fmaxf(a, b);
+#else
+    return a > b ? a : b;
+#endif
+}
 
 BVHLAB_HD inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 BVHLAB_HD inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
