@@ -55,7 +55,7 @@ void register_verify(CLI::App& app, Globals& g) {
         auto check_one = [&](const CheckedSet& cs, const std::vector<trav::Hit>& ours, nlohmann::json fields) {
             Stage st(g, "verifying " + std::to_string(cs.set.rays.size()) + " " + cs.ray_type + " rays (" +
                             fields["kernel"].get<std::string>() + ") against Embree");
-            nlohmann::json j = verify_hits(s, oracle, cs, ours, o->cc, g);
+            nlohmann::json j = verify_hits(s, oracle, cs, ours, o->cc);
             j.update(fields);
             rows.push_back(std::move(j));
         };

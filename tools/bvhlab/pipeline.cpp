@@ -228,29 +228,27 @@ std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const Trac
     } else {
         kernels.push_back(trav::find_kernel(t.kernel.empty() ? default_kernel(built, b.kd_stack) : t.kernel));
     }
-    trav::GpuTraceOptions go;
-    go.block_size = t.block_size;
-    go.fetch_threshold = t.fetch_threshold;
-    // --kd-stack 1..8 sizes the short stack; a full-stack kernel takes none.
+    // Each kernel's options, checked before anything is uploaded: --kd-stack 1..8 sizes a short
+    // stack (a full-stack kernel takes none), and with --kernel all --fetch-threshold goes to
+    // the dynamic-fetch kernels among them.
+    const bool all = t.kernel == "all";
     const bool short_given = b.kd_stack_flag->count() && b.kd_stack != trav::kKdFullStack;
-    go.kd_stack = short_given ? b.kd_stack : 4;
+    std::vector<trav::GpuTraceOptions> options;
     for (const trav::KernelInfo& k : kernels) {
-        // --fetch-threshold with --kernel all applies to the dynamic-fetch kernels among them.
-        trav::GpuTraceOptions ko = go;
-        if (t.kernel == "all" && !k.dynamic_fetch) ko.fetch_threshold = 0;
-        trav::check_kernel_fits(k, built.structure.layout, built.structure.depth(), ko);
-        if (t.kernel != "all" && b.kd_stack_flag->count() && !k.short_stack && built.is_kd() && short_given)
+        trav::GpuTraceOptions o;
+        o.block_size = t.block_size;
+        o.fetch_threshold = all && !k.dynamic_fetch ? 0 : t.fetch_threshold;
+        if (short_given) o.kd_stack = b.kd_stack;
+        trav::check_kernel_fits(k, built.structure.layout, built.structure.depth(), o);
+        if (!all && short_given && !k.short_stack)
             throw Error(std::string("--kd-stack ") + std::to_string(b.kd_stack) + " sizes a short stack; kernel '" +
                         k.name + "' has a full stack (use kd-short-stack)");
-        if (b.kd_stack_flag->count() && k.short_stack && !short_given)
+        if (b.kd_stack_flag->count() && !short_given && k.short_stack)
             throw Error(std::string("kernel '") + k.name + "' takes a short stack of 1..8 entries (--kd-stack), not 64");
+        options.push_back(o);
     }
     if (!built.device) built.device = std::make_shared<trav::DeviceStructure>(built.structure);
-    for (const trav::KernelInfo& k : kernels) {
-        trav::GpuTraceOptions ko = go;
-        if (!k.dynamic_fetch) ko.fetch_threshold = 0;
-        out.push_back(trav::make_gpu_tracer(built.device, k, ko));
-    }
+    for (size_t i = 0; i < kernels.size(); ++i) out.push_back(trav::make_gpu_tracer(built.device, kernels[i], options[i]));
     return out;
 }
 
@@ -275,10 +273,9 @@ nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer) {
 }
 
 nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle, const CheckedSet& cs,
-                           const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc, const Globals& g) {
+                           const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc) {
     trav::CompareReport rep = trav::compare_hits(scene.mesh, cs.set.rays, cs.set.query, ours, cs.reference,
                                                  [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
-    (void)g;
     for (const auto& d : rep.first_mismatches) {
         std::fprintf(stderr, "[bvhlab] MISMATCH %s ray %zu: ours tri %d t %.9g, embree tri %d t %.9g: %s\n",
                      cs.ray_type.c_str(), d.ray, d.ours.tri, d.ours.t, d.oracle.tri, d.oracle.t, d.reason.c_str());
@@ -335,7 +332,7 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Trace
     tracer.set_rays(cs.set.rays, cs.set.query);
     tracer.run();
     tracer.hits(hits);
-    nlohmann::json check = verify_hits(scene, oracle, cs, hits, cc, g);
+    nlohmann::json check = verify_hits(scene, oracle, cs, hits, cc);
     check.update(tracer_fields(built, tracer));
     if (verify_record) *verify_record = check;
     j["check"] = {{"mismatches", check["mismatches"]}, {"ties", check["ties"]}};

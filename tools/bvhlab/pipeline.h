@@ -75,7 +75,7 @@ nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer);
 /// Compares `ours` with Embree's answers; the record has rays, agree, ties, mismatches.
 /// Prints the first mismatches on stderr.
 nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle, const CheckedSet& cs,
-                           const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc, const Globals& g);
+                           const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc);
 
 struct BenchSettings {
     int runs = 10;
