@@ -81,6 +81,8 @@ expect_error block-needs-gpu "--block-size.*--device gpu" verify "$data/cornell_
 expect_error fetch-needs-gpu "--fetch-threshold.*--device gpu" bench "$data/cornell_box.obj" --fetch-threshold 4
 expect_error fetch-range "fetch-threshold" bench "$data/cornell_box.obj" --device gpu --fetch-threshold 40
 expect_error embree-no-structure "--structure does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --structure sbvh
+expect_error embree-no-bins "--bins does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --bins 8
+expect_error embree-no-kd-stack "--kd-stack does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --kd-stack 4
 expect_error bad-device "device" bench "$data/cornell_box.obj" --device tpu
 expect_error embree-not-for-verify "device" verify "$data/cornell_box.obj" --device embree
 expect_error kd-stack-on-bvh "--kd-stack applies to kd-trees" bench "$data/cornell_box.obj" --kd-stack 4

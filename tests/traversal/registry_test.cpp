@@ -9,6 +9,7 @@
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
 #include "accel/io/procedural.h"
+#include "accel/core/stats.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -87,19 +88,9 @@ TEST(Bvh2Layout, PacksLeavesAndRecordsDepth) {
     const accel::TriangleMesh m = accel::make_procedural(accel::ProceduralKind::kSoup, 5000, 2);
     const accel::BuildTree tree = accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree;
     const accel::Bvh2 bvh = accel::convert_to_bvh2(tree, m);
-    // The BuildTree's depth counts leaves too; the layout's counts interior nodes only.
-    uint32_t build_depth = 0;
-    std::vector<std::pair<uint32_t, uint32_t>> todo{{0, 1}};
-    while (!todo.empty()) {
-        auto [n, d] = todo.back();
-        todo.pop_back();
-        build_depth = std::max(build_depth, d);
-        if (!tree.nodes[n].is_leaf()) {
-            todo.push_back({tree.nodes[n].first_index, d + 1});
-            todo.push_back({tree.nodes[n].first_index + 1, d + 1});
-        }
-    }
-    EXPECT_EQ(bvh.depth + 1, build_depth);
+    // The deepest leaf's depth (root at 0) is the number of interior nodes above it, which is
+    // what the layout records.
+    EXPECT_EQ(bvh.depth, accel::compute_stats(tree, m, {}, false).depth);
     // Every leaf's range lies inside tris.
     for (const auto& n : bvh.nodes)
         for (int32_t c : n.child)

@@ -187,8 +187,14 @@ void TraceOptions::validate(const BuildOptions& build) const {
         if (block_flag->count()) throw Error("--block-size applies to GPU kernels; it needs --device gpu");
         if (fetch_flag->count()) throw Error("--fetch-threshold applies to GPU kernels; it needs --device gpu");
     }
-    if (device == "embree" && build.structure_flag->count())
-        throw Error("--structure does not apply to --device embree (Embree builds its own BVH)");
+    if (device == "embree") {
+        std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag, build.kd_stack_flag};
+        flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
+        flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
+        for (const CLI::Option* f : flags)
+            if (f->count())
+                throw Error(f->get_name() + " does not apply to --device embree (Embree builds its own BVH)");
+    }
     if (device == "gpu") {
         std::string why;
         if (!trav::gpu_available(&why)) throw Error("--device gpu: " + why);
@@ -210,7 +216,6 @@ std::string default_kernel(const Built& b, int kd_stack) {
 std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,
                                                        const trav::EmbreeOracle* oracle) {
     std::vector<std::unique_ptr<trav::Tracer>> out;
-    if (b.kd_stack_flag->count() && !built.is_kd()) throw Error("--kd-stack applies to kd-trees, not BVHs");
     if (t.device == "cpu") {
         out.push_back(trav::make_cpu_tracer(built.structure, b.kd_stack));
         return out;
@@ -322,7 +327,8 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Trace
     j["ray_type"] = cs.ray_type;
     j["query"] = cs.set.query == trav::Query::kAny ? "any" : "closest";
     j["rays"] = cs.set.rays.size();
-    j.update(tracer_fields(built, tracer));
+    const nlohmann::json fields = tracer_fields(built, tracer);
+    j.update(fields);
     j["machine"] = machine_description();
     std::vector<trav::Hit> hits;
     Stage st(g, tracer.name() + ": " + std::to_string(cs.set.rays.size()) + " " + cs.ray_type + " rays on " + device +
@@ -333,7 +339,7 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Trace
     tracer.run();
     tracer.hits(hits);
     nlohmann::json check = verify_hits(scene, oracle, cs, hits, cc);
-    check.update(tracer_fields(built, tracer));
+    check.update(fields);
     if (verify_record) *verify_record = check;
     j["check"] = {{"mismatches", check["mismatches"]}, {"ties", check["ties"]}};
     if (check["mismatches"].get<size_t>() > 0) {

@@ -27,11 +27,15 @@ void trace_all(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query
 
 }  // namespace
 
-void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
-               std::vector<TraversalCounters>* counters) {
+void check_bvh2_stack(const accel::Bvh2& bvh) {
     if (bvh.depth > uint32_t(kBvh2StackSize))
         throw Error("BVH of depth " + std::to_string(bvh.depth) + " is deeper than the traversal stack of " +
                     std::to_string(kBvh2StackSize) + " entries");
+}
+
+void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
+               std::vector<TraversalCounters>* counters) {
+    check_bvh2_stack(bvh);
     hits.resize(rays.size());
     if (counters) {
         counters->assign(rays.size(), TraversalCounters{});

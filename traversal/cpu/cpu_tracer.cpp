@@ -26,15 +26,13 @@ namespace {
 class CpuTracer final : public Tracer {
 public:
     CpuTracer(const Structure& s, int kd_stack) : s_(s), kd_stack_(kd_stack) {
+        // Refused here, before any ray is traced.
         if (s.layout == Layout::kBvh2) {
+            check_bvh2_stack(s.bvh2);
             name_ = "cpu-bvh2-stack";
-            if (s.depth() > uint32_t(kBvh2StackSize))
-                throw Error("BVH of depth " + std::to_string(s.depth()) + " is deeper than the CPU traversal stack of " +
-                            std::to_string(kBvh2StackSize) + " entries");
         } else {
+            check_kd_stack(s.kd, kd_stack);
             name_ = kd_stack == kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(kd_stack);
-            if (kd_stack == kKdFullStack && s.depth() > uint32_t(kKdFullStack))
-                throw Error("kd-tree of depth " + std::to_string(s.depth()) + " is deeper than the full stack");
         }
     }
     std::string name() const override { return name_; }

@@ -10,8 +10,7 @@
 
 namespace bvhlab::trav {
 
-void trace_kd_cpu(const accel::KdLayout& kd, int stack_limit, const std::vector<Ray>& rays, Query query,
-                  std::vector<Hit>& hits, std::vector<TraversalCounters>* counters) {
+void check_kd_stack(const accel::KdLayout& kd, int stack_limit) {
     const bool full = stack_limit == kKdFullStack;
     if (!full && (stack_limit < 1 || stack_limit > kKdMaxShortStack))
         throw Error("kd-tree stack depth must be 1..8 (short stack) or 64 (full stack), not " +
@@ -19,6 +18,12 @@ void trace_kd_cpu(const accel::KdLayout& kd, int stack_limit, const std::vector<
     if (full && kd.depth > uint32_t(kKdFullStack))
         throw Error("kd-tree of depth " + std::to_string(kd.depth) + " is deeper than the full stack of " +
                     std::to_string(kKdFullStack) + " entries");
+}
+
+void trace_kd_cpu(const accel::KdLayout& kd, int stack_limit, const std::vector<Ray>& rays, Query query,
+                  std::vector<Hit>& hits, std::vector<TraversalCounters>* counters) {
+    check_kd_stack(kd, stack_limit);
+    const bool full = stack_limit == kKdFullStack;
     hits.resize(rays.size());
     if (counters) counters->assign(rays.size(), TraversalCounters{});
     const KdView view{kd.tree.nodes.data(), kd.tree.prim_indices.data(), kd.tris.data(), kd.tree.bounds};

@@ -36,9 +36,8 @@ struct ExactSlabs {
 /// Robustness: fma(plane, inv, -ood) differs from the exact (plane - o) * inv by the rounding
 /// of ood = o * inv (at most 2^-24 |ood|, and as much again for rounding ood +- s) and its own
 /// relative rounding. So each axis's near distance is lowered by s = 2^-22 |ood| (twice the
-/// bound) and its far distance raised by
-/// the same, and the far distances carry slab_entry's relative widening (folded into a
-/// widened reciprocal and offset, so it costs nothing per box). The slack is per axis: on an
+/// bound) and its far distance raised by the same, and the far distances carry slab_entry's
+/// relative widening (folded into a widened reciprocal and offset, so it costs nothing per box). The slack is per axis: on an
 /// axis nearly parallel to the ray |ood| is huge, but so is every distance on that axis, and
 /// the slack moves only planes within 2^-22 |o| of the origin. (A first version added the
 /// largest axis's slack to the exit distance in t units; on furball's diffuse rays it cost
@@ -102,29 +101,22 @@ struct SharedStack {
 /// Dynamic shared memory per thread of a kernel whose stack is a SharedStack.
 constexpr uint32_t kSharedStackBytes = (kBvh2StackSize + 1) * sizeof(int32_t);
 
-template <bool kFma>
-__device__ __forceinline__ auto make_slabs(const Ray& r, Vec3 inv) {
-    if constexpr (kFma) return FmaSlabs(r.org, inv);
-    else return ExactSlabs(r.org, inv);
-}
-
 }  // namespace ww_detail
 
 /// The traversal stack of the while-while family: local memory, or shared memory.
 template <bool kSharedStack>
 using WhileWhileStack = std::conditional_t<kSharedStack, ww_detail::SharedStack, ww_detail::LocalStack>;
 
-/// Where a ray stands in the while-while traversal, in plain values (a struct holding these
-/// and the stack array had nvcc keep every field in local memory, and one without the array
-/// still took 6 registers more than plain locals).
-/// Above every node index, below every leaf reference as unsigned: the loop conditions are one
-/// unsigned compare each.
+/// The bottom of the stack and the end of a ray. Above every node index, below every leaf
+/// reference as unsigned: the loop conditions are one unsigned compare each.
 constexpr int32_t kWhileWhileSentinel = 0x76543210;
 
 /// One step of Aila & Laine's while-while traversal: the node loop until this lane (or,
 /// speculative, every lane) has a leaf, then the leaf loop. The ray is done when `node` is
 /// kWhileWhileSentinel. A kernel may hand a finished lane a new ray between steps (dynamic
-/// fetch) while the others go on. Stack: kBvh2StackSize entries plus the sentinel at the
+/// fetch) while the others go on. The ray's state comes in as plain values and the stack
+/// beside them: a struct that held the stack array had nvcc keep every field in local memory
+/// (stack frame 264 -> 368 bytes). Stack: kBvh2StackSize entries plus the sentinel at the
 /// bottom, so popping needs no emptiness test. The build-time choices, each measured in
 /// experiments/NOTES.md:
 /// - kSpeculative: postponed leaf tests (section 4 of the paper). A lane that has found a
@@ -209,7 +201,7 @@ struct WhileWhileTrace {
     Bvh2View view;
 
     __device__ __forceinline__ Hit operator()(const Ray& r) const {
-        const auto slabs = ww_detail::make_slabs<kFmaSlabs>(r, safe_reciprocal(r.dir));
+        const Slabs slabs(r.org, safe_reciprocal(r.dir));
         float t_hit = r.tmax, u_hit = 0.0f, v_hit = 0.0f;
         int32_t k_hit = -1, node = 0, leaf = 0;  // node 0: the root; leaf 0: none postponed
         Stack stack;
@@ -222,8 +214,7 @@ struct WhileWhileTrace {
     }
 
     __device__ __forceinline__ void start(State& s, Stack& stack, const Ray& r) const {
-        s = {r.org, r.dir, ww_detail::make_slabs<kFmaSlabs>(r, safe_reciprocal(r.dir)), r.tmin, r.tmax, 0.0f, 0.0f,
-             -1, 0, 0, 0};
+        s = {r.org, r.dir, Slabs(r.org, safe_reciprocal(r.dir)), r.tmin, r.tmax, 0.0f, 0.0f, -1, 0, 0, 0};
         stack[0] = kWhileWhileSentinel;
     }
     __device__ __forceinline__ void step(State& s, Stack& stack) const {

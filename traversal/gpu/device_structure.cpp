@@ -5,7 +5,7 @@
 
 namespace bvhlab::trav {
 
-DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_(s.depth()), name_(s.name) {
+DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_(s.depth()) {
     std::string why;
     if (!gpu_available(&why)) throw Error(why);
     if (s.layout == Layout::kBvh2) {
@@ -18,11 +18,6 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         kd_tris_.upload(s.kd.tris);
         kd_bounds_ = s.kd.tree.bounds;
     }
-}
-
-size_t DeviceStructure::bytes() const {
-    return bvh_nodes_.bytes() + bvh_tris_.bytes() + bvh_ids_.bytes() + kd_nodes_.bytes() + kd_prims_.bytes() +
-           kd_tris_.bytes();
 }
 
 }  // namespace bvhlab::trav

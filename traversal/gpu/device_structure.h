@@ -18,8 +18,6 @@ public:
 
     Layout layout() const { return layout_; }
     uint32_t depth() const { return depth_; }
-    size_t bytes() const;
-    const std::string& name() const { return name_; }
 
     /// The device view of a BVH2 layout (null pointers for a kd layout).
     Bvh2View bvh2() const { return {bvh_nodes_.data(), bvh_tris_.data(), bvh_ids_.data()}; }
@@ -29,7 +27,6 @@ public:
 private:
     Layout layout_;
     uint32_t depth_;
-    std::string name_;
     DeviceBuffer<accel::Bvh2Node> bvh_nodes_;
     DeviceBuffer<accel::WoopTriangle> bvh_tris_;
     DeviceBuffer<uint32_t> bvh_ids_;

@@ -8,17 +8,19 @@
 namespace bvhlab::trav {
 
 void RayQueue::reserve(size_t capacity) {
+    if (count_.empty()) {
+        count_.resize(1);
+        set_count(0);
+    }
     if (capacity <= rays_.size()) return;
     if (capacity > UINT32_MAX) throw Error("a ray queue holds at most 2^32 - 1 rays, not " + std::to_string(capacity));
     rays_.resize(capacity);
     hits_.resize(capacity);
-    if (count_.empty()) count_.resize(1);
     set_count(0);
 }
 
 void RayQueue::upload(const std::vector<Ray>& rays) {
     reserve(rays.size());
-    if (count_.empty()) count_.resize(1);
     if (!rays.empty()) detail::copy_to_device(rays_.data(), rays.data(), rays.size() * sizeof(Ray));
     set_count(uint32_t(rays.size()));
 }
