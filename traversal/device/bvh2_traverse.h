@@ -1,9 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Stack-based traversal of a Bvh2 with Woop triangles, written once for host and device.
-// Near child first; leaves are tested as soon as their box is hit. The stack keeps each
-// node's entry distance, and a closest-hit query drops popped nodes that start beyond its
-// closest hit without fetching them: 7% fewer node fetches on the scans' primary rays, 1-2%
-// on their diffuse rays (experiments/NOTES.md, session 13).
+// Near child first; leaves are tested as soon as their box is hit.
 #pragma once
 
 #include <cstdint>
@@ -65,7 +62,6 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
     float tmax = ray.tmax;
     const Vec3 o = ray.org, d = ray.dir, inv = safe_reciprocal(ray.dir);
     int32_t stack[kBvh2StackSize];
-    float stack_t[kBvh2StackSize];  // entry distances
     int sp = 0;
     int32_t node = 0;
     while (true) {
@@ -103,16 +99,13 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
         if (nnext == 2) {
             // Visit the nearer child first; the farther one waits on the stack.
             const bool swap = tnext[1] < tnext[0];
-            stack_t[sp] = tnext[swap ? 0 : 1];
             stack[sp++] = next[swap ? 0 : 1];
             node = next[swap ? 1 : 0];
         } else if (nnext == 1) {
             node = next[0];
         } else {
-            do {
-                if (sp == 0) return hit;
-                node = stack[--sp];
-            } while (stack_t[sp] > tmax);
+            if (sp == 0) break;
+            node = stack[--sp];
         }
     }
     return hit;

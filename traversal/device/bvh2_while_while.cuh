@@ -78,59 +78,28 @@ struct FmaSlabs {
     }
 };
 
-/// A stack entry: a node or leaf reference and the distance at which the ray enters its box.
-/// Popping skips entries that start beyond the closest hit so far, without fetching them
-/// (Embree's CPU traversal does the same): on the shared traversal this saved 7% of the node
-/// fetches of primary rays and 1-2% of diffuse ones (experiments/NOTES.md, session 13).
-struct StackEntry {
-    int32_t ref;
-    float t;
-};
-
-/// The traversal stack in local memory (the compiler's stack frame, cached in L1); an entry
-/// is one 8-byte store and load.
+/// The traversal stack in local memory (the compiler's stack frame, cached in L1).
 struct LocalStack {
-    int2 s[kBvh2StackSize + 1];
-    __device__ __forceinline__ void set(int i, int32_t ref, float t) { s[i] = make_int2(ref, __float_as_int(t)); }
-    __device__ __forceinline__ StackEntry get(int i) const {
-        const int2 e = s[i];
-        return {e.x, __int_as_float(e.y)};
-    }
+    int32_t s[kBvh2StackSize + 1];
+    __device__ __forceinline__ int32_t& operator[](int i) { return s[i]; }
 };
 
-/// The traversal stack in shared memory: kBvh2StackSize + 1 entries per thread, entry i of
-/// thread t at [i * blockDim.x + t] so that a warp's accesses are consecutive. Needs
-/// kSharedStackBytes of dynamic shared memory per thread.
+/// The traversal stack in shared memory: kBvh2StackSize + 1 words per thread, entry i of
+/// thread t at [i * blockDim.x + t] so that a warp's pushes hit 32 different banks. Needs
+/// (kBvh2StackSize + 1) * 4 bytes of dynamic shared memory per thread.
 struct SharedStack {
-    int2* base;
+    int32_t* base;
     uint32_t stride;
     __device__ __forceinline__ SharedStack() {
-        extern __shared__ int2 bvhlab_stack_smem[];
+        extern __shared__ int32_t bvhlab_stack_smem[];
         base = bvhlab_stack_smem + threadIdx.x;
         stride = blockDim.x;
     }
-    __device__ __forceinline__ void set(int i, int32_t ref, float t) {
-        base[uint32_t(i) * stride] = make_int2(ref, __float_as_int(t));
-    }
-    __device__ __forceinline__ StackEntry get(int i) const {
-        const int2 e = base[uint32_t(i) * stride];
-        return {e.x, __int_as_float(e.y)};
-    }
+    __device__ __forceinline__ int32_t& operator[](int i) { return base[uint32_t(i) * stride]; }
 };
 
 /// Dynamic shared memory per thread of a kernel whose stack is a SharedStack.
-constexpr uint32_t kSharedStackBytes = (kBvh2StackSize + 1) * sizeof(int2);
-
-/// Pops the next entry; for a closest-hit query (kCull) entries whose box starts beyond t_hit
-/// are dropped unfetched. The sentinel at the bottom has distance -inf and is never dropped.
-template <bool kCull, class Stack>
-__device__ __forceinline__ int32_t pop(Stack& stack, int& sp, float t_hit) {
-    StackEntry e = stack.get(sp--);
-    if constexpr (kCull) {
-        while (e.t > t_hit) e = stack.get(sp--);
-    }
-    return e.ref;
-}
+constexpr uint32_t kSharedStackBytes = (kBvh2StackSize + 1) * sizeof(int32_t);
 
 }  // namespace ww_detail
 
@@ -160,7 +129,6 @@ template <bool kAnyHit, bool kSpeculative, class Slabs, class Stack>
 __device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3 d, const Slabs& slabs, float tmin,
                                                  float& t_hit, float& u_hit, float& v_hit, int32_t& k_hit,
                                                  Stack& stack, int& sp, int32_t& node, int32_t& leaf) {
-    constexpr bool kCull = !kAnyHit;  // an any-hit ray keeps t_hit = tmax until it ends
     while (uint32_t(node) < uint32_t(kWhileWhileSentinel)) {
         // One 64-bit address and immediate offsets (4 * node + 1 in int arithmetic had cost an
         // address computation per load).
@@ -173,17 +141,17 @@ __device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3
         const bool hit0 = slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, tmin, t_hit, t0);
         const bool hit1 = slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, tmin, t_hit, t1);
         if (!hit0 && !hit1) {
-            node = ww_detail::pop<kCull>(stack, sp, t_hit);
+            node = stack[sp--];
         } else {
             // Near child first; on equal entry distances child 0, as traverse_bvh2 does.
             const bool first0 = hit0 && (!hit1 || t0 <= t1);
             node = first0 ? ch.x : ch.y;
-            if (hit0 && hit1) stack.set(++sp, first0 ? ch.y : ch.x, first0 ? t1 : t0);
+            if (hit0 && hit1) stack[++sp] = first0 ? ch.y : ch.x;
         }
         // Postpone the first leaf found and keep looking for interior nodes.
         if (node < 0 && leaf >= 0) {
             leaf = node;
-            node = ww_detail::pop<kCull>(stack, sp, t_hit);
+            node = stack[sp--];
         }
         if constexpr (kSpeculative) {
             if (!__any_sync(__activemask(), leaf >= 0)) break;
@@ -212,7 +180,7 @@ __device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3
             }
         }
         leaf = node;
-        if (node < 0) node = ww_detail::pop<kCull>(stack, sp, t_hit);
+        if (node < 0) node = stack[sp--];
     }
 }
 
@@ -237,7 +205,7 @@ struct WhileWhileTrace {
         float t_hit = r.tmax, u_hit = 0.0f, v_hit = 0.0f;
         int32_t k_hit = -1, node = 0, leaf = 0;  // node 0: the root; leaf 0: none postponed
         Stack stack;
-        stack.set(0, kWhileWhileSentinel, -INFINITY);
+        stack[0] = kWhileWhileSentinel;
         int sp = 0;
         while (node != kWhileWhileSentinel)
             while_while_step<kAnyHit, kSpeculative>(view, r.org, r.dir, slabs, r.tmin, t_hit, u_hit, v_hit, k_hit, stack,
@@ -247,7 +215,7 @@ struct WhileWhileTrace {
 
     __device__ __forceinline__ void start(State& s, Stack& stack, const Ray& r) const {
         s = {r.org, r.dir, Slabs(r.org, safe_reciprocal(r.dir)), r.tmin, r.tmax, 0.0f, 0.0f, -1, 0, 0, 0};
-        stack.set(0, kWhileWhileSentinel, -INFINITY);
+        stack[0] = kWhileWhileSentinel;
     }
     __device__ __forceinline__ void step(State& s, Stack& stack) const {
         while_while_step<kAnyHit, kSpeculative>(view, s.o, s.d, s.slabs, s.tmin, s.t_hit, s.u_hit, s.v_hit, s.k_hit,
