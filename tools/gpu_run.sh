@@ -6,8 +6,10 @@
 #   bench     the anchors' ray files (bvhlab rays at the default seed: 480x320x16 4x4-tiled
 #             primary, protocol diffuse), every kernel on binned, SBVH and kd-trees, checked
 #             against Embree before timing, and Embree on every core on the same rays
+#   bvhbench  the bench phase for the BVH2 kernels alone (binned and SBVH; no kd-tree, no Embree)
 #   verify    every kernel against Embree on the protocol's four ray types
-#   profile   ncu metrics of every kernel on bunny primary and furball diffuse
+#   profile   ncu metrics of every kernel on bunny primary and furball diffuse (PROFILE_SETS:
+#             scene:raytype pairs; PROFILE_KERNEL: one kernel instead of all)
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
@@ -58,6 +60,19 @@ if has bench; then
     done
 fi
 
+if has bvhbench; then
+    for s in "${names[@]}"; do
+        make_rays "$s"
+        for r in primary diffuse; do
+            log "bvh bench $s $r"
+            for st in bvh sbvh; do
+                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --structure $st --json \
+                    >>"$out/bench.jsonl" || status=1
+            done
+        done
+    done
+fi
+
 if has verify; then
     for s in cornell-box "${names[@]}"; do
         log "verify $s"
@@ -74,13 +89,13 @@ if has profile; then
     metrics+=,l1tex__t_sector_hit_rate.pct,lts__t_sector_hit_rate.pct,l1tex__t_bytes.sum,lts__t_bytes.sum,dram__bytes_read.sum
     metrics+=,dram__throughput.avg.pct_of_peak_sustained_elapsed,l1tex__throughput.avg.pct_of_peak_sustained_active
     metrics+=,lts__throughput.avg.pct_of_peak_sustained_elapsed,smsp__average_warp_latency_issue_stalled_long_scoreboard.ratio
-    for sr in stanford-bunny:primary furball:diffuse; do
+    for sr in ${PROFILE_SETS:-stanford-bunny:primary furball:diffuse}; do
         s=${sr%%:*} r=${sr##*:}
         make_rays "$s"
         log "ncu $s $r"
         ncu --metrics "$metrics" --csv --page raw -k regex:"per_ray_kernel|persistent_kernel|dynamic_fetch_kernel" \
-            "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --runs 1 --warmup 0 --json \
-            >>"$out/ncu.csv" 2>>"$out/profile.log" || status=1
+            "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel "${PROFILE_KERNEL:-all}" --runs 1 \
+            --warmup 0 --json >>"$out/ncu.csv" 2>>"$out/profile.log" || status=1
     done
 fi
 
