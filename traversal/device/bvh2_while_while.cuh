@@ -80,15 +80,6 @@ struct FmaSlabs {
     }
 };
 
-/// The child words of a node, through the read-only path. A volatile load, because nvcc
-/// otherwise sinks it below the two box tests into the branch that uses it, and the loop
-/// then waits a second L1 round trip per node.
-__device__ __forceinline__ int2 load_children(const float4* p) {
-    int2 c;
-    asm volatile("ld.global.nc.v2.s32 {%0, %1}, [%2];" : "=r"(c.x), "=r"(c.y) : "l"(p));
-    return c;
-}
-
 /// The traversal stack in local memory (the compiler's stack frame, cached in L1).
 struct LocalStack {
     int32_t s[kBvh2StackSize + 1];
@@ -147,7 +138,7 @@ __device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3
         const float4 c0 = __ldg(p + 0);  // child 0: lo.x hi.x lo.y hi.y
         const float4 c1 = __ldg(p + 1);  // child 1: lo.x hi.x lo.y hi.y
         const float4 zz = __ldg(p + 2);  // lo.z hi.z of child 0, then child 1
-        const int2 ch = ww_detail::load_children(p + 3);
+        const int2 ch = __ldg(reinterpret_cast<const int2*>(p + 3));
         float t0, t1;
         const bool hit0 = slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, tmin, t_hit, t0);
         const bool hit1 = slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, tmin, t_hit, t1);
