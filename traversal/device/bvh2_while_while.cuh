@@ -30,7 +30,9 @@ struct ExactSlabs {
 };
 
 /// The FMA form: one FMA per slab distance, plane * inv - o * inv with o * inv computed once
-/// per ray. About 18 instructions per child box against slab_entry's 27.
+/// per ray, and the near and far plane of each axis picked by the direction's sign (one
+/// select each) instead of a min and a max of both. About 20 instructions per child box
+/// against slab_entry's 27.
 /// Robustness: fma(plane, inv, -ood) differs from the exact (plane - o) * inv by the rounding
 /// of ood = o * inv (at most 2^-24 |ood|, and as much again for rounding ood +- s) and its own
 /// relative rounding. So each axis's near distance is lowered by s = 2^-22 |ood| (twice the
@@ -40,43 +42,39 @@ struct ExactSlabs {
 /// the slack moves only planes within 2^-22 |o| of the origin. (A first version added the
 /// largest axis's slack to the exit distance in t units; on furball's diffuse rays it cost
 /// 25%: one such lane per warp made the whole warp enter extra boxes.)
-/// Which plane is near depends on the direction's sign, so the near parameters go to the lo
-/// plane of a positive axis and to the hi plane of a negative one, once per ray; per box the
-/// near and far distances are then the min and max of the two planes' distances. (Picking the
-/// planes per box by the sign had cost 12 selects per node, and nvcc recomputed the three sign
-/// predicates in every iteration: 3 instructions more per node than this form.) The min and
-/// max give the same near and far as the picked planes, except where the far plane's
-/// widening makes an interval behind the origin non-empty: a box entered too often, never
-/// one lost.
 struct FmaSlabs {
-    Vec3 inv_lo, inv_hi;  // reciprocal direction for the lo and the hi plane (far: widened)
-    Vec3 ood_lo, ood_hi;  // o * inv less (near) or plus (far) the slack, for the same planes
+    Vec3 inv, inv_far;        // reciprocal direction; widened by (1 + 2^-21) for far planes
+    Vec3 ood_near, ood_far;   // o * inv plus / minus the slack (widened for far planes)
+    bool neg_x, neg_y, neg_z;  // direction negative: the near plane is hi
     FmaSlabs() = default;
-    __device__ __forceinline__ FmaSlabs(Vec3 org, Vec3 inv_dir) {
+    __device__ __forceinline__ FmaSlabs(Vec3 org, Vec3 inv_dir) : inv(inv_dir) {
         constexpr float kWiden = 1.0000005f;  // 1 + 2^-21: the far side's relative rounding
-        auto axis = [&](float o, float iv, float& iv_lo, float& iv_hi, float& off_lo, float& off_hi) {
+        auto axis = [&](float o, float iv, float& near_off, float& far_off, float& iv_far) {
             const float ood = o * iv;
             const float slack = fabsf(ood) * 2.3841858e-7f;  // 2^-22
-            const float near_off = ood + slack, far_off = (ood - slack) * kWiden, iv_far = iv * kWiden;
-            const bool neg = iv < 0.0f;
-            iv_lo = neg ? iv_far : iv;
-            off_lo = neg ? far_off : near_off;
-            iv_hi = neg ? iv : iv_far;
-            off_hi = neg ? near_off : far_off;
+            near_off = ood + slack;
+            far_off = (ood - slack) * kWiden;
+            iv_far = iv * kWiden;
         };
-        axis(org.x, inv_dir.x, inv_lo.x, inv_hi.x, ood_lo.x, ood_hi.x);
-        axis(org.y, inv_dir.y, inv_lo.y, inv_hi.y, ood_lo.y, ood_hi.y);
-        axis(org.z, inv_dir.z, inv_lo.z, inv_hi.z, ood_lo.z, ood_hi.z);
+        axis(org.x, inv.x, ood_near.x, ood_far.x, inv_far.x);
+        axis(org.y, inv.y, ood_near.y, ood_far.y, inv_far.y);
+        axis(org.z, inv.z, ood_near.z, ood_far.z, inv_far.z);
+        neg_x = inv.x < 0.0f;
+        neg_y = inv.y < 0.0f;
+        neg_z = inv.z < 0.0f;
     }
     /// Whether the box is entered within [tmin, tmax]; its entry distance in `tn`. (Returning
     /// +inf for a miss, as slab_entry does, cost 4 more compares and selects per node.)
     __device__ __forceinline__ bool entry(float lox, float hix, float loy, float hiy, float loz, float hiz,
                                           float tmin, float tmax, float& tn) const {
-        const float ax = fmaf(lox, inv_lo.x, -ood_lo.x), bx = fmaf(hix, inv_hi.x, -ood_hi.x);
-        const float ay = fmaf(loy, inv_lo.y, -ood_lo.y), by = fmaf(hiy, inv_hi.y, -ood_hi.y);
-        const float az = fmaf(loz, inv_lo.z, -ood_lo.z), bz = fmaf(hiz, inv_hi.z, -ood_hi.z);
-        tn = max_f(max_f(min_f(ax, bx), min_f(ay, by)), max_f(min_f(az, bz), tmin));
-        return tn <= min_f(min_f(max_f(ax, bx), max_f(ay, by)), min_f(max_f(az, bz), tmax));
+        const float nx = fmaf(neg_x ? hix : lox, inv.x, -ood_near.x);
+        const float ny = fmaf(neg_y ? hiy : loy, inv.y, -ood_near.y);
+        const float nz = fmaf(neg_z ? hiz : loz, inv.z, -ood_near.z);
+        const float fx = fmaf(neg_x ? lox : hix, inv_far.x, -ood_far.x);
+        const float fy = fmaf(neg_y ? loy : hiy, inv_far.y, -ood_far.y);
+        const float fz = fmaf(neg_z ? loz : hiz, inv_far.z, -ood_far.z);
+        tn = max_f(max_f(nx, ny), max_f(nz, tmin));
+        return tn <= min_f(min_f(fx, fy), min_f(fz, tmax));
     }
 };
 
