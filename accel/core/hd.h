@@ -3,10 +3,18 @@
 #pragma once
 
 #if defined(__CUDACC__)
+#define BVHLAB_UNROLL _Pragma("unroll")
 #define BVHLAB_HD __host__ __device__
 #define BVHLAB_DEVICE __device__
 #define BVHLAB_FORCEINLINE __forceinline__
 #else
+#if defined(__clang__)
+#define BVHLAB_UNROLL _Pragma("unroll")
+#elif defined(__GNUC__)
+#define BVHLAB_UNROLL _Pragma("GCC unroll 8")
+#else
+#define BVHLAB_UNROLL
+#endif
 #define BVHLAB_HD
 #define BVHLAB_DEVICE
 #if defined(__GNUC__) || defined(__clang__)

@@ -35,8 +35,19 @@ void print_build_table(const Scene& s, const Built& b) {
                 double(b.stats.references) / double(s.mesh.triangle_count()));
     std::printf("SAH          %.4f (Ct = Ci = 1, root-normalised)\n", b.stats.sah);
     if (b.stats.epo >= 0) std::printf("EPO          %.4f\n", b.stats.epo);
-    std::printf("bytes        %llu (BuildTree), %zu (bvh2 layout + Woop triangles)\n",
-                (unsigned long long)b.stats.bytes, b.structure.bytes());
+    if (b.structure.layout != trav::Layout::kCwbvh) {
+        std::printf("bytes        %llu (BuildTree), %zu (bvh2 layout + Woop triangles)\n",
+                    (unsigned long long)b.stats.bytes, b.structure.bytes());
+        return;
+    }
+    const auto& w = r["wide"];
+    std::printf("cwbvh        %s collapse in %.1f ms: %zu nodes, %zu leaves, %.2f children per node, depth %u\n",
+                w["collapse"].get<std::string>().c_str(), w["collapse_ms"].get<double>(), w["nodes"].get<size_t>(),
+                w["leaves"].get<size_t>(), w["mean_children"].get<double>(), w["depth"].get<uint32_t>());
+    std::printf("wide SAH     %.4f (node %g, triangle %g, root-normalised)\n", w["sah"].get<double>(),
+                w["sah_costs"]["node"].get<double>(), w["sah_costs"]["prim"].get<double>());
+    std::printf("bytes        %zu (cwbvh layout + Woop triangles) against %zu for the bvh2 layout: %.3fx\n",
+                b.structure.bytes(), r["bvh2_layout_bytes"].get<size_t>(), r["bytes_vs_bvh2"].get<double>());
 }
 
 void register_build(CLI::App& app, Globals& g) {
@@ -45,7 +56,8 @@ void register_build(CLI::App& app, Globals& g) {
         BuildOptions build;
     };
     auto o = std::make_shared<Opts>();
-    CLI::App* sub = app.add_subcommand("build", "build a BVH or kd-tree from a scene and print its quality figures");
+    CLI::App* sub = app.add_subcommand(
+        "build", "build a BVH (binary, or collapsed to a CWBVH) or kd-tree from a scene and print its quality figures");
     sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
     o->build.add_to(*sub);
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");

@@ -194,6 +194,16 @@ void BuildOptions::add_to(CLI::App& app) {
         if (v == "bvh" || v == "binned") builder = "binned";
         else if (v == "sweep" || v == "sbvh") builder = v;
     });
+    layout_flag = app.add_option("--layout", layout,
+                                 "BVH traversal layout: bvh2 (binary, Aila-Laine nodes) or cwbvh (collapsed to a compressed "
+                                 "8-wide BVH, Ylitie et al. 2017); default: bvh2, or the layout that --kernel traces")
+                      ->check(CLI::IsMember({"bvh2", "cwbvh"}))
+                      ->capture_default_str();
+    collapse_flag = app.add_option("--collapse", collapse,
+                                   "--layout cwbvh: sah (the least wide-SAH collapse, by dynamic programming) or greedy "
+                                   "(open the largest child until 8)")
+                        ->check(CLI::IsMember({"sah", "greedy"}))
+                        ->capture_default_str();
     kd_stack_flag = app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
         ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
         ->capture_default_str();
@@ -221,6 +231,7 @@ std::string BuildOptions::structure_file() const {
 }
 
 void BuildOptions::check_applicable() const {
+    if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
     if (!structure_file().empty()) return;
     // config_flags: --bins, --max-leaf, --min-leaf, --alpha, --budget, --spatial-bins, --reinsert.
     auto refuse = [](const CLI::Option* f, const std::string& why) {
@@ -228,6 +239,7 @@ void BuildOptions::check_applicable() const {
     };
     if (is_kdtree()) {
         for (const CLI::Option* f : config_flags) refuse(f, "applies to BVH builders, not --structure kdtree");
+        refuse(layout_flag, "applies to BVHs; a kd-tree has its own layout");
         return;
     }
     for (const CLI::Option* f : kd_flags) refuse(f, "applies to --structure kdtree, not a BVH");

@@ -79,18 +79,24 @@ struct BuildOptions {
     accel::KdTreeBuilder::Config kd;            ///< kd-tree build constants (--kd-*)
     std::vector<CLI::Option*> kd_flags;         ///< kd flags whose explicit values a cache must match
     std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
+    std::string layout = "bvh2";   ///< --layout of a BVH: bvh2, or cwbvh (collapsed, compressed 8-wide)
+    std::string collapse = "sah";  ///< --collapse to 8-wide: sah (Ylitie et al.'s optimum) or greedy
     CLI::Option* builder_flag = nullptr;
     CLI::Option* structure_flag = nullptr;
     CLI::Option* kd_stack_flag = nullptr;
+    CLI::Option* layout_flag = nullptr;
+    CLI::Option* collapse_flag = nullptr;
 
     bool is_kdtree() const { return structure == "kdtree"; }
+    bool is_cwbvh() const { return layout == "cwbvh"; }
 
     void add_to(CLI::App& app);
     accel::BuilderKind kind() const { return accel::parse_builder_kind(builder); }
     /// The structure file named by --structure, or "" when --structure names a builder.
     std::string structure_file() const;
     /// Refuses, with a one-line bvhlab::Error, an option given explicitly that the chosen
-    /// builder does not use (--bins with a kd-tree, --alpha with binned, --kd-ct with a BVH).
+    /// builder does not use (--bins with a kd-tree, --alpha with binned, --kd-ct with a BVH,
+    /// --layout with a kd-tree, --collapse without --layout cwbvh).
     /// Structure files are checked against their own config when loaded.
     void check_applicable() const;
 };

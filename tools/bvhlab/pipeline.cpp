@@ -3,13 +3,16 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 
 #include "accel/builders/kdtree.h"
 #include "accel/core/check.h"
 #include "accel/core/validate.h"
 #include "accel/io/tree_file.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
+#include "accel/passes/collapse_wide.h"
 #include "traversal/device/kd_traverse.h"
 #include "traversal/gpu/gpu_tracer.h"
 
@@ -24,6 +27,8 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     const std::string stale = accel::stale_reason(f.meta, scene.mesh.triangle_count(), scene.hash);
     if (!stale.empty()) throw Error("stale structure file '" + file + "': " + stale);
     if (f.meta.kdtree) {
+        if (opts.layout_flag->count())
+            throw Error("structure file '" + file + "' holds a kd-tree; --layout applies to BVHs");
         for (const CLI::Option* flag : opts.config_flags)
             if (flag->count())
                 throw Error("stale structure file '" + file + "': it holds a " + accel::describe_config(f.meta) +
@@ -113,6 +118,46 @@ static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Gl
     return b;
 }
 
+/// The bytes of the BVH2 layout of `tree` (nodes, Woop triangles, triangle ids), without
+/// building it: what a CWBVH's bytes are compared with.
+static size_t bvh2_layout_bytes(const accel::BuildTree& tree) {
+    size_t interior = 0;
+    for (const accel::BuildNode& n : tree.nodes) interior += !n.is_leaf();
+    return std::max<size_t>(interior, 1) * sizeof(accel::Bvh2Node) +
+           tree.prim_indices.size() * (sizeof(accel::WoopTriangle) + sizeof(uint32_t));
+}
+
+/// The CWBVH path of build_scene: collapse the binary tree to 8-wide, check it, quantise.
+static void convert_cwbvh(const Scene& scene, const BuildOptions& opts, const Globals& g, Built& b) {
+    const auto t0 = std::chrono::steady_clock::now();
+    accel::WideTree w;
+    {
+        Stage st(g, "collapsing to an 8-wide BVH (" + opts.collapse + ") and quantising its boxes");
+        w = accel::collapse_to_wide(b.result.tree, scene.mesh,
+                                    opts.collapse == "greedy" ? accel::CollapseMethod::kGreedy
+                                                              : accel::CollapseMethod::kSahOptimal);
+        const std::string err = accel::validate_wide(w, scene.mesh.triangle_count(), b.result.tree.prim_indices);
+        BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide tree: " + err);
+        b.structure.layout = trav::Layout::kCwbvh;
+        b.structure.cwbvh = accel::convert_to_cwbvh(w, scene.mesh);
+    }
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const accel::WideStats ws = accel::compute_wide_stats(w);
+    const size_t bvh2_bytes = bvh2_layout_bytes(b.result.tree);
+    b.record["wide"] = {{"collapse", opts.collapse},
+                        {"collapse_ms", ms},
+                        {"nodes", ws.nodes},
+                        {"leaves", ws.leaves},
+                        {"references", ws.references},
+                        {"mean_children", ws.mean_children},
+                        {"sah", ws.sah},
+                        {"sah_costs", {{"node", accel::WideCost{}.node}, {"prim", accel::WideCost{}.prim}}},
+                        {"depth", ws.depth},
+                        {"node_bytes", b.structure.cwbvh.nodes.size() * sizeof(accel::CwbvhNode)}};
+    b.record["bvh2_layout_bytes"] = bvh2_bytes;
+    b.record["bytes_vs_bvh2"] = double(b.structure.cwbvh.bytes()) / double(bvh2_bytes);
+}
+
 Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
     opts_in.check_applicable();
     if (opts_in.is_kdtree()) return build_kdtree(scene, opts_in, g, nullptr, "");
@@ -141,12 +186,18 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
         Stage st(g, opts.epo ? "computing SAH and EPO" : "computing SAH");
         b.stats = accel::compute_stats(b.result.tree, scene.mesh, opts.opts.config, opts.epo);
     }
-    b.structure.name = "bvh2/" + builder;
-    b.structure.layout = trav::Layout::kBvh2;
-    b.structure.bvh2 = accel::convert_to_bvh2(b.result.tree, scene.mesh);
     b.record = base_record("build", scene);
     b.record.update(stats_json(b.stats, b.result, builder, scene.mesh));
+    if (opts.is_cwbvh()) {
+        convert_cwbvh(scene, opts, g, b);
+        b.structure.name = "cwbvh/" + builder;
+    } else {
+        b.structure.name = "bvh2/" + builder;
+        b.structure.layout = trav::Layout::kBvh2;
+        b.structure.bvh2 = accel::convert_to_bvh2(b.result.tree, scene.mesh);
+    }
     b.record["structure"] = b.structure.name;
+    b.record["layout"] = trav::layout_name(b.structure.layout);
     b.record["layout_bytes"] = b.structure.bytes();
     b.record["layout_depth"] = b.structure.depth();
     if (builder != "sweep") b.record["bins"] = opts.opts.num_bins;
@@ -172,7 +223,8 @@ void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
         ->check(CLI::IsMember(devices))
         ->capture_default_str();
     kernel_flag = app.add_option("--kernel", kernel,
-                                 "GPU kernel (`bvhlab kernels` lists them) or all; default: dynamic-speculative-fma for BVHs, "
+                                 "GPU kernel (`bvhlab kernels` lists them) or all; on --device cpu, plain or cwbvh: the CPU "
+                                 "runs that kernel's traversal; default: cwbvh for --layout cwbvh, dynamic-speculative-fma for BVHs, "
                                  "kd-full-stack or kd-short-stack (with --kd-stack 1..8) for kd-trees");
     block_flag = app.add_option("--block-size", block_size, "GPU threads per block (default: the kernel's)")
                      ->check(CLI::Range(32, 1024));
@@ -181,14 +233,44 @@ void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
                      ->check(CLI::Range(1, 32));
 }
 
-void TraceOptions::validate(const BuildOptions& build) const {
+/// The layout whose CPU traversal is the one kernel `name` runs on the GPU (the CPU reference
+/// behind `--device cpu --kernel NAME`).
+static std::optional<trav::Layout> cpu_reference_layout(const std::string& name) {
+    if (name == "plain") return trav::Layout::kBvh2;   // traverse_bvh2
+    if (name == "cwbvh") return trav::Layout::kCwbvh;  // traverse_cwbvh
+    return std::nullopt;
+}
+
+void TraceOptions::validate(BuildOptions& build) const {
+    // --kernel picks the layout it traces, unless --layout says otherwise.
+    if (kernel_flag->count() && kernel != "all" && device != "embree") {
+        trav::Layout layout;
+        if (device == "cpu") {
+            const auto l = cpu_reference_layout(kernel);
+            if (!l)
+                throw Error("--kernel " + kernel + " has no CPU form; on --device cpu, --kernel names the kernel whose "
+                            "traversal the CPU runs: plain (bvh2) or cwbvh");
+            layout = *l;
+        } else {
+            layout = trav::find_kernel(kernel).layout;
+        }
+        if (layout == trav::Layout::kCwbvh) {
+            if (build.is_kdtree()) throw Error("kernel '" + kernel + "' traces a CWBVH, which is built from a BVH, not a kd-tree");
+            if (build.layout_flag->count() && !build.is_cwbvh())
+                throw Error("kernel '" + kernel + "' traces --layout cwbvh, not --layout " + build.layout);
+            build.layout = "cwbvh";
+        } else if (layout == trav::Layout::kBvh2 && build.is_cwbvh() && !build.is_kdtree()) {
+            throw Error("kernel '" + kernel + "' traces --layout bvh2, not --layout cwbvh");
+        }
+    }
     if (device != "gpu") {
-        if (kernel_flag->count()) throw Error("--kernel chooses a GPU kernel; it needs --device gpu");
+        if (kernel_flag->count() && device != "cpu") throw Error("--kernel chooses a GPU kernel; it needs --device gpu");
         if (block_flag->count()) throw Error("--block-size applies to GPU kernels; it needs --device gpu");
         if (fetch_flag->count()) throw Error("--fetch-threshold applies to GPU kernels; it needs --device gpu");
     }
     if (device == "embree") {
-        std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag, build.kd_stack_flag};
+        std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag, build.kd_stack_flag,
+                                              build.layout_flag, build.collapse_flag};
         flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
         flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
         for (const CLI::Option* f : flags)
@@ -207,6 +289,7 @@ namespace {
 /// best on every diffuse set and on furball; within 4% of while-while-fma on primary rays)
 /// (experiments/NOTES.md), or the kd kernel that matches --kd-stack.
 std::string default_kernel(const Built& b, int kd_stack) {
+    if (b.structure.layout == trav::Layout::kCwbvh) return "cwbvh";
     if (!b.is_kd()) return "dynamic-speculative-fma";
     return kd_stack == trav::kKdFullStack ? "kd-full-stack" : "kd-short-stack";
 }

@@ -49,7 +49,9 @@ struct TraceOptions {
     /// Adds --device (with `embree` when allow_embree), --kernel and --block-size.
     void add_to(CLI::App& app, bool allow_embree = false);
     /// Refuses options that do not apply (one-line bvhlab::Error), and a GPU that is missing.
-    void validate(const BuildOptions& build) const;
+    /// A --kernel that traces a CWBVH sets build.layout to cwbvh (unless --layout said otherwise,
+    /// which is refused); on the CPU --kernel names the kernel whose traversal the CPU runs.
+    void validate(BuildOptions& build) const;
 };
 
 /// The tracers of one command over `built`: one for the CPU, one per kernel on the GPU (all

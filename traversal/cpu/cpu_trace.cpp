@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <string>
+#include <type_traits>
 
 #include "accel/core/check.h"
 
@@ -11,18 +12,29 @@ namespace bvhlab::trav {
 namespace {
 
 /// `kCount` is a template parameter so the uncounted path passes a literal nullptr and the
-/// traversal's counter branches compile away.
-template <bool kCount>
-void trace_all(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
-               std::vector<TraversalCounters>* counters) {
+/// traversal's counter branches compile away. `trace(any, ray, counters)` traces one ray.
+template <bool kCount, class Trace>
+void trace_all(const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
+               std::vector<TraversalCounters>* counters, const Trace& trace) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const auto& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             TraversalCounters* c = kCount ? &(*counters)[i] : nullptr;
-            hits[i] = query == Query::kAny
-                          ? traverse_bvh2<true>(bvh.nodes.data(), bvh.tris.data(), bvh.tri_ids.data(), rays[i], c)
-                          : traverse_bvh2<false>(bvh.nodes.data(), bvh.tris.data(), bvh.tri_ids.data(), rays[i], c);
+            hits[i] = query == Query::kAny ? trace(std::true_type{}, rays[i], c) : trace(std::false_type{}, rays[i], c);
         }
     });
+}
+
+/// Sizes the outputs and runs trace_all with or without counters.
+template <class Trace>
+void trace_set(const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
+               std::vector<TraversalCounters>* counters, const Trace& trace) {
+    hits.resize(rays.size());
+    if (counters) {
+        counters->assign(rays.size(), TraversalCounters{});
+        trace_all<true>(rays, query, hits, counters, trace);
+    } else {
+        trace_all<false>(rays, query, hits, nullptr, trace);
+    }
 }
 
 }  // namespace
@@ -36,13 +48,24 @@ void check_bvh2_stack(const accel::Bvh2& bvh) {
 void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
                std::vector<TraversalCounters>* counters) {
     check_bvh2_stack(bvh);
-    hits.resize(rays.size());
-    if (counters) {
-        counters->assign(rays.size(), TraversalCounters{});
-        trace_all<true>(bvh, rays, query, hits, counters);
-    } else {
-        trace_all<false>(bvh, rays, query, hits, nullptr);
-    }
+    trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
+        return traverse_bvh2<decltype(any)::value>(bvh.nodes.data(), bvh.tris.data(), bvh.tri_ids.data(), ray, c);
+    });
+}
+
+void check_cwbvh_stack(const accel::Cwbvh& cw) {
+    if (cw.depth > uint32_t(kCwbvhStackSize))
+        throw Error("CWBVH of depth " + std::to_string(cw.depth) + " is deeper than the traversal stack of " +
+                    std::to_string(kCwbvhStackSize) + " entries");
+}
+
+void trace_cpu(const accel::Cwbvh& cw, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
+               std::vector<TraversalCounters>* counters) {
+    check_cwbvh_stack(cw);
+    const CwbvhView view{cw.nodes.data(), cw.tris.data(), cw.tri_ids.data()};
+    trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
+        return traverse_cwbvh<decltype(any)::value>(view, ray, c);
+    });
 }
 
 }  // namespace bvhlab::trav

@@ -10,12 +10,16 @@
 
 namespace bvhlab::trav {
 
-const char* layout_name(Layout layout) { return layout == Layout::kBvh2 ? "bvh2" : "kdtree"; }
+const char* layout_name(Layout layout) {
+    return layout == Layout::kBvh2 ? "bvh2" : layout == Layout::kKd ? "kdtree" : "cwbvh";
+}
 
 void trace_cpu_counted(const Structure& s, int kd_stack, const RaySet& set, std::vector<Hit>& hits,
                        std::vector<TraversalCounters>* counters) {
     if (s.layout == Layout::kBvh2) {
         trace_cpu(s.bvh2, set.rays, set.query, hits, counters);
+    } else if (s.layout == Layout::kCwbvh) {
+        trace_cpu(s.cwbvh, set.rays, set.query, hits, counters);
     } else {
         trace_kd_cpu(s.kd, kd_stack, set.rays, set.query, hits, counters);
     }
@@ -30,6 +34,9 @@ public:
         if (s.layout == Layout::kBvh2) {
             check_bvh2_stack(s.bvh2);
             name_ = "cpu-bvh2-stack";
+        } else if (s.layout == Layout::kCwbvh) {
+            check_cwbvh_stack(s.cwbvh);
+            name_ = "cpu-cwbvh";
         } else {
             check_kd_stack(s.kd, kd_stack);
             name_ = kd_stack == kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(kd_stack);

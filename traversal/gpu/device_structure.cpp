@@ -12,6 +12,10 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         bvh_nodes_.upload(s.bvh2.nodes);
         bvh_tris_.upload(s.bvh2.tris);
         bvh_ids_.upload(s.bvh2.tri_ids);
+    } else if (s.layout == Layout::kCwbvh) {
+        cw_nodes_.upload(s.cwbvh.nodes);
+        bvh_tris_.upload(s.cwbvh.tris);
+        bvh_ids_.upload(s.cwbvh.tri_ids);
     } else {
         kd_nodes_.upload(s.kd.tree.nodes);
         kd_prims_.upload(s.kd.tree.prim_indices);

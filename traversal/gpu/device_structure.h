@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 // A Structure uploaded to the GPU, whatever its layout, with the plain view struct that its
-// kernels take (Bvh2View or KdView, written once for host and device).
+// kernels take (Bvh2View, CwbvhView or KdView, written once for host and device).
 #pragma once
 
 #include "accel/core/aabb.h"
 #include "traversal/device/bvh2_traverse.h"
+#include "traversal/device/cwbvh_traverse.h"
 #include "traversal/device/kd_traverse.h"
 #include "traversal/gpu/device_buffer.h"
 #include "traversal/structure.h"
@@ -19,16 +20,19 @@ public:
     Layout layout() const { return layout_; }
     uint32_t depth() const { return depth_; }
 
-    /// The device view of a BVH2 layout (null pointers for a kd layout).
+    /// The device view of a BVH2 layout (null pointers for the other layouts).
     Bvh2View bvh2() const { return {bvh_nodes_.data(), bvh_tris_.data(), bvh_ids_.data()}; }
-    /// The device view of a kd layout (null pointers for a BVH2 layout).
+    /// The device view of a kd layout (null pointers for the other layouts).
     KdView kd() const { return {kd_nodes_.data(), kd_prims_.data(), kd_tris_.data(), kd_bounds_}; }
+    /// The device view of a CWBVH layout (null pointers for the other layouts).
+    CwbvhView cwbvh() const { return {cw_nodes_.data(), bvh_tris_.data(), bvh_ids_.data()}; }
 
 private:
     Layout layout_;
     uint32_t depth_;
     DeviceBuffer<accel::Bvh2Node> bvh_nodes_;
-    DeviceBuffer<accel::WoopTriangle> bvh_tris_;
+    DeviceBuffer<accel::CwbvhNode> cw_nodes_;
+    DeviceBuffer<accel::WoopTriangle> bvh_tris_;  // the BVH2's or the CWBVH's triangles
     DeviceBuffer<uint32_t> bvh_ids_;
     DeviceBuffer<accel::KdNode> kd_nodes_;
     DeviceBuffer<uint32_t> kd_prims_;

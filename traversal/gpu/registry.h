@@ -10,16 +10,18 @@
 #include <vector>
 
 #include "traversal/device/bvh2_traverse.h"
+#include "traversal/device/cwbvh_traverse.h"
 #include "traversal/device/kd_traverse.h"
 #include "traversal/gpu/ray_queue.h"
 #include "traversal/structure.h"
 
 namespace bvhlab::trav {
 
-/// Everything a launch needs; the view that does not match the kernel's layout is null.
+/// Everything a launch needs; the views that do not match the kernel's layout are null.
 struct LaunchArgs {
     Bvh2View bvh2{};
     KdView kd{};
+    CwbvhView cwbvh{};
     RayQueueView queue{};
     uint32_t capacity = 0;           ///< the queue's capacity: the grid covers it, threads read the count
     Query query = Query::kClosest;

@@ -1,0 +1,20 @@
+// SPDX-License-Identifier: MIT
+// WideTree -> Cwbvh: octant-ordered child slots, conservatively quantised child boxes, Woop
+// triangles in leaf order.
+#pragma once
+
+#include "accel/core/mesh.h"
+#include "accel/layouts/cwbvh_node.h"
+#include "accel/passes/collapse_wide.h"
+
+namespace bvhlab::accel {
+
+/// Converts a wide tree over `mesh`. Throws bvhlab::Error when a node's extent is beyond what
+/// the traversal's scaled reciprocals can hold (more than 255 * 2^31 on an axis).
+Cwbvh convert_to_cwbvh(const WideTree& tree, const TriangleMesh& mesh);
+
+/// The box slot `slot` of `node` decodes to, in double precision (exact for every scene the
+/// converter accepts): what the conservativeness tests compare with the exact child boxes.
+AABB decode_child_box(const CwbvhNode& node, uint32_t slot, double* lo = nullptr, double* hi = nullptr);
+
+}  // namespace bvhlab::accel

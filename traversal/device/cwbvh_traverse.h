@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: MIT
+// Traversal of a compressed 8-wide BVH (Ylitie, Karras & Laine, HPG 2017, section 4), written
+// once for host and device: the CPU reference (`--device cpu --kernel cwbvh`) and the GPU
+// kernel run this code, so they visit the same nodes and return the same hits.
+//
+// The ray keeps two groups: a node group (a node's interior children that the ray entered, as
+// hit-mask bits 24..31 in octant order, with the parent's child base and interior mask) and a
+// triangle group (the triangles of the leaves it entered, bits 0..23). Each step takes the
+// nearest interior child of the node group (the highest bit: slots are octant-ordered, see
+// CwbvhNode), pushes what is left of the group, fetches that child and tests its eight
+// boxes into new groups; then the triangle group is tested. The stack holds node groups, at
+// most one per level.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+#include "accel/core/bits.h"
+#include "accel/core/hd.h"
+#include "accel/layouts/cwbvh_node.h"
+#include "traversal/device/bvh2_traverse.h"
+#include "traversal/device/ray.h"
+
+namespace bvhlab::trav {
+
+/// Stack entries of the CWBVH traversal: trees deeper than this (Cwbvh::depth) are refused
+/// before any ray is traced.
+constexpr int kCwbvhStackSize = 64;
+
+/// A CWBVH layout as traversal sees it: plain pointers, host or device memory.
+struct CwbvhView {
+    const accel::CwbvhNode* nodes;
+    const accel::WoopTriangle* tris;
+    const uint32_t* tri_ids;
+};
+
+namespace cw_detail {
+
+/// The node as 20 words, read as five 16-byte loads on the device.
+BVHLAB_HD BVHLAB_FORCEINLINE void load_node(const accel::CwbvhNode* n, uint32_t (&w)[20]) {
+#if defined(__CUDA_ARCH__)
+    const uint4* p = reinterpret_cast<const uint4*>(n);
+BVHLAB_UNROLL
+    for (int i = 0; i < 5; ++i) {
+        const uint4 v = __ldg(p + i);
+        w[4 * i] = v.x;
+        w[4 * i + 1] = v.y;
+        w[4 * i + 2] = v.z;
+        w[4 * i + 3] = v.w;
+    }
+#else
+    std::memcpy(w, n, sizeof w);
+#endif
+}
+static_assert(sizeof(accel::CwbvhNode) == 20 * sizeof(uint32_t), "five 16-byte loads");
+
+/// Word indices in the node (see CwbvhNode).
+constexpr int kWordExponents = 3, kWordChildBase = 4, kWordTriBase = 5, kWordMeta = 6, kWordQlo = 8, kWordQhi = 14;
+
+/// What a ray needs per axis, once.
+struct RayAxes {
+    float o[3], inv[3];
+    bool neg[3];
+    uint32_t octant;  // bit k set when the direction's component k is not negative
+};
+
+/// Tests the node's eight child boxes within [tmin, tmax]. Returns the hit mask: for each
+/// slot entered, (meta >> 5) << (meta & 31), with interior slots moved to bit 24 + (s ^ octant).
+/// `leaves_hit` counts the leaf slots entered.
+///
+/// Plane distances: slot s's plane on axis k is p + q * 2^e. With f = 1 + q * 2^-15 (the byte
+/// unpacked, exactly) and sc = 2^e * 2^15 * inv (a power-of-two scaling, exact), the distance
+/// (p + q 2^e - o) * inv is f * sc + orig with orig = (p - o) * inv - sc: one FMA per plane.
+/// Robustness, as FmaSlabs: orig carries at most 2^-24 (|orig| + |sc|) from rounding p - o and
+/// the FMA that makes it, so near planes are lowered and far planes raised by
+/// 2^-22 (|orig| + |sc|), and far planes are widened by 1 + 2^-21 for their own rounding. The
+/// |sc| term is 1/128 of one quantisation step.
+BVHLAB_HD BVHLAB_FORCEINLINE uint32_t intersect_children(const uint32_t (&w)[20], const RayAxes& r, float tmin,
+                                                          float tmax, uint32_t& leaves_hit) {
+    constexpr float kWiden = 1.0000005f;  // 1 + 2^-21
+    float sc_near[3], sc_far[3], off_near[3], off_far[3];
+    uint32_t qn[3][2], qf[3][2];
+BVHLAB_UNROLL
+    for (int k = 0; k < 3; ++k) {
+        const float p = float_from_bits(w[k]);
+        const float sc = accel::cwbvh_scale((w[kWordExponents] >> (8 * k)) & 0xFFu) * 32768.0f * r.inv[k];
+        const float orig = fmaf(p - r.o[k], r.inv[k], -sc);
+        const float slack = (fabsf(orig) + fabsf(sc)) * 2.3841858e-7f;  // 2^-22
+        sc_near[k] = sc;
+        sc_far[k] = sc * kWiden;
+        off_near[k] = orig - slack;
+        off_far[k] = (orig + slack) * kWiden;
+        // The near plane of a positive axis is the lower one.
+BVHLAB_UNROLL
+        for (int h = 0; h < 2; ++h) {
+            const uint32_t lo = w[kWordQlo + 2 * k + h], hi = w[kWordQhi + 2 * k + h];
+            qn[k][h] = r.neg[k] ? hi : lo;
+            qf[k][h] = r.neg[k] ? lo : hi;
+        }
+    }
+    const uint32_t imask = w[kWordExponents] >> 24;
+    uint32_t hits = 0, leaves = 0;
+BVHLAB_UNROLL
+    for (uint32_t s = 0; s < 8; ++s) {
+        const uint32_t h = s >> 2, b = s & 3;
+        const float nx = fmaf(accel::cwbvh_unpack(qn[0][h], b), sc_near[0], off_near[0]);
+        const float ny = fmaf(accel::cwbvh_unpack(qn[1][h], b), sc_near[1], off_near[1]);
+        const float nz = fmaf(accel::cwbvh_unpack(qn[2][h], b), sc_near[2], off_near[2]);
+        const float fx = fmaf(accel::cwbvh_unpack(qf[0][h], b), sc_far[0], off_far[0]);
+        const float fy = fmaf(accel::cwbvh_unpack(qf[1][h], b), sc_far[1], off_far[1]);
+        const float fz = fmaf(accel::cwbvh_unpack(qf[2][h], b), sc_far[2], off_far[2]);
+        const float tn = max_f(max_f(nx, ny), max_f(nz, tmin));
+        const float tf = min_f(min_f(fx, fy), min_f(fz, tmax));
+        if (tn <= tf) {
+            const uint32_t meta = (w[kWordMeta + h] >> (8 * b)) & 0xFFu;
+            const bool interior = (imask >> s) & 1u;
+            const uint32_t shift = (meta & 31u) ^ (interior ? r.octant : 0u);
+            hits |= (meta >> 5) << shift;
+            leaves += !interior && meta != 0;
+        }
+    }
+    leaves_hit += leaves;
+    return hits;
+}
+
+}  // namespace cw_detail
+
+/// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
+template <bool kAnyHit>
+BVHLAB_HD inline Hit traverse_cwbvh(const CwbvhView& v, const Ray& ray, TraversalCounters* counters = nullptr) {
+    cw_detail::RayAxes r;
+    const Vec3 inv = safe_reciprocal(ray.dir);
+    r.o[0] = ray.org.x, r.o[1] = ray.org.y, r.o[2] = ray.org.z;
+    r.inv[0] = inv.x, r.inv[1] = inv.y, r.inv[2] = inv.z;
+    r.octant = 0;
+    for (int k = 0; k < 3; ++k) {
+        r.neg[k] = r.inv[k] < 0.0f;
+        r.octant |= uint32_t(!r.neg[k]) << k;
+    }
+    float t_hit = ray.tmax, u_hit = 0.0f, v_hit = 0.0f;
+    int32_t k_hit = -1;
+    // The root as the one interior child (slot 0) of a virtual parent whose children start at 0.
+    uint32_t group_base = 0, group_bits = (1u << (accel::CwbvhNode::kInteriorBit + r.octant)) | 1u;
+    uint32_t tri_base = 0, tri_bits = 0;
+    uint32_t stack_base[kCwbvhStackSize], stack_bits[kCwbvhStackSize];
+    int sp = 0;
+    uint32_t w[20];
+    while (true) {
+        if (group_bits & 0xFF000000u) {
+            // The nearest interior child left in the group; the rest waits on the stack.
+            const uint32_t bit = highest_bit(group_bits & 0xFF000000u);
+            group_bits &= ~(1u << bit);
+            const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ r.octant;
+            const uint32_t node = group_base + popc32(group_bits & ((1u << slot) - 1u) & 0xFFu);
+            if (group_bits & 0xFF000000u) {
+                stack_base[sp] = group_base;
+                stack_bits[sp++] = group_bits;
+            }
+            cw_detail::load_node(v.nodes + node, w);
+            uint32_t leaves = 0;
+            const uint32_t hits = cw_detail::intersect_children(w, r, ray.tmin, t_hit, leaves);
+            if (counters) {
+                ++counters->nodes;
+                counters->leaves += leaves;
+            }
+            group_base = w[cw_detail::kWordChildBase];
+            group_bits = (hits & 0xFF000000u) | (w[cw_detail::kWordExponents] >> 24);
+            tri_base = w[cw_detail::kWordTriBase];
+            tri_bits = hits & 0x00FFFFFFu;
+        }
+        while (tri_bits) {
+            const uint32_t k = tri_base + lowest_bit(tri_bits);
+            tri_bits &= tri_bits - 1u;
+            if (counters) ++counters->tri_tests;
+            float t, u, vv;
+            if (v.tris[k].intersect(ray.org, ray.dir, ray.tmin, t_hit, t, u, vv)) {
+                t_hit = t;
+                u_hit = u;
+                v_hit = vv;
+                k_hit = int32_t(k);
+                if (kAnyHit) return {int32_t(v.tri_ids[k]), t, u, vv};
+            }
+        }
+        if (!(group_bits & 0xFF000000u)) {
+            if (sp == 0) break;
+            group_base = stack_base[--sp];
+            group_bits = stack_bits[sp];
+        }
+    }
+    if (k_hit < 0) return Hit::miss();
+    return {int32_t(v.tri_ids[k_hit]), t_hit, u_hit, v_hit};
+}
+
+}  // namespace bvhlab::trav
