@@ -7,12 +7,14 @@
 #             primary, protocol diffuse), every kernel on binned, SBVH and kd-trees, checked
 #             against Embree before timing, and Embree on every core on the same rays
 #   bvhbench  the bench phase for the BVH2 kernels alone (binned and SBVH; no kd-tree, no Embree)
+#   cwbench   the CWBVH kernels (--layout cwbvh) on binned and SBVH trees, beside the bvh2 bench
 #   verify    every kernel against Embree on the protocol's four ray types
 #   profile   ncu metrics of every kernel on bunny primary and furball diffuse (PROFILE_SETS:
 #             scene:raytype pairs; PROFILE_KERNEL: one kernel instead of all)
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
+# GPU_TESTS: a gtest filter for the tests phase (default: all).
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
 set -uo pipefail
 prefix=$1 scenes=$2 out=$3 phases=$4
@@ -41,7 +43,7 @@ make_rays() {
 
 if has tests; then
     log "tests"
-    "$bin/bvhlab_gpu_tests" >"$out/gpu_tests.log" 2>&1 || status=1
+    "$bin/bvhlab_gpu_tests" --gtest_filter="${GPU_TESTS:-*}" >"$out/gpu_tests.log" 2>&1 || status=1
     tail -3 "$out/gpu_tests.log" | tee -a "$out/summary.txt"
 fi
 
@@ -68,6 +70,19 @@ if has bvhbench; then
             for st in bvh sbvh; do
                 "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --structure $st --json \
                     >>"$out/bench.jsonl" || status=1
+            done
+        done
+    done
+fi
+
+if has cwbench; then
+    for s in "${names[@]}"; do
+        make_rays "$s"
+        for r in primary diffuse; do
+            log "cwbvh bench $s $r"
+            for b in binned sbvh; do
+                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --layout cwbvh --kernel all --builder $b \
+                    --json >>"$out/cwbench.jsonl" || status=1
             done
         done
     done

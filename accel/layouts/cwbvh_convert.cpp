@@ -100,7 +100,8 @@ AABB decode_child_box(const CwbvhNode& node, uint32_t slot, double* lo, double* 
     return b;
 }
 
-Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh) {
+Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh,
+                       std::vector<std::array<AABB, kWideArity>>* slot_boxes) {
     BVHLAB_CHECK(!w.nodes.empty(), "cannot convert an empty WideTree");
     Cwbvh out;
     out.depth = w.depth;
@@ -134,6 +135,11 @@ Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh) {
             }
         }
         out.nodes[oi] = node;
+        if (slot_boxes) {
+            if (slot_boxes->size() <= oi) slot_boxes->resize(out.nodes.size());
+            for (uint32_t slot = 0; slot < kWideArity; ++slot)
+                (*slot_boxes)[oi][slot] = child_of_slot[slot] < 0 ? AABB::empty() : n.child[child_of_slot[slot]].box;
+        }
     }
     out.tris.resize(out.tri_ids.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tris.size(), 4096), [&](const auto& r) {

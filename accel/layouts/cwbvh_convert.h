@@ -3,6 +3,9 @@
 // triangles in leaf order.
 #pragma once
 
+#include <array>
+#include <vector>
+
 #include "accel/core/mesh.h"
 #include "accel/layouts/cwbvh_node.h"
 #include "accel/passes/collapse_wide.h"
@@ -10,8 +13,11 @@
 namespace bvhlab::accel {
 
 /// Converts a wide tree over `mesh`. Throws bvhlab::Error when a node's extent is beyond what
-/// the traversal's scaled reciprocals can hold (more than 255 * 2^31 on an axis).
-Cwbvh convert_to_cwbvh(const WideTree& tree, const TriangleMesh& mesh);
+/// the traversal's scaled reciprocals can hold (more than 255 * 2^31 on an axis). With
+/// `slot_boxes`, also returns for each output node the exact box of the child in each slot
+/// (empty slots: AABB::empty()), for the conservativeness tests.
+Cwbvh convert_to_cwbvh(const WideTree& tree, const TriangleMesh& mesh,
+                       std::vector<std::array<AABB, kWideArity>>* slot_boxes = nullptr);
 
 /// The box slot `slot` of `node` decodes to, in double precision (exact for every scene the
 /// converter accepts): what the conservativeness tests compare with the exact child boxes.

@@ -84,6 +84,14 @@ expect_error embree-no-structure "--structure does not apply to --device embree"
 expect_error embree-no-bins "--bins does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --bins 8
 expect_error embree-no-kd-stack "--kd-stack does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --kd-stack 4
 expect_error bad-device "device" bench "$data/cornell_box.obj" --device tpu
+expect_error embree-no-layout "--layout does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --layout cwbvh
+expect_error collapse-needs-cwbvh "--collapse applies to --layout cwbvh" build "$data/cornell_box.obj" --collapse greedy
+expect_error layout-not-for-kd "--layout applies to BVHs" build "$data/cornell_box.obj" --structure kdtree --layout cwbvh
+expect_error layout-bad-value "layout" build "$data/cornell_box.obj" --layout wide
+expect_error cwbvh-kernel-vs-layout "traces --layout cwbvh, not --layout bvh2" verify "$data/cornell_box.obj" --kernel cwbvh --layout bvh2
+expect_error plain-kernel-vs-layout "traces --layout bvh2, not --layout cwbvh" verify "$data/cornell_box.obj" --kernel plain --layout cwbvh
+expect_error cwbvh-kernel-kd "kd-tree" verify "$data/cornell_box.obj" --kernel cwbvh --structure kdtree
+expect_error cpu-kernel-no-cpu-form "no CPU form" verify "$data/cornell_box.obj" --device cpu --kernel while-while
 expect_error embree-not-for-verify "device" verify "$data/cornell_box.obj" --device embree
 expect_error kd-stack-on-bvh "--kd-stack applies to kd-trees" bench "$data/cornell_box.obj" --kd-stack 4
 expect_error bins-on-kdtree "--bins applies to BVH builders, not --structure kdtree" verify "$data/cornell_box.obj" --structure kdtree --bins 4
@@ -118,6 +126,18 @@ if "$bin" -q verify "$data/cornell_box.obj" --structure "$tmp/kd.tree" --kd-stac
     pass=$((pass + 1))
 else
     fail=$((fail + 1)); echo "FAIL verify from a kd-tree structure file"
+fi
+
+# The CPU reference of the cwbvh kernel, and the CWBVH's build record.
+if "$bin" -q verify "$data/cornell_box.obj" --device cpu --kernel cwbvh --width 32 --height 24 --json | python3 -c 'import json,sys; rows=[json.loads(l) for l in sys.stdin]; assert len(rows)==4 and all(r["mismatches"]==0 and r["kernel"]=="cpu-cwbvh" and r["structure"]=="cwbvh/binned" for r in rows)'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL verify --device cpu --kernel cwbvh"
+fi
+if "$bin" -q build "$data/cornell_box.obj" --layout cwbvh --collapse greedy --json | python3 -c 'import json,sys; r=json.loads(sys.stdin.read()); assert r["layout"]=="cwbvh" and r["wide"]["collapse"]=="greedy" and r["wide"]["nodes"]>0 and 0<r["bytes_vs_bvh2"]<1.5 and r["layout_bytes"]<r["bvh2_layout_bytes"]*1.5'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL build --layout cwbvh --json"
 fi
 
 echo "$pass passed, $fail failed"

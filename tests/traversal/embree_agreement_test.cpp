@@ -10,6 +10,7 @@
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
@@ -59,6 +60,15 @@ void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float 
                           [&](const RaySet& set, std::vector<Hit>& hits) { trace_cpu(bvh, set.rays, set.query, hits); });
 }
 
+/// The same with the CWBVH collapsed from a BVH of `builder` (the CPU reference of 'cwbvh').
+void expect_cwbvh_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w,
+                            uint32_t h, accel::BuilderKind builder, accel::CollapseMethod method) {
+    const accel::Cwbvh cw =
+        accel::convert_to_cwbvh(accel::collapse_to_wide(accel::run_builder(builder, mesh, {}).tree, mesh, method), mesh);
+    expect_agreement_with(mesh, cam, ao_length, w, h,
+                          [&](const RaySet& set, std::vector<Hit>& hits) { trace_cpu(cw, set.rays, set.query, hits); });
+}
+
 }  // namespace
 
 TEST(EmbreeAgreement, CornellBox) {
@@ -67,15 +77,21 @@ TEST(EmbreeAgreement, CornellBox) {
     cam.eye = {278, 273, -800};
     cam.target = {278, 273, 0};
     cam.fov_y_deg = 39.3f;
-    for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh})
+    for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh}) {
         expect_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b);
+        for (auto m : {accel::CollapseMethod::kSahOptimal, accel::CollapseMethod::kGreedy})
+            expect_cwbvh_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b, m);
+    }
 }
 
 TEST(EmbreeAgreement, GeneratedScenes) {
     for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
         accel::TriangleMesh mesh = accel::make_procedural(kind, 20000, 3);
-        for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh})
+        for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh}) {
             expect_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b);
+            for (auto m : {accel::CollapseMethod::kSahOptimal, accel::CollapseMethod::kGreedy})
+                expect_cwbvh_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b, m);
+        }
     }
 }
 
@@ -112,6 +128,11 @@ TEST(EmbreeAgreement, BenchmarkScenes) {
         for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
             SCOPED_TRACE(accel::builder_name(b));
             expect_agreement(mesh, cam, e.ao_length, 160, 120, b);
+        }
+        {
+            SCOPED_TRACE("cwbvh from binned");
+            expect_cwbvh_agreement(mesh, cam, e.ao_length, 160, 120, accel::BuilderKind::kBinned,
+                                   accel::CollapseMethod::kSahOptimal);
         }
         const accel::KdLayout kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);
         for (int stack : {64, 2}) {

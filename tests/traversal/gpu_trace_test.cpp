@@ -12,6 +12,7 @@
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -36,6 +37,10 @@ Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::
     if (layout == Layout::kBvh2) {
         s.name = std::string("bvh2/") + accel::builder_name(builder);
         s.bvh2 = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
+    } else if (layout == Layout::kCwbvh) {
+        s.name = std::string("cwbvh/") + accel::builder_name(builder);
+        const accel::BuildTree tree = accel::run_builder(builder, mesh, {}).tree;
+        s.cwbvh = accel::convert_to_cwbvh(accel::collapse_to_wide(tree, mesh, accel::CollapseMethod::kSahOptimal), mesh);
     } else {
         s.name = "kdtree";
         s.kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);

@@ -248,8 +248,8 @@ void TraceOptions::validate(BuildOptions& build) const {
         if (device == "cpu") {
             const auto l = cpu_reference_layout(kernel);
             if (!l)
-                throw Error("--kernel " + kernel + " has no CPU form; on --device cpu, --kernel names the kernel whose "
-                            "traversal the CPU runs: plain (bvh2) or cwbvh");
+                throw Error("--kernel " + kernel + " has no CPU form: it needs --device gpu (on the CPU, --kernel takes "
+                            "plain or cwbvh, whose traversals the CPU runs)");
             layout = *l;
         } else {
             layout = trav::find_kernel(kernel).layout;
