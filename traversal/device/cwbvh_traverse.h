@@ -123,72 +123,126 @@ BVHLAB_UNROLL
     return hits;
 }
 
+/// Intersects triangle k: three 16-byte read-only loads on the device, the shared Woop test.
+BVHLAB_HD BVHLAB_FORCEINLINE bool intersect_tri(const accel::WoopTriangle* tris, uint32_t k, Vec3 o, Vec3 d,
+                                                float tmin, float tmax, float& t, float& u, float& v) {
+#if defined(__CUDA_ARCH__)
+    const float4* p = reinterpret_cast<const float4*>(tris + k);
+    const float4 r0 = __ldg(p), r1 = __ldg(p + 1), r2 = __ldg(p + 2);
+    return accel::WoopTriangle::intersect_rows(&r0.x, &r1.x, &r2.x, o, d, tmin, tmax, t, u, v);
+#else
+    return tris[k].intersect(o, d, tmin, tmax, t, u, v);
+#endif
+}
+
 }  // namespace cw_detail
+
+/// The node-group stack: base indices and group bits, kCwbvhStackSize entries.
+struct CwbvhStack {
+    uint32_t base[kCwbvhStackSize];
+    uint32_t bits[kCwbvhStackSize];
+};
+
+/// A ray in flight through a CWBVH: what traverse_cwbvh keeps between steps, so that a kernel
+/// can hand a finished lane a new ray between steps (dynamic fetch).
+struct CwbvhState {
+    Vec3 o, d;
+    cw_detail::RayAxes axes;
+    float tmin, t_hit, u_hit, v_hit;
+    int32_t k_hit;
+    uint32_t group_base, group_bits;  // node group: base, interior hits (bits 24..31) | imask
+    int sp;
+};
+
+/// Starts `ray`: the root as the one interior child (slot 0) of a virtual parent whose
+/// children start at node 0.
+BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_start(CwbvhState& s, const Ray& ray) {
+    const Vec3 inv = safe_reciprocal(ray.dir);
+    s.o = ray.org;
+    s.d = ray.dir;
+    s.axes.o[0] = ray.org.x, s.axes.o[1] = ray.org.y, s.axes.o[2] = ray.org.z;
+    s.axes.inv[0] = inv.x, s.axes.inv[1] = inv.y, s.axes.inv[2] = inv.z;
+    s.axes.octant = 0;
+    for (int k = 0; k < 3; ++k) {
+        s.axes.neg[k] = s.axes.inv[k] < 0.0f;
+        s.axes.octant |= uint32_t(!s.axes.neg[k]) << k;
+    }
+    s.tmin = ray.tmin;
+    s.t_hit = ray.tmax;
+    s.u_hit = s.v_hit = 0.0f;
+    s.k_hit = -1;
+    s.group_base = 0;
+    s.group_bits = (1u << (accel::CwbvhNode::kInteriorBit + s.axes.octant)) | 1u;
+    s.sp = 0;
+}
+
+/// Whether the ray has finished (no node group left to visit).
+BVHLAB_HD BVHLAB_FORCEINLINE bool cwbvh_done(const CwbvhState& s) { return !(s.group_bits & 0xFF000000u); }
+
+/// One step: the nearest interior child left in the node group (the highest bit: slots are
+/// octant-ordered, see CwbvhNode) is fetched and its eight boxes tested, what is left of the
+/// group waits on the stack, then the triangles of the leaves entered are tested. When the
+/// group is empty the next one is popped; the ray is done when none is left.
+template <bool kAnyHit>
+BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, CwbvhStack& stack,
+                                             TraversalCounters* counters) {
+    const uint32_t bit = highest_bit(s.group_bits & 0xFF000000u);
+    s.group_bits &= ~(1u << bit);
+    const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ s.axes.octant;
+    const uint32_t node = s.group_base + popc32(s.group_bits & ((1u << slot) - 1u) & 0xFFu);
+    if (s.group_bits & 0xFF000000u) {
+        stack.base[s.sp] = s.group_base;
+        stack.bits[s.sp++] = s.group_bits;
+    }
+    uint32_t w[20];
+    cw_detail::load_node(v.nodes + node, w);
+    uint32_t leaves = 0;
+    const uint32_t hits = cw_detail::intersect_children(w, s.axes, s.tmin, s.t_hit, leaves);
+    if (counters) {
+        ++counters->nodes;
+        counters->leaves += leaves;
+    }
+    s.group_base = w[cw_detail::kWordChildBase];
+    s.group_bits = (hits & 0xFF000000u) | (w[cw_detail::kWordExponents] >> 24);
+    const uint32_t tri_base = w[cw_detail::kWordTriBase];
+    uint32_t tri_bits = hits & 0x00FFFFFFu;
+    while (tri_bits) {
+        const uint32_t k = tri_base + lowest_bit(tri_bits);
+        tri_bits &= tri_bits - 1u;
+        if (counters) ++counters->tri_tests;
+        float t, u, vv;
+        if (cw_detail::intersect_tri(v.tris, k, s.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
+            s.t_hit = t;
+            s.u_hit = u;
+            s.v_hit = vv;
+            s.k_hit = int32_t(k);
+            if (kAnyHit) {  // any hit ends the ray
+                s.group_bits = 0;
+                return;
+            }
+        }
+    }
+    if (!(s.group_bits & 0xFF000000u) && s.sp > 0) {
+        --s.sp;
+        s.group_base = stack.base[s.sp];
+        s.group_bits = stack.bits[s.sp];
+    }
+}
+
+/// The hit of a finished ray.
+BVHLAB_HD BVHLAB_FORCEINLINE Hit cwbvh_result(const CwbvhView& v, const CwbvhState& s) {
+    if (s.k_hit < 0) return Hit::miss();
+    return {int32_t(v.tri_ids[s.k_hit]), s.t_hit, s.u_hit, s.v_hit};
+}
 
 /// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
 template <bool kAnyHit>
 BVHLAB_HD inline Hit traverse_cwbvh(const CwbvhView& v, const Ray& ray, TraversalCounters* counters = nullptr) {
-    cw_detail::RayAxes r;
-    const Vec3 inv = safe_reciprocal(ray.dir);
-    r.o[0] = ray.org.x, r.o[1] = ray.org.y, r.o[2] = ray.org.z;
-    r.inv[0] = inv.x, r.inv[1] = inv.y, r.inv[2] = inv.z;
-    r.octant = 0;
-    for (int k = 0; k < 3; ++k) {
-        r.neg[k] = r.inv[k] < 0.0f;
-        r.octant |= uint32_t(!r.neg[k]) << k;
-    }
-    float t_hit = ray.tmax, u_hit = 0.0f, v_hit = 0.0f;
-    int32_t k_hit = -1;
-    // The root as the one interior child (slot 0) of a virtual parent whose children start at 0.
-    uint32_t group_base = 0, group_bits = (1u << (accel::CwbvhNode::kInteriorBit + r.octant)) | 1u;
-    uint32_t tri_base = 0, tri_bits = 0;
-    uint32_t stack_base[kCwbvhStackSize], stack_bits[kCwbvhStackSize];
-    int sp = 0;
-    uint32_t w[20];
-    while (true) {
-        if (group_bits & 0xFF000000u) {
-            // The nearest interior child left in the group; the rest waits on the stack.
-            const uint32_t bit = highest_bit(group_bits & 0xFF000000u);
-            group_bits &= ~(1u << bit);
-            const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ r.octant;
-            const uint32_t node = group_base + popc32(group_bits & ((1u << slot) - 1u) & 0xFFu);
-            if (group_bits & 0xFF000000u) {
-                stack_base[sp] = group_base;
-                stack_bits[sp++] = group_bits;
-            }
-            cw_detail::load_node(v.nodes + node, w);
-            uint32_t leaves = 0;
-            const uint32_t hits = cw_detail::intersect_children(w, r, ray.tmin, t_hit, leaves);
-            if (counters) {
-                ++counters->nodes;
-                counters->leaves += leaves;
-            }
-            group_base = w[cw_detail::kWordChildBase];
-            group_bits = (hits & 0xFF000000u) | (w[cw_detail::kWordExponents] >> 24);
-            tri_base = w[cw_detail::kWordTriBase];
-            tri_bits = hits & 0x00FFFFFFu;
-        }
-        while (tri_bits) {
-            const uint32_t k = tri_base + lowest_bit(tri_bits);
-            tri_bits &= tri_bits - 1u;
-            if (counters) ++counters->tri_tests;
-            float t, u, vv;
-            if (v.tris[k].intersect(ray.org, ray.dir, ray.tmin, t_hit, t, u, vv)) {
-                t_hit = t;
-                u_hit = u;
-                v_hit = vv;
-                k_hit = int32_t(k);
-                if (kAnyHit) return {int32_t(v.tri_ids[k]), t, u, vv};
-            }
-        }
-        if (!(group_bits & 0xFF000000u)) {
-            if (sp == 0) break;
-            group_base = stack_base[--sp];
-            group_bits = stack_bits[sp];
-        }
-    }
-    if (k_hit < 0) return Hit::miss();
-    return {int32_t(v.tri_ids[k_hit]), t_hit, u_hit, v_hit};
+    CwbvhState s;
+    CwbvhStack stack;
+    cwbvh_start(s, ray);
+    while (!cwbvh_done(s)) cwbvh_step<kAnyHit>(v, s, stack, counters);
+    return cwbvh_result(v, s);
 }
 
 }  // namespace bvhlab::trav
