@@ -8,6 +8,7 @@
 #             against Embree before timing, and Embree on every core on the same rays
 #   bvhbench  the bench phase for the BVH2 kernels alone (binned and SBVH; no kd-tree, no Embree)
 #   cwbench   the CWBVH kernels (--layout cwbvh) on binned and SBVH trees, beside the bvh2 bench
+#   cwverify  the CWBVH kernels against Embree on the protocol's four ray types (verify does them too)
 #   verify    every kernel against Embree on the protocol's four ray types
 #   profile   ncu metrics of every kernel on bunny primary and furball diffuse (PROFILE_SETS:
 #             scene:raytype pairs; PROFILE_KERNEL: one kernel instead of all)
@@ -94,6 +95,14 @@ if has verify; then
         "$bin/bvhlab" -q verify "$s" --device gpu --kernel all --json >>"$out/verify.jsonl" || status=1
         "$bin/bvhlab" -q verify "$s" --device gpu --kernel all --structure kdtree --kd-stack 2 --json \
             >>"$out/verify.jsonl" || status=1
+        "$bin/bvhlab" -q verify "$s" --device gpu --layout cwbvh --kernel all --json >>"$out/verify.jsonl" || status=1
+    done
+fi
+
+if has cwverify; then
+    for s in cornell-box "${names[@]}"; do
+        log "cwbvh verify $s"
+        "$bin/bvhlab" -q verify "$s" --device gpu --layout cwbvh --kernel all --json >>"$out/verify.jsonl" || status=1
     done
 fi
 

@@ -98,7 +98,18 @@ BVHLAB_UNROLL
             qf[k][h] = r.neg[k] ? lo : hi;
         }
     }
-    const uint32_t imask = w[kWordExponents] >> 24;
+    // Each slot's hit-mask bits and shift, four slots per word (Ylitie et al.'s trick): the
+    // shift is meta & 31, with the octant folded into interior slots; the bits are meta >> 5.
+    // Per node this costs ~10 word operations instead of ~5 per slot.
+    const uint32_t imask = w[kWordExponents] >> 24, octant4 = r.octant * 0x01010101u;
+    uint32_t shift4[2], bits4[2];
+BVHLAB_UNROLL
+    for (int h = 0; h < 2; ++h) {
+        const uint32_t meta4 = w[kWordMeta + h];
+        const uint32_t inner4 = ((((imask >> (4 * h)) & 0xFu) * 0x00204081u) & 0x01010101u) * 0xFFu;
+        shift4[h] = (meta4 ^ (octant4 & inner4)) & 0x1F1F1F1Fu;
+        bits4[h] = (meta4 >> 5) & 0x07070707u;
+    }
     uint32_t hits = 0, leaves = 0;
 BVHLAB_UNROLL
     for (uint32_t s = 0; s < 8; ++s) {
@@ -111,12 +122,10 @@ BVHLAB_UNROLL
         const float fz = fmaf(accel::cwbvh_unpack(qf[2][h], b), sc_far[2], off_far[2]);
         const float tn = max_f(max_f(nx, ny), max_f(nz, tmin));
         const float tf = min_f(min_f(fx, fy), min_f(fz, tmax));
-        if (tn <= tf) {
-            const uint32_t meta = (w[kWordMeta + h] >> (8 * b)) & 0xFFu;
-            const bool interior = (imask >> s) & 1u;
-            const uint32_t shift = (meta & 31u) ^ (interior ? r.octant : 0u);
-            hits |= (meta >> 5) << shift;
-            leaves += !interior && meta != 0;
+        if (tn <= tf) {  // an empty slot has no bits
+            const uint32_t bits = (bits4[h] >> (8 * b)) & 7u;
+            hits |= bits << ((shift4[h] >> (8 * b)) & 31u);
+            leaves += bits != 0 && !((imask >> s) & 1u);
         }
     }
     leaves_hit += leaves;
