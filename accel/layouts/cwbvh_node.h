@@ -55,24 +55,13 @@ BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_scale(uint32_t biased_exponent) {
 
 /// Byte `byte` (0..3) of `word` as the float 1 + q * 2^-15: one byte permute on the device
 /// (against an I2F conversion at a quarter of the FMA rate). The traversal folds the 1 and the
-/// 2^15 into per-node constants. `one` is 0x3F800000, passed in a register: with it as a
-/// literal nvcc put the selector in a register instead, and rebuilt it before almost every
-/// permute (~30 extra instructions per node in the SASS).
-BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_unpack(uint32_t word, uint32_t byte, uint32_t one) {
+/// 2^15 into per-node constants.
+BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_unpack(uint32_t word, uint32_t byte) {
 #if defined(__CUDA_ARCH__)
-    return __uint_as_float(__byte_perm(word, one, 0x7604u | (byte << 4)));
+    return __uint_as_float(__byte_perm(word, 0x3F800000u, 0x7604u | (byte << 4)));
 #else
-    return float_from_bits(one | ((word >> (8 * byte)) & 0xFFu) << 8);
+    return float_from_bits(0x3F800000u | ((word >> (8 * byte)) & 0xFFu) << 8);
 #endif
-}
-
-/// 0x3F800000 as a value the device compiler cannot see through (see cwbvh_unpack).
-BVHLAB_HD BVHLAB_FORCEINLINE uint32_t cwbvh_unpack_one() {
-    uint32_t one = 0x3F800000u;
-#if defined(__CUDA_ARCH__)
-    asm volatile("" : "+r"(one));
-#endif
-    return one;
 }
 
 /// A CWBVH ready for traversal: nodes (root at 0), Woop triangles in leaf order, and each

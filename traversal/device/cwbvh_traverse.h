@@ -111,16 +111,15 @@ BVHLAB_UNROLL
         bits4[h] = (meta4 >> 5) & 0x07070707u;
     }
     uint32_t hits = 0, leaves = 0;
-    const uint32_t one = accel::cwbvh_unpack_one();
 BVHLAB_UNROLL
     for (uint32_t s = 0; s < 8; ++s) {
         const uint32_t h = s >> 2, b = s & 3;
-        const float nx = fmaf(accel::cwbvh_unpack(qn[0][h], b, one), sc_near[0], off_near[0]);
-        const float ny = fmaf(accel::cwbvh_unpack(qn[1][h], b, one), sc_near[1], off_near[1]);
-        const float nz = fmaf(accel::cwbvh_unpack(qn[2][h], b, one), sc_near[2], off_near[2]);
-        const float fx = fmaf(accel::cwbvh_unpack(qf[0][h], b, one), sc_far[0], off_far[0]);
-        const float fy = fmaf(accel::cwbvh_unpack(qf[1][h], b, one), sc_far[1], off_far[1]);
-        const float fz = fmaf(accel::cwbvh_unpack(qf[2][h], b, one), sc_far[2], off_far[2]);
+        const float nx = fmaf(accel::cwbvh_unpack(qn[0][h], b), sc_near[0], off_near[0]);
+        const float ny = fmaf(accel::cwbvh_unpack(qn[1][h], b), sc_near[1], off_near[1]);
+        const float nz = fmaf(accel::cwbvh_unpack(qn[2][h], b), sc_near[2], off_near[2]);
+        const float fx = fmaf(accel::cwbvh_unpack(qf[0][h], b), sc_far[0], off_far[0]);
+        const float fy = fmaf(accel::cwbvh_unpack(qf[1][h], b), sc_far[1], off_far[1]);
+        const float fz = fmaf(accel::cwbvh_unpack(qf[2][h], b), sc_far[2], off_far[2]);
         const float tn = max_f(max_f(nx, ny), max_f(nz, tmin));
         const float tf = min_f(min_f(fx, fy), min_f(fz, tmax));
         if (tn <= tf) {  // an empty slot has no bits
