@@ -55,14 +55,20 @@ BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_scale(uint32_t biased_exponent) {
 
 /// Byte `byte` (0..3) of `word` as the float 1 + q * 2^-15: one byte permute on the device
 /// (against an I2F conversion at a quarter of the FMA rate). The traversal folds the 1 and the
-/// 2^15 into per-node constants.
-BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_unpack(uint32_t word, uint32_t byte) {
+/// 2^15 into per-node constants. `one` must be 0x3F800000; the kernels pass it in as a
+/// value that ptxas cannot fold (CwbvhView::one): with a literal it made the constant the
+/// permute's immediate and rebuilt the selector in a register before almost every permute
+/// (~30 extra instructions per node in the SASS).
+BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_unpack(uint32_t word, uint32_t byte, uint32_t one) {
 #if defined(__CUDA_ARCH__)
-    return __uint_as_float(__byte_perm(word, 0x3F800000u, 0x7604u | (byte << 4)));
+    return __uint_as_float(__byte_perm(word, one, 0x7604u | (byte << 4)));
 #else
-    return float_from_bits(0x3F800000u | ((word >> (8 * byte)) & 0xFFu) << 8);
+    return float_from_bits(one | ((word >> (8 * byte)) & 0xFFu) << 8);
 #endif
 }
+
+/// The `one` of cwbvh_unpack.
+constexpr uint32_t kCwbvhUnpackOne = 0x3F800000u;
 
 /// A CWBVH ready for traversal: nodes (root at 0), Woop triangles in leaf order, and each
 /// one's mesh triangle id. Owns its data.

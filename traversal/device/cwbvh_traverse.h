@@ -32,6 +32,7 @@ struct CwbvhView {
     const accel::CwbvhNode* nodes;
     const accel::WoopTriangle* tris;
     const uint32_t* tri_ids;
+    uint32_t one = accel::kCwbvhUnpackOne;  ///< see cwbvh_unpack: a kernel parameter, not a literal
 };
 
 namespace cw_detail {
@@ -76,7 +77,7 @@ struct RayAxes {
 /// 2^-22 (|orig| + |sc|), and far planes are widened by 1 + 2^-21 for their own rounding. The
 /// |sc| term is 1/128 of one quantisation step.
 BVHLAB_HD BVHLAB_FORCEINLINE uint32_t intersect_children(const uint32_t (&w)[20], const RayAxes& r, float tmin,
-                                                          float tmax, uint32_t& leaves_hit) {
+                                                          float tmax, uint32_t one, uint32_t& leaves_hit) {
     constexpr float kWiden = 1.0000005f;  // 1 + 2^-21
     float sc_near[3], sc_far[3], off_near[3], off_far[3];
     uint32_t qn[3][2], qf[3][2];
@@ -114,12 +115,12 @@ BVHLAB_UNROLL
 BVHLAB_UNROLL
     for (uint32_t s = 0; s < 8; ++s) {
         const uint32_t h = s >> 2, b = s & 3;
-        const float nx = fmaf(accel::cwbvh_unpack(qn[0][h], b), sc_near[0], off_near[0]);
-        const float ny = fmaf(accel::cwbvh_unpack(qn[1][h], b), sc_near[1], off_near[1]);
-        const float nz = fmaf(accel::cwbvh_unpack(qn[2][h], b), sc_near[2], off_near[2]);
-        const float fx = fmaf(accel::cwbvh_unpack(qf[0][h], b), sc_far[0], off_far[0]);
-        const float fy = fmaf(accel::cwbvh_unpack(qf[1][h], b), sc_far[1], off_far[1]);
-        const float fz = fmaf(accel::cwbvh_unpack(qf[2][h], b), sc_far[2], off_far[2]);
+        const float nx = fmaf(accel::cwbvh_unpack(qn[0][h], b, one), sc_near[0], off_near[0]);
+        const float ny = fmaf(accel::cwbvh_unpack(qn[1][h], b, one), sc_near[1], off_near[1]);
+        const float nz = fmaf(accel::cwbvh_unpack(qn[2][h], b, one), sc_near[2], off_near[2]);
+        const float fx = fmaf(accel::cwbvh_unpack(qf[0][h], b, one), sc_far[0], off_far[0]);
+        const float fy = fmaf(accel::cwbvh_unpack(qf[1][h], b, one), sc_far[1], off_far[1]);
+        const float fz = fmaf(accel::cwbvh_unpack(qf[2][h], b, one), sc_far[2], off_far[2]);
         const float tn = max_f(max_f(nx, ny), max_f(nz, tmin));
         const float tf = min_f(min_f(fx, fy), min_f(fz, tmax));
         if (tn <= tf) {  // an empty slot has no bits
@@ -206,7 +207,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, 
     uint32_t w[20];
     cw_detail::load_node(v.nodes + node, w);
     uint32_t leaves = 0;
-    const uint32_t hits = cw_detail::intersect_children(w, s.axes, s.tmin, s.t_hit, leaves);
+    const uint32_t hits = cw_detail::intersect_children(w, s.axes, s.tmin, s.t_hit, v.one, leaves);
     if (counters) {
         ++counters->nodes;
         counters->leaves += leaves;
