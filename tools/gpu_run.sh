@@ -63,31 +63,23 @@ if has bench; then
     done
 fi
 
-if has bvhbench; then
+# every_layout_bench FILE ARGS...: every kernel of one layout on binned and SBVH trees, both ray sets.
+every_layout_bench() {
+    local file=$1
+    shift
     for s in "${names[@]}"; do
         make_rays "$s"
         for r in primary diffuse; do
-            log "bvh bench $s $r"
-            for st in bvh sbvh; do
-                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --structure $st --json \
-                    >>"$out/bench.jsonl" || status=1
-            done
-        done
-    done
-fi
-
-if has cwbench; then
-    for s in "${names[@]}"; do
-        make_rays "$s"
-        for r in primary diffuse; do
-            log "cwbvh bench $s $r"
+            log "bench $* $s $r"
             for b in binned sbvh; do
-                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --layout cwbvh --kernel all --builder $b \
-                    --json >>"$out/cwbench.jsonl" || status=1
+                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --builder $b "$@" --json \
+                    >>"$out/$file" || status=1
             done
         done
     done
-fi
+}
+if has bvhbench; then every_layout_bench bench.jsonl --layout bvh2; fi
+if has cwbench; then every_layout_bench cwbench.jsonl --layout cwbvh; fi
 
 if has verify; then
     for s in cornell-box "${names[@]}"; do

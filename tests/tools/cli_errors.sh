@@ -91,6 +91,7 @@ expect_error layout-bad-value "layout" build "$data/cornell_box.obj" --layout wi
 expect_error cwbvh-kernel-vs-layout "traces --layout cwbvh, not --layout bvh2" verify "$data/cornell_box.obj" --kernel cwbvh --layout bvh2
 expect_error plain-kernel-vs-layout "traces --layout bvh2, not --layout cwbvh" verify "$data/cornell_box.obj" --kernel plain --layout cwbvh
 expect_error cwbvh-kernel-kd "kd-tree" verify "$data/cornell_box.obj" --kernel cwbvh --structure kdtree
+expect_error cpu-kernel-all "--kernel all chooses GPU kernels; it needs --device gpu" verify "$data/cornell_box.obj" --device cpu --kernel all
 expect_error cpu-kernel-no-cpu-form "no CPU form" verify "$data/cornell_box.obj" --device cpu --kernel while-while
 expect_error embree-not-for-verify "device" verify "$data/cornell_box.obj" --device embree
 expect_error kd-stack-on-bvh "--kd-stack applies to kd-trees" bench "$data/cornell_box.obj" --kd-stack 4

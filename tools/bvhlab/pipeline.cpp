@@ -264,7 +264,8 @@ void TraceOptions::validate(BuildOptions& build) const {
         }
     }
     if (device != "gpu") {
-        if (kernel_flag->count() && device != "cpu") throw Error("--kernel chooses a GPU kernel; it needs --device gpu");
+        if (kernel_flag->count() && (device != "cpu" || kernel == "all"))
+            throw Error("--kernel " + kernel + " chooses GPU kernels; it needs --device gpu");
         if (block_flag->count()) throw Error("--block-size applies to GPU kernels; it needs --device gpu");
         if (fetch_flag->count()) throw Error("--fetch-threshold applies to GPU kernels; it needs --device gpu");
     }
