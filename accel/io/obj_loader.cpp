@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 
 #include "accel/core/check.h"
+#include "accel/io/atomic_file.h"
 
 namespace bvhlab::accel {
 namespace {
@@ -194,25 +195,20 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
 }
 
 void write_obj(const TriangleMesh& mesh, const std::string& path) {
-    std::ofstream out(path);
-    if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
-    char buf[96];
-    for (const Vec3& v : mesh.vertices) {
+    write_file_atomically(path, [&](std::FILE* f) {
         // %.9g round-trips every float exactly.
-        std::snprintf(buf, sizeof buf, "v %.9g %.9g %.9g\n", v.x, v.y, v.z);
-        out << buf;
-    }
-    int32_t current = -1;
-    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-        const int32_t m = mesh.material_ids.empty() ? -1 : mesh.material_ids[t];
-        if (m != current && m >= 0 && size_t(m) < mesh.materials.size()) {
-            out << "usemtl " << mesh.materials[size_t(m)].name << "\n";
-            current = m;
+        for (const Vec3& v : mesh.vertices) std::fprintf(f, "v %.9g %.9g %.9g\n", v.x, v.y, v.z);
+        int32_t current = -1;
+        for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+            const int32_t m = mesh.material_ids.empty() ? -1 : mesh.material_ids[t];
+            if (m != current && m >= 0 && size_t(m) < mesh.materials.size()) {
+                std::fprintf(f, "usemtl %s\n", mesh.materials[size_t(m)].name.c_str());
+                current = m;
+            }
+            std::fprintf(f, "f %u %u %u\n", mesh.indices[3 * t] + 1, mesh.indices[3 * t + 1] + 1,
+                         mesh.indices[3 * t + 2] + 1);
         }
-        out << "f " << mesh.indices[3 * t] + 1 << ' ' << mesh.indices[3 * t + 1] + 1 << ' '
-            << mesh.indices[3 * t + 2] + 1 << "\n";
-    }
-    if (!out.flush()) throw Error("cannot write '" + path + "': write failed");
+    });
 }
 
 }  // namespace bvhlab::accel

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "accel/core/check.h"
+#include "accel/io/atomic_file.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "tree files need a little-endian host");
 
@@ -52,13 +53,12 @@ void write_file(const std::string& path, Header h, const std::vector<Node>& node
     uint64_t sum = fnv1a(&h, sizeof h);
     sum = fnv1a(nodes.data(), nodes.size() * sizeof(Node), sum);
     sum = fnv1a(indices.data(), indices.size() * sizeof(uint32_t), sum);
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
-    out.write(reinterpret_cast<const char*>(&h), sizeof h);
-    out.write(reinterpret_cast<const char*>(nodes.data()), std::streamsize(nodes.size() * sizeof(Node)));
-    out.write(reinterpret_cast<const char*>(indices.data()), std::streamsize(indices.size() * sizeof(uint32_t)));
-    out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
-    if (!out.flush()) throw Error("cannot write '" + path + "': write failed");
+    write_file_atomically(path, [&](std::FILE* f) {
+        std::fwrite(&h, sizeof h, 1, f);
+        if (!nodes.empty()) std::fwrite(nodes.data(), sizeof(Node), nodes.size(), f);
+        if (!indices.empty()) std::fwrite(indices.data(), sizeof(uint32_t), indices.size(), f);
+        std::fwrite(&sum, sizeof sum, 1, f);
+    });
 }
 
 Header provenance(const TreeFileMeta& meta) {

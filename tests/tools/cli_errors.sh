@@ -141,5 +141,28 @@ else
     fail=$((fail + 1)); echo "FAIL build --layout cwbvh --json"
 fi
 
+# Outputs never overwrite the command's inputs; invalid rays and foreign hits are refused by index.
+cp "$data/cornell_box.obj" "$tmp/cb_in.obj"
+expect_error build-out-is-input "--out .* is this command's input" build "$tmp/cb_in.obj" -o "$tmp/cb_in.obj"
+expect_error rays-out-is-input "--out .* is this command's input" rays "$tmp/cb_in.obj" --type primary -o "$tmp/cb_in.obj"
+"$bin" -q rays "$tmp/cb_in.obj" --type primary --width 8 --height 8 -o "$tmp/small.rays" >/dev/null
+expect_error hits-out-is-rays "--hits-out .* is this command's input" bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.rays"
+if cmp -s "$data/cornell_box.obj" "$tmp/cb_in.obj"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL the input was changed"; fi
+python3 - "$tmp/small.rays" "$tmp/nan.rays" <<'PY'
+import struct, sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+struct.pack_into('<f', d, 24 + 3 * 32 + 16, float('nan'))  # ray 3: direction x
+open(sys.argv[2], 'wb').write(d)
+PY
+expect_error nan-ray "ray 3 has a non-finite direction" verify "$tmp/cb_in.obj" --rays "$tmp/nan.rays"
+"$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null
+python3 - "$tmp/small.hits" "$tmp/foreign.hits" <<'PY'
+import struct, sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+struct.pack_into('<ifff', d, 24 + 5 * 16, 999999, 1.0, 0.1, 0.1)  # hit 5: a triangle the scene lacks
+open(sys.argv[2], 'wb').write(d)
+PY
+expect_error foreign-hits "hit 5 names triangle 999999" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/foreign.hits"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -99,6 +100,48 @@ TEST(HitFile, RoundTrip) {
     EXPECT_EQ(b.hits[0].v, 0.5f);
     EXPECT_EQ(b.hits[1].tri, -1);
     EXPECT_THROW(read_ray_file(f.path()), Error);
+}
+
+TEST(RayFile, InvalidRaysAreRefusedWithTheirIndex) {
+    // Each of these once reached Embree (which aborts on a NaN direction) or the kernels.
+    const float nan = std::nanf("");
+    const std::vector<std::pair<Ray, std::string>> bad = {
+        {{{0, 0, 0}, 0.0f, {nan, 0, 1}, INFINITY}, "non-finite direction"},
+        {{{INFINITY, 0, 0}, nan, {0, 0, 1}, INFINITY}, "non-finite origin"},
+        {{{0, 0, 0}, 0.0f, {0, 0, 0}, INFINITY}, "zero direction"},
+        {{{0, 0, 0}, nan, {0, 0, 1}, INFINITY}, "tmin"},
+        {{{0, 0, 0}, -1.0f, {0, 0, 1}, INFINITY}, "tmin"},
+        {{{0, 0, 0}, INFINITY, {0, 0, 1}, INFINITY}, "tmin"},
+        {{{0, 0, 0}, 2.0f, {0, 0, 1}, 1.0f}, "tmax"},
+        {{{0, 0, 0}, 0.0f, {0, 0, 1}, nan}, "tmax"},
+    };
+    test::TempFile f("bad_rays.bin");
+    for (const auto& [ray, why] : bad) {
+        SCOPED_TRACE(why);
+        EXPECT_NE(invalid_ray(ray), "");
+        RaySet set = sample_set();
+        set.rays.push_back(ray);
+        write_ray_file(f.path(), set);
+        expect_error(f.path(), "ray 2 has");
+        expect_error(f.path(), why);
+    }
+    for (const Ray& r : sample_set().rays) EXPECT_EQ(invalid_ray(r), "");  // tmax = +inf and tiny components are fine
+}
+
+TEST(HitFile, InvalidHitsAndForeignIdsAreRefused) {
+    test::TempFile f("bad_hits.bin");
+    write_hit_file(f.path(), {{{5, 1.0f, 0.1f, 0.1f}, {-7, 1.0f, 0.1f, 0.1f}}, Query::kClosest});
+    EXPECT_THROW(read_hit_file(f.path()), Error);  // id below -1
+    write_hit_file(f.path(), {{{5, std::nanf(""), 0.1f, 0.1f}}, Query::kClosest});
+    EXPECT_THROW(read_hit_file(f.path()), Error);  // NaN t on a hit
+    const HitSet ok{{{5, 1.0f, 0.1f, 0.1f}, Hit::miss()}, Query::kClosest};
+    EXPECT_NO_THROW(check_hit_ids(ok, 6, f.path()));
+    try {
+        check_hit_ids(ok, 5, f.path());  // the hits of a larger scene
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("hit 0 names triangle 5"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace bvhlab::trav

@@ -62,6 +62,7 @@ void register_verify(CLI::App& app, Globals& g) {
         if (hits->count()) {
             const trav::RaySet set = trav::read_ray_file(o->rays_file);
             trav::HitSet hs = trav::read_hit_file(o->hits_file);
+            trav::check_hit_ids(hs, s.mesh.triangle_count(), o->hits_file);
             if (hs.hits.size() != set.rays.size())
                 throw Error("hit file has " + std::to_string(hs.hits.size()) + " hits for " +
                             std::to_string(set.rays.size()) + " rays");

@@ -4,10 +4,12 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cmath>
 #include <cstring>
 #include <memory>
 
 #include "accel/core/check.h"
+#include "accel/io/atomic_file.h"
 
 // Records are written as the in-memory structs, which is the little-endian file layout only on
 // little-endian hosts (x86-64, AArch64 Linux).
@@ -37,16 +39,15 @@ File open(const std::string& path, const char* mode) {
 template <typename T>
 void write_records(const std::string& path, const char* magic, uint32_t version, Query query,
                    const std::vector<T>& records) {
-    File f = open(path, "wb");
     Header h{};
     std::memcpy(h.magic, magic, 8);
     h.version = version;
     h.flags = query == Query::kAny ? kFlagAnyHit : 0u;
     h.count = records.size();
-    bool ok = std::fwrite(&h, sizeof h, 1, f.get()) == 1 &&
-              (records.empty() || std::fwrite(records.data(), sizeof(T), records.size(), f.get()) == records.size());
-    ok = (std::fclose(f.release()) == 0) && ok;
-    if (!ok) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    accel::write_file_atomically(path, [&](std::FILE* f) {
+        std::fwrite(&h, sizeof h, 1, f);
+        if (!records.empty()) std::fwrite(records.data(), sizeof(T), records.size(), f);
+    });
 }
 
 template <typename T>
@@ -84,9 +85,29 @@ void write_ray_file(const std::string& path, const RaySet& set) {
     write_records(path, "BVHLRAYS", kRayFileVersion, set.query, set.rays);
 }
 
+std::string invalid_ray(const Ray& r) {
+    auto finite3 = [](Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    auto str = [](Vec3 v) {
+        char b[96];
+        std::snprintf(b, sizeof b, "(%g, %g, %g)", v.x, v.y, v.z);
+        return std::string(b);
+    };
+    if (!finite3(r.org)) return "a non-finite origin " + str(r.org);
+    if (!finite3(r.dir)) return "a non-finite direction " + str(r.dir);
+    if (r.dir.x == 0.0f && r.dir.y == 0.0f && r.dir.z == 0.0f) return "a zero direction";
+    if (!std::isfinite(r.tmin) || r.tmin < 0.0f) return "tmin " + std::to_string(r.tmin) + " (must be finite and >= 0)";
+    if (std::isnan(r.tmax) || r.tmax < r.tmin)
+        return "tmax " + std::to_string(r.tmax) + " below tmin " + std::to_string(r.tmin) + " or NaN";
+    return "";
+}
+
 RaySet read_ray_file(const std::string& path) {
     RaySet s;
     s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s.query);
+    for (size_t i = 0; i < s.rays.size(); ++i) {
+        const std::string why = invalid_ray(s.rays[i]);
+        if (!why.empty()) throw Error("ray file '" + path + "': ray " + std::to_string(i) + " has " + why);
+    }
     return s;
 }
 
@@ -97,7 +118,22 @@ void write_hit_file(const std::string& path, const HitSet& set) {
 HitSet read_hit_file(const std::string& path) {
     HitSet s;
     s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s.query);
+    for (size_t i = 0; i < s.hits.size(); ++i) {
+        const Hit& h = s.hits[i];
+        if (h.tri < -1) throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has triangle id " +
+                                    std::to_string(h.tri));
+        if (h.tri >= 0 && !(std::isfinite(h.t) && std::isfinite(h.u) && std::isfinite(h.v)))
+            throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has a non-finite t, u or v");
+    }
     return s;
+}
+
+void check_hit_ids(const HitSet& set, size_t triangle_count, const std::string& path) {
+    for (size_t i = 0; i < set.hits.size(); ++i)
+        if (set.hits[i].tri >= 0 && size_t(set.hits[i].tri) >= triangle_count)
+            throw Error("hit file '" + path + "': hit " + std::to_string(i) + " names triangle " +
+                        std::to_string(set.hits[i].tri) + ", but the scene has " + std::to_string(triangle_count) +
+                        " triangles (hits of another scene?)");
 }
 
 }  // namespace bvhlab::trav

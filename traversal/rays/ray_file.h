@@ -2,6 +2,7 @@
 // Versioned ray-set and hit files (format in README.md, "File formats"). Little-endian.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -24,14 +25,26 @@ struct HitSet {
     Query query = Query::kClosest;
 };
 
-/// Writes `BVHLRAYS`, version, flags (bit 0 = any-hit), count, then 32 bytes per ray.
-/// Throws bvhlab::Error when the file cannot be written.
+/// Writes `BVHLRAYS`, version, flags (bit 0 = any-hit), count, then 32 bytes per ray, whole
+/// or not at all (accel::write_file_atomically). Throws bvhlab::Error when it cannot.
 void write_ray_file(const std::string& path, const RaySet& set);
 /// Reads a ray file. Throws bvhlab::Error naming the problem on a missing file, wrong magic,
-/// unknown version or flags, or a size that does not match the count.
+/// unknown version or flags, a size that does not match the count, or an invalid ray (its
+/// index and why: see invalid_ray).
 RaySet read_ray_file(const std::string& path);
 
+/// Why `r` cannot be traced, or "" when it can: origin and direction finite, direction not
+/// zero, tmin finite and >= 0, tmax not NaN and >= tmin (+inf allowed).
+std::string invalid_ray(const Ray& r);
+
+/// Writes a hit file (same header as a ray file, 16 bytes per hit), whole or not at all.
 void write_hit_file(const std::string& path, const HitSet& set);
+/// Reads a hit file; the same checks as read_ray_file, and each hit's t, u, v must be finite
+/// (a miss is tri -1). Triangle ids are checked against a mesh by check_hit_ids.
 HitSet read_hit_file(const std::string& path);
+
+/// Throws bvhlab::Error naming the first hit whose triangle id is not -1 or below
+/// `triangle_count` (the hits of another scene, say).
+void check_hit_ids(const HitSet& set, size_t triangle_count, const std::string& path);
 
 }  // namespace bvhlab::trav

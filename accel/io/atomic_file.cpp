@@ -1,0 +1,74 @@
+// SPDX-License-Identifier: MIT
+#include "accel/io/atomic_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "accel/core/check.h"
+
+namespace bvhlab::accel {
+
+void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+    namespace fs = std::filesystem;
+    const fs::path target(path);
+    if (fs::is_directory(target)) throw Error("cannot write '" + path + "': it is a folder");
+    // mkstemp in the target's folder, so that the rename stays on one file system.
+    std::string tmpl = (target.parent_path().empty() ? fs::path(".") : target.parent_path()) /
+                       ("." + target.filename().string() + ".tmp-XXXXXX");
+    const int fd = ::mkstemp(tmpl.data());
+    if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    // mkstemp makes the file 0600; give it what a plain fopen would (0666 less the umask).
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    ::fchmod(fd, 0666 & ~mask);
+    std::FILE* f = ::fdopen(fd, "wb");
+    if (!f) {
+        const int e = errno;
+        ::close(fd);
+        ::unlink(tmpl.c_str());
+        throw Error("cannot write '" + path + "': " + std::strerror(e));
+    }
+    auto fail = [&](int e) {
+        std::fclose(f);
+        ::unlink(tmpl.c_str());
+        throw Error("cannot write '" + path + "': " + std::strerror(e ? e : EIO));
+    };
+    try {
+        write(f);
+    } catch (...) {
+        std::fclose(f);
+        ::unlink(tmpl.c_str());
+        throw;
+    }
+    if (std::ferror(f)) fail(errno);
+    if (std::fflush(f) != 0) fail(errno);
+    if (::fsync(::fileno(f)) != 0) fail(errno);
+    if (std::fclose(f) != 0) {
+        const int e = errno;
+        ::unlink(tmpl.c_str());
+        throw Error("cannot write '" + path + "': " + std::strerror(e));
+    }
+    if (std::rename(tmpl.c_str(), path.c_str()) != 0) {
+        const int e = errno;
+        ::unlink(tmpl.c_str());
+        throw Error("cannot write '" + path + "': " + std::strerror(e));
+    }
+}
+
+void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what) {
+    namespace fs = std::filesystem;
+    std::error_code e1, e2, e3;
+    bool same = fs::exists(out, e1) && fs::exists(in, e2) && fs::equivalent(out, in, e3) && !e3;
+    if (!same) {
+        const fs::path a = fs::weakly_canonical(out, e1), b = fs::weakly_canonical(in, e2);
+        same = !e1 && !e2 && !a.empty() && a == b;
+    }
+    if (same) throw Error(what + " '" + out + "' is this command's input; choose another file");
+}
+
+}  // namespace bvhlab::accel

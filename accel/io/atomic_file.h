@@ -1,0 +1,24 @@
+// SPDX-License-Identifier: MIT
+// Output files written whole or not at all: into a temporary file in the same folder, flushed
+// to disk, then renamed over the final name. A killed run or a full disk leaves the old file
+// (or none), never a half-written one under the final name.
+#pragma once
+
+#include <cstdio>
+#include <functional>
+#include <string>
+
+namespace bvhlab::accel {
+
+/// Calls `write(f)` on a temporary file beside `path` and renames it to `path` when `write`
+/// returns and every byte reached the disk. On any failure (the temporary cannot be created,
+/// `write` throws, a write, flush, sync or the rename fails) the temporary is removed, `path`
+/// is left as it was, and bvhlab::Error names `path` and the reason (strerror). `write`
+/// reports its own failures by throwing, or by a failed stdio call (checked with ferror).
+void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
+
+/// Throws bvhlab::Error when the output `out` is the same file as the input `in` (by inode
+/// when both exist, else by normalised path): `what` names the output option.
+void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what);
+
+}  // namespace bvhlab::accel
