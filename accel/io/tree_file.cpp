@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -112,6 +113,7 @@ void write_kd_file(const std::string& path, const KdTree& tree, const TreeFileMe
 }
 
 TreeFile read_tree_file(const std::string& path) {
+    if (std::filesystem::is_directory(path)) throw Error("'" + path + "' is a folder, not a structure file");
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw Error("cannot open structure file '" + path + "': " + std::strerror(errno));
     const auto size = uint64_t(in.tellg());

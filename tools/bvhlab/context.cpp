@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -22,13 +23,41 @@ namespace fs = std::filesystem;
 
 namespace bvhlab::cli {
 
-Stage::Stage(const Globals& g, std::string what) : g_(g), what_(std::move(what)), t0_(std::chrono::steady_clock::now()) {
+Stage::Stage(const Globals& g, std::string what)
+    : g_(g), what_(std::move(what)), t0_(std::chrono::steady_clock::now()), exceptions_(std::uncaught_exceptions()) {
     if (!g_.quiet) std::fprintf(stderr, "[bvhlab] %s ...\n", what_.c_str());
 }
 
 Stage::~Stage() {
+    if (std::uncaught_exceptions() > exceptions_) return;  // failed: the error line follows
     if (!g_.quiet) std::fprintf(stderr, "[bvhlab] %s: done (%.2f s)\n", what_.c_str(), seconds());
 }
+
+CLI::Validator FiniteRange(double lo, double hi) {
+    char desc[64];
+    std::snprintf(desc, sizeof desc, "FLOAT in [%g - %g]", lo, hi);
+    return CLI::Validator(
+        [lo, hi](std::string& text) -> std::string {
+            double v = 0.0;
+            size_t used = 0;
+            try {
+                v = std::stod(text, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used == 0 || used != text.size()) return "'" + text + "' is not a number";
+            if (!std::isfinite(v)) return "'" + text + "' is not a finite number";
+            if (v < lo || v > hi) {
+                char b[96];
+                std::snprintf(b, sizeof b, "%s is not in [%g, %g]", text.c_str(), lo, hi);
+                return b;
+            }
+            return "";
+        },
+        desc);
+}
+
+CLI::Validator Finite() { return FiniteRange(-3.0e38, 3.0e38); }
 
 double Stage::seconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
@@ -84,7 +113,13 @@ std::vector<std::string> catalogue_scene_names() {
     std::vector<std::string> names;
     const char* env = std::getenv("BVHLAB_SCENES");
     if (!env || !*env) return names;
-    for (const auto& e : trav::read_catalogue(env)) names.push_back(e.name);
+    // A set variable that finds no scenes is an error: a typo must not make a suite pass on
+    // the Cornell box alone.
+    const std::string dir = env;
+    if (!fs::is_directory(dir)) throw Error("BVHLAB_SCENES='" + dir + "' is not a folder");
+    if (!fs::exists(fs::path(dir) / "scenes.json")) throw Error("BVHLAB_SCENES='" + dir + "' has no scenes.json");
+    for (const auto& e : trav::read_catalogue(dir)) names.push_back(e.name);
+    if (names.empty()) throw Error("'" + dir + "/scenes.json' lists no scenes (expected {\"scenes\": {NAME: {\"file\": ...}}})");
     return names;
 }
 
@@ -102,12 +137,15 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         if (parts.size() < 3 || parts.size() > 4)
             throw Error("bad generated-scene spec '" + spec + "' (expected gen:soup|structured:TRIANGLES[:SEED])");
         uint64_t n = 0, seed = 1;
-        try {
-            n = std::stoull(parts[2]);
-            if (parts.size() == 4) seed = std::stoull(parts[3]);
-        } catch (const std::exception&) {
-            throw Error("bad number in generated-scene spec '" + spec + "'");
-        }
+        auto number = [&](const std::string& text, const char* what) {
+            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19)
+                throw Error("generated-scene spec '" + spec + "': " + what + " '" + text + "' is not a whole number");
+            return std::stoull(text);
+        };
+        n = number(parts[2], "the triangle count");
+        if (parts.size() == 4) seed = number(parts[3], "the seed");
+        if (n < 1 || n > (1ull << 30))
+            throw Error("generated-scene spec '" + spec + "': the triangle count must be 1..2^30, not " + parts[2]);
         Stage st(g, "generating " + spec);
         s.mesh = accel::make_procedural(accel::parse_procedural_kind(parts[1]), n, seed);
         s.name = spec;
@@ -175,10 +213,10 @@ void BuildOptions::add_to(CLI::App& app) {
             ->check(CLI::Range(1, 64))
             ->capture_default_str(),
         app.add_option("--alpha", opts.sbvh_alpha, "SBVH: try spatial splits where child overlap exceeds alpha x root area")
-            ->check(CLI::Range(0.0, 1.0))
+            ->check(FiniteRange(0.0, 1.0))
             ->capture_default_str(),
         app.add_option("--budget", opts.sbvh_budget, "SBVH: at most this many references per triangle in all")
-            ->check(CLI::Range(1.0, 16.0))
+            ->check(FiniteRange(1.0, 16.0))
             ->capture_default_str(),
         app.add_option("--spatial-bins", opts.sbvh_spatial_bins, "SBVH: bins per axis for spatial splits")
             ->check(CLI::Range(2, 256))
@@ -209,13 +247,13 @@ void BuildOptions::add_to(CLI::App& app) {
         ->capture_default_str();
     kd_flags = {
         app.add_option("--kd-ct", kd.traversal_cost, "kd-tree SAH: cost of a traversal step (Wald-Havran K_T)")
-            ->check(CLI::Range(0.001, 1e6))
+            ->check(FiniteRange(0.001, 1e6))
             ->capture_default_str(),
         app.add_option("--kd-ci", kd.intersection_cost, "kd-tree SAH: cost of a triangle test (K_I)")
-            ->check(CLI::Range(0.001, 1e6))
+            ->check(FiniteRange(0.001, 1e6))
             ->capture_default_str(),
         app.add_option("--kd-bonus", kd.empty_bonus, "kd-tree SAH: cost reduction for a split with an empty side")
-            ->check(CLI::Range(0.0, 0.99))
+            ->check(FiniteRange(0.0, 0.99))
             ->capture_default_str(),
         app.add_option("--kd-max-depth", kd.max_depth, "kd-tree depth limit; -1 = 8 + 1.3 log2(N), at most 64")
             ->check(CLI::Range(-1, 64))
@@ -243,6 +281,9 @@ void BuildOptions::check_applicable() const {
         return;
     }
     for (const CLI::Option* f : kd_flags) refuse(f, "applies to --structure kdtree, not a BVH");
+    if (opts.config.min_leaf_size > opts.config.max_leaf_size)
+        throw Error("--min-leaf " + std::to_string(opts.config.min_leaf_size) + " is larger than --max-leaf " +
+                    std::to_string(opts.config.max_leaf_size));
     refuse(kd_stack_flag, "applies to kd-trees, not a BVH");
     const accel::BuilderKind k = kind();
     if (k != accel::BuilderKind::kSbvh)
@@ -255,6 +296,14 @@ void RayOptions::add_to(CLI::App& app) {
     app.add_option("--height", cfg.primary.height, "image height in pixels")->check(CLI::Range(1, 65536))->capture_default_str();
     app.add_option("--spp", cfg.primary.samples, "samples per pixel, a perfect square (regular sub-grid)")
         ->check(CLI::Range(1, 1024))
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+                const long n = std::strtol(text.c_str(), nullptr, 10);
+                long k = 1;
+                while (k * k < n) ++k;
+                return k * k == n ? "" : "--spp " + text + " is not a perfect square (1, 4, 9, 16, ...): the samples form a regular sub-grid";
+            },
+            "a perfect square"))
         ->capture_default_str();
     app.add_option("--tile", cfg.primary.tile, "order primary rays in TxT pixel tiles (0 = row-major)")
         ->check(CLI::Range(0, 4096))
@@ -264,10 +313,10 @@ void RayOptions::add_to(CLI::App& app) {
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
     app.add_option("--seed", cfg.seed, "seed of every random choice")->capture_default_str();
-    app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")->expected(3);
-    app.add_option("--target", target, "camera target x y z")->expected(3);
-    app.add_option("--up", up, "camera up vector x y z")->expected(3);
-    app.add_option("--fov", fov, "vertical field of view in degrees")->check(CLI::Range(0.01, 179.0));
+    app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")->expected(3)->check(Finite());
+    app.add_option("--target", target, "camera target x y z")->expected(3)->check(Finite());
+    app.add_option("--up", up, "camera up vector x y z")->expected(3)->check(Finite());
+    app.add_option("--fov", fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0));
 }
 
 trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {

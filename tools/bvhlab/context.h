@@ -30,6 +30,14 @@ struct Globals {
 };
 
 /// Stage lines on stderr: "[bvhlab] loading X ..." then "... done (1.23 s)".
+/// A CLI11 check for a floating-point option: a finite number within [lo, hi] (CLI::Range lets
+/// NaN through, since every comparison with NaN is false).
+CLI::Validator FiniteRange(double lo, double hi);
+/// A CLI11 check for each number of a vector option: finite.
+CLI::Validator Finite();
+
+/// Progress on stderr: "what ..." when the stage starts, "what: done (s)" when it ends, and
+/// nothing more when it ends by an exception (the error line says why).
 class Stage {
 public:
     Stage(const Globals& g, std::string what);
@@ -42,6 +50,7 @@ private:
     const Globals& g_;
     std::string what_;
     std::chrono::steady_clock::time_point t0_;
+    int exceptions_ = 0;  // std::uncaught_exceptions() at the start
 };
 
 /// A scene ready to use: mesh plus camera and AO length from its catalogue entry (or an

@@ -3,6 +3,7 @@
 // against Embree. This file only wires up the subcommands.
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "accel/core/check.h"
 #include "tools/bvhlab/commands.h"
@@ -32,6 +33,23 @@ int main(int argc, char** argv) {
     for (CLI::App* sub : app.get_subcommands({})) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
         sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
+    }
+    // An unknown first word is named (CLI11 would only say that a subcommand is required).
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--json" || a == "-q" || a == "--quiet") continue;
+        if (a.empty() || a[0] == '-') break;
+        std::string known;
+        bool found = false;
+        for (CLI::App* sub : app.get_subcommands({})) {
+            known += (known.empty() ? "" : ", ") + sub->get_name();
+            found = found || sub->get_name() == a;
+        }
+        if (!found) {
+            std::fprintf(stderr, "bvhlab: error: unknown command '%s' (commands: %s)\n", a.c_str(), known.c_str());
+            return 2;
+        }
+        break;
     }
     try {
         app.parse(argc, argv);

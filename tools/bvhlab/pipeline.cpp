@@ -463,10 +463,10 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Trace
 
 void add_compare_options(CLI::App& app, trav::CompareConfig& cc) {
     app.add_option("--edge-eps", cc.edge_eps, "barycentric distance from an edge that counts as a tie")
-        ->check(CLI::Range(0.0, 0.1))
+        ->check(FiniteRange(0.0, 0.1))
         ->capture_default_str();
     app.add_option("--t-tol", cc.t_rel_tol, "relative t difference under which two hits are at the same t")
-        ->check(CLI::Range(0.0, 0.1))
+        ->check(FiniteRange(0.0, 0.1))
         ->capture_default_str();
 }
 

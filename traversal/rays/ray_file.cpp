@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 
 #include "accel/core/check.h"
@@ -31,6 +32,7 @@ static_assert(sizeof(Header) == 24, "file header is 24 bytes");
 using File = std::unique_ptr<FILE, int (*)(FILE*)>;
 
 File open(const std::string& path, const char* mode) {
+    if (std::filesystem::is_directory(path)) throw Error("'" + path + "' is a folder, not a file");
     FILE* f = std::fopen(path.c_str(), mode);
     if (!f) throw Error("cannot open '" + path + "': " + std::strerror(errno));
     return File(f, &std::fclose);

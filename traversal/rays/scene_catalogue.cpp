@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "traversal/rays/scene_catalogue.h"
 
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -24,7 +25,12 @@ std::vector<CatalogueEntry> read_catalogue(const std::string& dir) {
         for (const auto& [name, e] : j.at("scenes").items()) {
             CatalogueEntry c;
             c.name = name;
-            c.file = dir + "/" + e.at("file").get<std::string>();
+            const std::string rel = e.at("file").get<std::string>();
+            // Scene files live in the catalogue's folder: no absolute paths, no way out by "..".
+            const std::filesystem::path norm = std::filesystem::path(rel).lexically_normal();
+            if (norm.is_absolute() || norm.empty() || *norm.begin() == "..")
+                throw Error("'" + path + "': scene '" + name + "' names a file outside its folder: '" + rel + "'");
+            c.file = dir + "/" + rel;
             if (e.contains("triangles")) c.triangles = e["triangles"].get<uint64_t>();
             if (e.contains("camera")) {
                 const auto& cam = e["camera"];
