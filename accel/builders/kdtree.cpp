@@ -1138,8 +1138,8 @@ KdTree flatten(const TopNode& root, const AABB& bounds) {
 }  // namespace
 
 int KdTreeBuilder::max_depth_for(size_t n) const {
-    if (config_.max_depth >= 0) return std::min(config_.max_depth, 64);
-    return std::min(64, int(8.0 + 1.3 * std::log2(double(std::max<size_t>(n, 1)))));
+    if (config_.max_depth >= 0) return std::min(config_.max_depth, int(kMaxTreeDepth));
+    return std::min(int(kMaxTreeDepth), int(8.0 + 1.3 * std::log2(double(std::max<size_t>(n, 1)))));
 }
 
 KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {

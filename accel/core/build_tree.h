@@ -34,13 +34,19 @@ struct BuildTree {
     }
 };
 
+/// The deepest tree any builder makes (interior nodes on a root-to-leaf path), BVH or kd-tree.
+/// The one constant behind every full traversal stack, CPU and GPU: the stacks are
+/// static_assert-ed against it (bvh2_traverse.h, kd_traverse.h, cwbvh_traverse.h), and a tree
+/// read from a file is measured, never trusted for its depth.
+constexpr uint32_t kMaxTreeDepth = 64;
+
 /// Settings every top-down builder shares. Builders nest their own Config deriving from it.
 struct BuildConfig {
     float traversal_cost = 1.0f;     ///< Ct: cost of visiting an interior node
     float intersection_cost = 1.0f;  ///< Ci: cost of one triangle test
     uint32_t min_leaf_size = 1;      ///< nodes this small always become leaves
     uint32_t max_leaf_size = 8;      ///< nodes larger than this are always split
-    uint32_t max_depth = 64;         ///< the traversal stacks are sized for this depth
+    uint32_t max_depth = kMaxTreeDepth;  ///< the traversal stacks are sized for this depth
 };
 
 }  // namespace bvhlab::accel

@@ -158,7 +158,7 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     }
     const size_t nv = attrib.vertices.size() / 3;
     mesh.vertices.resize(nv);
-    std::memcpy(mesh.vertices.data(), attrib.vertices.data(), nv * sizeof(Vec3));
+    if (nv) std::memcpy(mesh.vertices.data(), attrib.vertices.data(), nv * sizeof(Vec3));  // (null when empty)
     for (size_t v : non_finite)
         if (v < nv) mesh.vertices[v] = {NAN, NAN, NAN};
     for (const auto& shape : shapes) {

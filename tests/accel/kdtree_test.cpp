@@ -188,7 +188,11 @@ TEST(KdTreeBuilder, ValidateAndStats) {
     EXPECT_EQ(s.nodes, t.nodes.size());
     EXPECT_EQ(s.nodes, 2 * s.leaves - 1);
     EXPECT_EQ(s.references, t.prim_indices.size());
-    EXPECT_GT(s.sah, 0.0);
+    // A tree that did not split (one leaf of every triangle) costs Ci * N; this scene's tree
+    // costs under 2% of that (measured 1.2%), and a builder that stopped early would not.
+    const KdTreeBuilder::Config c{};
+    EXPECT_LT(s.sah, 0.02 * c.intersection_cost * double(m.triangle_count())) << s.sah;
+    EXPECT_GT(s.sah, c.traversal_cost);  // the root alone is visited by every ray
     // Damaged trees, as a tampered structure file could hold them.
     KdTree cycle = t;
     uint32_t interior = 0;

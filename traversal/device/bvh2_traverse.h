@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "accel/core/build_tree.h"
 #include "accel/core/hd.h"
 #include "accel/layouts/bvh2_node.h"
 #include "traversal/device/ray.h"
@@ -13,7 +14,8 @@ namespace bvhlab::trav {
 
 /// Stack entries of the shared traversal. Trees deeper than this (Bvh2::depth) are refused by
 /// the tracers before any ray is traced; builders stay below it (BuildConfig::max_depth).
-constexpr int kBvh2StackSize = 64;
+constexpr int kBvh2StackSize = int(accel::kMaxTreeDepth);
+static_assert(kBvh2StackSize >= int(accel::kMaxTreeDepth), "the BVH2 stack must hold the deepest tree a builder makes");
 
 /// Per-ray work counters, filled when a non-null pointer is given.
 struct TraversalCounters {

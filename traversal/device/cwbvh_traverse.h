@@ -16,6 +16,7 @@
 #include <cstring>
 
 #include "accel/core/bits.h"
+#include "accel/core/build_tree.h"
 #include "accel/core/hd.h"
 #include "accel/layouts/cwbvh_node.h"
 #include "traversal/device/bvh2_traverse.h"
@@ -24,8 +25,11 @@
 namespace bvhlab::trav {
 
 /// Stack entries of the CWBVH traversal: trees deeper than this (Cwbvh::depth) are refused
-/// before any ray is traced.
-constexpr int kCwbvhStackSize = 64;
+/// before any ray is traced. A wide level takes at least one binary level, and splitting
+/// leaves of up to 64 references into leaves of 3 adds at most 5, so the collapse of any
+/// builder's tree is at most kMaxTreeDepth + 5 wide nodes deep.
+constexpr int kCwbvhStackSize = int(accel::kMaxTreeDepth) + 8;
+static_assert(kCwbvhStackSize >= int(accel::kMaxTreeDepth) + 5, "the CWBVH stack must hold any collapsed tree");
 
 /// A CWBVH layout as traversal sees it: plain pointers, host or device memory.
 struct CwbvhView {

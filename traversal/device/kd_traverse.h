@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "accel/core/build_tree.h"
 #include "accel/core/hd.h"
 #include "accel/layouts/kd_node.h"
 #include "accel/layouts/woop_tri.h"
@@ -15,7 +16,9 @@
 
 namespace bvhlab::trav {
 
-constexpr int kKdFullStack = 64;  ///< full-stack entries; deeper trees are refused by the tracers
+/// Full-stack entries; deeper trees are refused by the tracers.
+constexpr int kKdFullStack = int(accel::kMaxTreeDepth);
+static_assert(kKdFullStack >= int(accel::kMaxTreeDepth), "the kd full stack must hold the deepest kd-tree");
 constexpr int kKdMaxShortStack = 8;
 
 /// A kd-tree as traversal sees it. `tris` holds one Woop triangle per mesh triangle id.
