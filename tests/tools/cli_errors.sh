@@ -187,5 +187,35 @@ open(sys.argv[2], 'wb').write(d)
 PY
 expect_error foreign-hits "hit 5 names triangle 999999" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/foreign.hits"
 
+# Every command's --json lines carry the identifying fields of the schema (README, "JSON lines").
+check_schema() {
+    local name=$1
+    shift
+    if "$bin" -q "$@" --json 2>/dev/null | python3 -c '
+import json, sys
+lines = [l for l in sys.stdin if l.strip()]
+assert lines, "no JSON lines"
+for l in lines:
+    r = json.loads(l)
+    for k in ("record", "schema", "tool", "commit", "build_type", "machine"):
+        assert k in r and r[k] not in (None, ""), k
+    assert r["schema"] == 1 and r["tool"] == "bvhlab"
+'; then
+        pass=$((pass + 1))
+    else
+        fail=$((fail + 1)); echo "FAIL JSON schema of $name"
+    fi
+}
+check_schema build build "$data/cornell_box.obj"
+check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh
+check_schema rays rays "$data/cornell_box.obj" --type ao --width 8 --height 8 -o "$tmp/schema.rays"
+check_schema rays-info rays --info "$tmp/schema.rays"
+check_schema gen gen --kind soup -n 10 -o "$tmp/schema.obj"
+check_schema bench bench "$data/cornell_box.obj" --types primary --width 8 --height 8 --runs 1
+check_schema verify verify "$data/cornell_box.obj" --width 8 --height 8
+check_schema quality quality "$data/cornell_box.obj" --types primary --width 8 --height 8
+check_schema run run "$data/cornell_box.obj" --runs 1 --width 8 --height 8
+check_schema kernels kernels
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -369,7 +369,20 @@ nlohmann::json base_record(const char* kind, const Scene& scene) {
             {"scene", scene.name},     {"scene_hash", scene.hash}, {"triangles", scene.mesh.triangle_count()}};
 }
 
-void emit(const nlohmann::json& j) {
+void emit(const nlohmann::json& record) {
+    // The identifying fields every record carries (README, "JSON lines"), stamped here so that
+    // no command can leave them out; a record that set one keeps its own value.
+    static const std::string machine = machine_description();
+    BVHLAB_CHECK(record.is_object() && record.contains("record"), "a JSON line without a record kind");
+    nlohmann::json j = record;
+    auto stamp = [&](const char* key, const nlohmann::json& v) {
+        if (!j.contains(key)) j[key] = v;
+    };
+    stamp("schema", kJsonSchemaVersion);
+    stamp("tool", "bvhlab");
+    stamp("commit", git_commit());
+    stamp("build_type", build_type());
+    stamp("machine", machine);
     std::cout << j.dump() << std::endl;
 }
 

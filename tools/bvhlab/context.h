@@ -132,7 +132,11 @@ std::string machine_description();
 /// Fields every JSON line carries: commit, build type, scene name and hash.
 nlohmann::json base_record(const char* kind, const Scene& scene);
 
-/// Prints a JSON object as one line on stdout.
+/// The version of the JSON-lines schema (README, "JSON lines"): bumped when a field changes meaning.
+constexpr int kJsonSchemaVersion = 1;
+
+/// Prints a JSON object as one line on stdout, stamped with the identifying fields every record
+/// carries: schema, tool, commit, build_type, machine (and its own "record" kind).
 void emit(const nlohmann::json& j);
 
 /// Build statistics as JSON (keys: triangles, nodes, leaves, ..., build_ms, builder).
