@@ -44,16 +44,21 @@ bool parse_face_token(const char* b, const char* e, long& vi) {
     std::string tok(b, e);
     const char* p = tok.c_str();
     char* end = nullptr;
+    // References beyond int (what tinyobjloader stores) are bad references, never negated:
+    // -LONG_MIN overflowed here before (found by the OBJ fuzz target).
+    constexpr long kMaxRef = 2147483647L;
+    errno = 0;
     vi = std::strtol(p, &end, 10);
-    if (end == p || vi == 0) return false;
+    if (end == p || vi == 0 || errno == ERANGE || vi > kMaxRef || vi < -kMaxRef) return false;
     for (int part = 0; part < 2 && *end == '/'; ++part) {
         p = end + 1;
         if (*p == '/' && part == 0) {  // v//vn
             end = const_cast<char*>(p);
             continue;
         }
+        errno = 0;
         long x = std::strtol(p, &end, 10);
-        if (end == p || x == 0) return false;
+        if (end == p || x == 0 || errno == ERANGE || x > kMaxRef || x < -kMaxRef) return false;
     }
     return *end == '\0';
 }
