@@ -6,7 +6,10 @@
 namespace bvhlab::trav {
 
 namespace {
-const char* const kNoCuda = "this bvhlab was built without CUDA (nvcc was not found at configure time)";
+#ifndef BVHLAB_NO_CUDA_REASON
+#define BVHLAB_NO_CUDA_REASON "it was built without CUDA"
+#endif
+const char* const kNoCuda = "this bvhlab was built without CUDA: " BVHLAB_NO_CUDA_REASON;
 }
 
 bool gpu_available(std::string* why) {
