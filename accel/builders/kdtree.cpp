@@ -55,14 +55,17 @@ constexpr size_t kPrefetchRoutes = size_t(1) << 14;
 constexpr size_t kRouteAhead = 32;
 
 /// Eight floats or ints (GCC/Clang vector types): one AVX2 register, or two SSE or NEON ones.
-/// They never cross a non-inlined call, so GCC's note on their calling convention is moot.
+/// They must never cross a call that is not inlined: the AVX2 copies pass them in one register
+/// and the portable code in memory, so every function that takes or returns one is
+/// always_inline. (to_float and AxisCost::operator() were only `inline`: at -O0 they were
+/// real calls, and a sanitizer build read their arguments from a garbage address.)
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 constexpr uint32_t kLanes = 8;
 using FV = float __attribute__((vector_size(4 * kLanes)));
 using IV = int32_t __attribute__((vector_size(4 * kLanes)));
-inline FV to_float(const IV& x) { return __builtin_convertvector(x, FV); }
+__attribute__((always_inline)) inline FV to_float(const IV& x) { return __builtin_convertvector(x, FV); }
 /// The smallest lane (inlined into the AVX2 copies as into the portable ones).
 __attribute__((always_inline)) inline float hmin(const FV& x) {
     float m = x[0];
@@ -616,7 +619,7 @@ private:
         /// (a plane that costs more loses to an earlier axis or to the leaf).
         float below = INFINITY;
         template <typename F, typename I>
-        F operator()(const F& pos, const I& nl, const I& nr) const {
+        __attribute__((always_inline)) F operator()(const F& pos, const I& nl, const I& nr) const {
             const F pl = face + side * (pos - lo), pr = face + side * (hi - pos);
             const F c = ct + ci * (pl * to_float(nl) + pr * to_float(nr));
             return ((nl == 0) | (nr == 0)) ? c * bonus : c;
