@@ -5,6 +5,7 @@
 # starting from the seed corpus in tests/fuzz/corpus/<target>/. Crashing inputs are copied
 # into that corpus folder (as crash-*), where ctest replays them from then on; the per-target
 # stats (executions, coverage, corpus size) go to build-fuzz/fuzz-summary.txt.
+# Needs clang-14 and libclang-rt-14-dev (tools/install_deps.sh --with-fuzz).
 # Usage: tools/fuzz.sh [SECONDS per target, default 60] [JOBS, default nproc] [TARGET ...]
 set -uo pipefail
 cd "$(dirname "$0")/.."

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # Installs bvhlab's build dependencies from Debian 12's packages. Idempotent: installs only
-# what is missing. Usage: tools/install_deps.sh [--with-oiio]
+# what is missing. Usage: tools/install_deps.sh [--with-oiio] [--with-fuzz]
+# (--with-fuzz: clang-14 and libFuzzer, for tools/fuzz.sh)
 set -euo pipefail
 
 pkgs=(build-essential cmake git python3 libembree-dev libtinyobjloader-dev libglm-dev libtbb-dev
@@ -9,8 +10,9 @@ pkgs=(build-essential cmake git python3 libembree-dev libtinyobjloader-dev libgl
 for arg in "$@"; do
     case "$arg" in
         --with-oiio) pkgs+=(libopenimageio-dev) ;;
-        -h|--help) echo "usage: $0 [--with-oiio]"; exit 0 ;;
-        *) echo "install_deps.sh: unknown option '$arg' (expected --with-oiio)" >&2; exit 2 ;;
+        --with-fuzz) pkgs+=(clang-14 libclang-rt-14-dev) ;;
+        -h|--help) echo "usage: $0 [--with-oiio] [--with-fuzz]"; exit 0 ;;
+        *) echo "install_deps.sh: unknown option '$arg' (expected --with-oiio or --with-fuzz)" >&2; exit 2 ;;
     esac
 done
 
