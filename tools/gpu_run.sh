@@ -138,9 +138,10 @@ fi
 if has sanitize; then
     for tool in memcheck racecheck; do
         log "compute-sanitizer $tool"
-        for st in bvh kdtree; do
+        for st in "--structure bvh" "--structure kdtree" "--layout cwbvh"; do
+            # shellcheck disable=SC2086
             compute-sanitizer --tool $tool --error-exitcode 3 "$bin/bvhlab" -q verify cornell-box --device gpu \
-                --kernel all --structure $st --width 64 --height 48 --json >>"$out/sanitizer.log" 2>&1 || status=1
+                --kernel all $st --width 64 --height 48 --json >>"$out/sanitizer.log" 2>&1 || status=1
         done
     done
     grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$out/sanitizer.log" | tee -a "$out/summary.txt"
