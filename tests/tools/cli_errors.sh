@@ -54,6 +54,8 @@ expect_error contradictory "excludes" verify "$data/cornell_box.obj" --types pri
 expect_error hits-needs-rays "requires|needs" verify "$data/cornell_box.obj" --hits "$tmp/truncated.rays"
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n' >"$tmp/long_min.obj"
 expect_error face-index-long-min "bad vertex reference '-9223372036854775808'" build "$tmp/long_min.obj"
+printf 'v 1e38 1e38 1e38\nv -1e38 1e38 -1e38\nv 0 -1e38 0\nf 1 2 3\n' >"$tmp/huge.obj"
+expect_error huge-coordinates "overflows float surface areas" build "$tmp/huge.obj"
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100
@@ -133,6 +135,8 @@ fi
 # Numbers and specs checked where they are parsed; no internal check text, no source path.
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n' >"$tmp/long_min.obj"
 expect_error face-index-long-min "bad vertex reference '-9223372036854775808'" build "$tmp/long_min.obj"
+printf 'v 1e38 1e38 1e38\nv -1e38 1e38 -1e38\nv 0 -1e38 0\nf 1 2 3\n' >"$tmp/huge.obj"
+expect_error huge-coordinates "overflows float surface areas" build "$tmp/huge.obj"
 expect_error spp-not-square "--spp 2 is not a perfect square" rays "$data/cornell_box.obj" --type primary --spp 2 -o "$tmp/x.rays"
 expect_error min-leaf-above-max "--min-leaf 16 is larger than --max-leaf 4" build "$data/cornell_box.obj" --min-leaf 16 --max-leaf 4
 expect_error gen-zero "triangle count must be 1..2\^30, not 0" build gen:soup:0

@@ -182,6 +182,16 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         if (!g.quiet)
             for (const auto& w : warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
     }
+    // Surface areas (SAH, EPO, the builders' costs) are floats: a box whose area overflows
+    // would give NaN figures and arbitrary trees without a word.
+    const AABB box = s.mesh.bounds();
+    if (!std::isfinite(box.half_area())) {
+        char b[160];
+        const Vec3 e = box.extent();
+        std::snprintf(b, sizeof b, "its bounding box (extent %g x %g x %g) overflows float surface areas; scale it down",
+                      e.x, e.y, e.z);
+        throw Error("scene '" + spec + "': " + b);
+    }
     if (entry) apply_entry(s, *entry);
     if (!s.camera_from_catalogue) s.camera = trav::framing_camera(s.mesh);
     if (s.ao_length <= 0.0f) s.ao_length = 0.05f * s.mesh.diagonal();
