@@ -128,6 +128,15 @@ TEST(RayFile, InvalidRaysAreRefusedWithTheirIndex) {
     for (const Ray& r : sample_set().rays) EXPECT_EQ(invalid_ray(r), "");  // tmax = +inf and tiny components are fine
 }
 
+TEST(RayFile, AHugeCountIsRefusedWithoutWrapping) {
+    test::TempFile f("huge_count.rays");
+    std::string bytes("BVHLRAYS\1\0\0\0\0\0\0\0", 16);
+    const uint64_t count = (1ull << 59);  // times 32 bytes wraps to 0 in 64 bits
+    bytes.append(reinterpret_cast<const char*>(&count), 8);
+    std::ofstream(f.path(), std::ios::binary) << bytes;
+    expect_error(f.path(), "header says 576460752303423488 records of 32 bytes, the file has room for 0");
+}
+
 TEST(HitFile, InvalidHitsAndForeignIdsAreRefused) {
     test::TempFile f("bad_hits.bin");
     write_hit_file(f.path(), {{{5, 1.0f, 0.1f, 0.1f}, {-7, 1.0f, 0.1f, 0.1f}}, Query::kClosest});

@@ -69,11 +69,14 @@ std::vector<T> read_records(const std::string& path, const char* magic, uint32_t
     query = (h.flags & kFlagAnyHit) ? Query::kAny : Query::kClosest;
     std::fseek(f.get(), 0, SEEK_END);
     const long size = std::ftell(f.get());
-    const unsigned long long expect = sizeof(Header) + h.count * sizeof(T);
-    if (size < 0 || h.count > (1ull << 40) || (unsigned long long)size != expect)
-        throw Error("'" + path + "' is truncated or has trailing bytes: header says " +
-                    std::to_string(h.count) + " records (" + std::to_string(expect) +
-                    " bytes), file has " + std::to_string(size) + " bytes");
+    if (size < 0) throw Error("cannot read '" + path + "': " + std::strerror(errno));
+    // The count is checked against the file's size before anything is allocated, by division
+    // (a count near 2^64 wrapped the product, and the message with it).
+    const unsigned long long body = (unsigned long long)size - sizeof(Header);
+    if (h.count > body / sizeof(T) || h.count * sizeof(T) != body)
+        throw Error("'" + path + "' is truncated or has trailing bytes: header says " + std::to_string(h.count) +
+                    " records of " + std::to_string(sizeof(T)) + " bytes, the file has room for " +
+                    std::to_string(body / sizeof(T)) + " (" + std::to_string(size) + " bytes)");
     std::fseek(f.get(), sizeof(Header), SEEK_SET);
     std::vector<T> out(h.count);
     if (h.count && std::fread(out.data(), sizeof(T), out.size(), f.get()) != out.size())
