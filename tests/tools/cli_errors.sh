@@ -178,6 +178,12 @@ expect_error build-out-is-input "--out .* is this command's input" build "$tmp/c
 expect_error rays-out-is-input "--out .* is this command's input" rays "$tmp/cb_in.obj" --type primary -o "$tmp/cb_in.obj"
 "$bin" -q rays "$tmp/cb_in.obj" --type primary --width 8 --height 8 -o "$tmp/small.rays" >/dev/null
 expect_error hits-out-is-rays "--hits-out .* is this command's input" bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.rays"
+# A catalogue name is the file it names: an output onto that file is refused too.
+mkdir -p "$tmp/cbcat"
+cp "$data/cornell_box.obj" "$tmp/cbcat/cb.obj"
+echo '{"scenes": {"mycb": {"file": "cb.obj"}}}' >"$tmp/cbcat/scenes.json"
+BVHLAB_SCENES="$tmp/cbcat" expect_error build-out-is-catalogue-file "--out .* is this command's input" build mycb -o "$tmp/cbcat/cb.obj"
+if cmp -s "$data/cornell_box.obj" "$tmp/cbcat/cb.obj"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL the catalogue's file was changed"; fi
 if cmp -s "$data/cornell_box.obj" "$tmp/cb_in.obj"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL the input was changed"; fi
 python3 - "$tmp/small.rays" "$tmp/nan.rays" <<'PY'
 import struct, sys

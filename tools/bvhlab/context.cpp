@@ -176,6 +176,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
                         s.name = e.name;
                     }
         }
+        s.source = file.string();  // what a catalogue name resolved to
         Stage st(g, "loading " + file.string());
         std::vector<std::string> warnings;
         s.mesh = accel::load_obj(file.string(), &warnings);

@@ -57,7 +57,7 @@ private:
 /// automatic framing when it has none).
 struct Scene {
     std::string name;
-    std::string source;  ///< file path, or the gen: spec
+    std::string source;  ///< the OBJ file read (a catalogue name resolved to its file), or the gen: spec
     accel::TriangleMesh mesh;
     trav::Camera camera;
     bool camera_from_catalogue = false;
