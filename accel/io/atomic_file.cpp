@@ -27,37 +27,31 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     ::umask(mask);
     ::fchmod(fd, 0666 & ~mask);
     std::FILE* f = ::fdopen(fd, "wb");
-    if (!f) {
-        const int e = errno;
-        ::close(fd);
+    int raw = f ? -1 : fd;  // the descriptor still to close when fdopen failed
+    // Every failure from here: close what is open, remove the temporary, name the reason.
+    auto discard = [&] {
+        if (f) std::fclose(f);
+        if (raw >= 0) ::close(raw);
+        f = nullptr;
+        raw = -1;
         ::unlink(tmpl.c_str());
-        throw Error("cannot write '" + path + "': " + std::strerror(e));
-    }
+    };
     auto fail = [&](int e) {
-        std::fclose(f);
-        ::unlink(tmpl.c_str());
+        discard();
         throw Error("cannot write '" + path + "': " + std::strerror(e ? e : EIO));
     };
+    if (!f) fail(errno);
     try {
         write(f);
     } catch (...) {
-        std::fclose(f);
-        ::unlink(tmpl.c_str());
+        discard();
         throw;
     }
-    if (std::ferror(f)) fail(errno);
-    if (std::fflush(f) != 0) fail(errno);
-    if (::fsync(::fileno(f)) != 0) fail(errno);
-    if (std::fclose(f) != 0) {
-        const int e = errno;
-        ::unlink(tmpl.c_str());
-        throw Error("cannot write '" + path + "': " + std::strerror(e));
-    }
-    if (std::rename(tmpl.c_str(), path.c_str()) != 0) {
-        const int e = errno;
-        ::unlink(tmpl.c_str());
-        throw Error("cannot write '" + path + "': " + std::strerror(e));
-    }
+    if (std::ferror(f) || std::fflush(f) != 0 || ::fsync(::fileno(f)) != 0) fail(errno);
+    const int closed = std::fclose(f);
+    f = nullptr;
+    if (closed != 0) fail(errno);
+    if (std::rename(tmpl.c_str(), path.c_str()) != 0) fail(errno);
 }
 
 void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what) {
