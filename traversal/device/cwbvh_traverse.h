@@ -64,7 +64,8 @@ constexpr int kWordExponents = 3, kWordChildBase = 4, kWordTriBase = 5, kWordMet
 
 /// What a ray needs per axis, once.
 struct RayAxes {
-    float o[3], inv[3];
+    Vec3 o;
+    float inv[3];
     bool neg[3];
     uint32_t octant;  // bit k set when the direction's component k is not negative
 };
@@ -160,8 +161,8 @@ struct CwbvhStack {
 /// A ray in flight through a CWBVH: what traverse_cwbvh keeps between steps, so that a kernel
 /// can hand a finished lane a new ray between steps (dynamic fetch).
 struct CwbvhState {
-    Vec3 o, d;
-    cw_detail::RayAxes axes;
+    cw_detail::RayAxes axes;  // the origin among them
+    Vec3 d;
     float tmin, t_hit, u_hit, v_hit;
     int32_t k_hit;
     uint32_t group_base, group_bits;  // node group: base, interior hits (bits 24..31) | imask
@@ -172,9 +173,8 @@ struct CwbvhState {
 /// children start at node 0.
 BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_start(CwbvhState& s, const Ray& ray) {
     const Vec3 inv = safe_reciprocal(ray.dir);
-    s.o = ray.org;
     s.d = ray.dir;
-    s.axes.o[0] = ray.org.x, s.axes.o[1] = ray.org.y, s.axes.o[2] = ray.org.z;
+    s.axes.o = ray.org;
     s.axes.inv[0] = inv.x, s.axes.inv[1] = inv.y, s.axes.inv[2] = inv.z;
     s.axes.octant = 0;
     for (int k = 0; k < 3; ++k) {
@@ -225,7 +225,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, 
         tri_bits &= tri_bits - 1u;
         if (counters) ++counters->tri_tests;
         float t, u, vv;
-        if (cw_detail::intersect_tri(v.tris, k, s.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
+        if (cw_detail::intersect_tri(v.tris, k, s.axes.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
             s.t_hit = t;
             s.u_hit = u;
             s.v_hit = vv;
