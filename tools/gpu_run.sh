@@ -7,15 +7,18 @@
 #             primary, protocol diffuse), every kernel on binned, SBVH and kd-trees, checked
 #             against Embree before timing, and Embree on every core on the same rays
 #   bvhbench  the bench phase for the BVH2 kernels alone (binned and SBVH; no kd-tree, no Embree)
-#   cwbench   the CWBVH kernels (--layout cwbvh) on binned and SBVH trees, beside the bvh2 bench
-#   cwverify  the CWBVH kernels against Embree on the protocol's four ray types (verify does them too)
+#   cwbench   the CWBVH kernels (--layout cwbvh) on binned and SBVH trees, with Woop and with vertex
+#             leaf triangles (--cw-tris), beside the bvh2 bench
+#   cwverify  the CWBVH kernels against Embree on the protocol's four ray types, both leaf
+#             triangle formats (verify does them too)
 #   verify    every kernel against Embree on the protocol's four ray types
 #   profile   ncu metrics of every kernel on bunny primary and furball diffuse (PROFILE_SETS:
 #             scene:raytype pairs; PROFILE_KERNEL: one kernel instead of all)
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
-# GPU_TESTS: a gtest filter for the tests phase (default: all).
+# GPU_TESTS: a gtest filter for the tests phase (default: all). BENCH_KERNELS: the kernels of
+# bvhbench and cwbench (default: all).
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
 set -uo pipefail
 prefix=$1 scenes=$2 out=$3 phases=$4
@@ -72,14 +75,19 @@ every_layout_bench() {
         for r in primary diffuse; do
             log "bench $* $s $r"
             for b in binned sbvh; do
-                "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --builder $b "$@" --json \
-                    >>"$out/$file" || status=1
+                for k in ${BENCH_KERNELS:-all}; do
+                    "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel "$k" --builder $b "$@" \
+                        --json >>"$out/$file" || status=1
+                done
             done
         done
     done
 }
 if has bvhbench; then every_layout_bench bench.jsonl --layout bvh2; fi
-if has cwbench; then every_layout_bench cwbench.jsonl --layout cwbvh; fi
+if has cwbench; then
+    every_layout_bench cwbench.jsonl --layout cwbvh
+    every_layout_bench cwbench.jsonl --layout cwbvh --cw-tris vertices
+fi
 
 if has verify; then
     for s in cornell-box "${names[@]}"; do
@@ -94,7 +102,10 @@ fi
 if has cwverify; then
     for s in cornell-box "${names[@]}"; do
         log "cwbvh verify $s"
-        "$bin/bvhlab" -q verify "$s" --device gpu --layout cwbvh --kernel all --json >>"$out/verify.jsonl" || status=1
+        for tris in woop vertices; do
+            "$bin/bvhlab" -q verify "$s" --device gpu --layout cwbvh --cw-tris $tris --kernel all --json \
+                >>"$out/verify.jsonl" || status=1
+        done
     done
 fi
 
@@ -138,7 +149,7 @@ fi
 if has sanitize; then
     for tool in memcheck racecheck; do
         log "compute-sanitizer $tool"
-        for st in "--structure bvh" "--structure kdtree" "--layout cwbvh"; do
+        for st in "--structure bvh" "--structure kdtree" "--layout cwbvh" "--layout cwbvh --cw-tris vertices"; do
             # shellcheck disable=SC2086
             compute-sanitizer --tool $tool --error-exitcode 3 "$bin/bvhlab" -q verify cornell-box --device gpu \
                 --kernel all $st --width 64 --height 48 --json >>"$out/sanitizer.log" 2>&1 || status=1

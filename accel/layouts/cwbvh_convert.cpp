@@ -100,7 +100,7 @@ AABB decode_child_box(const CwbvhNode& node, uint32_t slot, double* lo, double* 
     return b;
 }
 
-Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh,
+Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh, CwTris tri_format,
                        std::vector<std::array<AABB, kWideArity>>* slot_boxes) {
     BVHLAB_CHECK(!w.nodes.empty(), "cannot convert an empty WideTree");
     Cwbvh out;
@@ -141,11 +141,15 @@ Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh,
                 (*slot_boxes)[oi][slot] = child_of_slot[slot] < 0 ? AABB::empty() : n.child[child_of_slot[slot]].box;
         }
     }
-    out.tris.resize(out.tri_ids.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tris.size(), 4096), [&](const auto& r) {
+    out.tri_format = tri_format;
+    if (tri_format == CwTris::kWoop) out.tris.resize(out.tri_ids.size());
+    else out.vtris.resize(out.tri_ids.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tri_ids.size(), 4096), [&](const auto& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             const uint32_t t = out.tri_ids[i];
-            out.tris[i] = make_woop_triangle(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2));
+            const Vec3 a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+            if (tri_format == CwTris::kWoop) out.tris[i] = make_woop_triangle(a, b, c);
+            else out.vtris[i] = make_vertex_triangle(a, b, c);
         }
     });
     return out;

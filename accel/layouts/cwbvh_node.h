@@ -9,6 +9,7 @@
 
 #include "accel/core/bits.h"
 #include "accel/core/hd.h"
+#include "accel/layouts/vertex_tri.h"
 #include "accel/layouts/woop_tri.h"
 
 namespace bvhlab::accel {
@@ -70,17 +71,25 @@ BVHLAB_HD BVHLAB_FORCEINLINE float cwbvh_unpack(uint32_t word, uint32_t byte, ui
 /// The `one` of cwbvh_unpack.
 constexpr uint32_t kCwbvhUnpackOne = 0x3F800000u;
 
-/// A CWBVH ready for traversal: nodes (root at 0), Woop triangles in leaf order, and each
-/// one's mesh triangle id. Owns its data.
+/// How a CWBVH stores its leaves' triangles (--cw-tris): Woop's 48-byte maps (three 16-byte
+/// loads, the cheaper test) or 36-byte vertex triples (0.75x the bytes, nine 4-byte loads and
+/// Moller-Trumbore). experiments/NOTES.md has the measured choice.
+enum class CwTris : uint32_t { kWoop = 0, kVertices = 1 };
+
+/// A CWBVH ready for traversal: nodes (root at 0), triangles in leaf order (in `tris` or
+/// `vtris`, as `tri_format` says; the other is empty), and each one's mesh triangle id.
+/// Owns its data.
 struct Cwbvh {
     std::vector<CwbvhNode> nodes;
     std::vector<WoopTriangle> tris;
+    std::vector<VertexTriangle> vtris;
     std::vector<uint32_t> tri_ids;
+    CwTris tri_format = CwTris::kWoop;
     uint32_t depth = 0;  ///< wide nodes on the longest root-to-leaf path
 
     size_t bytes() const {
         return nodes.size() * sizeof(CwbvhNode) + tris.size() * sizeof(WoopTriangle) +
-               tri_ids.size() * sizeof(uint32_t);
+               vtris.size() * sizeof(VertexTriangle) + tri_ids.size() * sizeof(uint32_t);
     }
 };
 

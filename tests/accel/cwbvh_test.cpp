@@ -4,6 +4,9 @@
 // scenes and trees, the node encoding, and the refusal of trees deeper than the stack.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <random>
 
 #include "accel/builders/builder.h"
@@ -124,7 +127,7 @@ TEST(Cwbvh, QuantisedBoxesContainTheExactBoxes) {
         const BuildTree tree = build(mesh, b, 1 + rng() % 8);
         const CollapseMethod m = trial % 2 ? CollapseMethod::kGreedy : CollapseMethod::kSahOptimal;
         std::vector<std::array<AABB, kWideArity>> exact;
-        const Cwbvh cw = convert_to_cwbvh(collapse_to_wide(tree, mesh, m), mesh, &exact);
+        const Cwbvh cw = convert_to_cwbvh(collapse_to_wide(tree, mesh, m), mesh, CwTris::kWoop, &exact);
         ASSERT_EQ(exact.size(), cw.nodes.size());
         for (size_t n = 0; n < cw.nodes.size(); ++n)
             for (uint32_t s = 0; s < kWideArity; ++s) {
@@ -188,6 +191,59 @@ TEST(Cwbvh, SmallerThanTheBinaryLayout) {
     size_t interior = 0;
     for (const BuildNode& n : tree.nodes) interior += !n.is_leaf();
     EXPECT_LT(cw.nodes.size() * sizeof(CwbvhNode), interior * 64 / 2);
+}
+
+TEST(Cwbvh, VertexTrianglesSameTreeFewerBytes) {
+    // --cw-tris vertices: the same nodes and leaf order, 36 bytes per triangle instead of 48.
+    const TriangleMesh mesh = make_procedural(ProceduralKind::kSoup, 5000, 4);
+    const WideTree w = collapse_to_wide(build(mesh, BuilderKind::kBinned, 8), mesh, CollapseMethod::kSahOptimal);
+    const Cwbvh woop = convert_to_cwbvh(w, mesh), vert = convert_to_cwbvh(w, mesh, CwTris::kVertices);
+    ASSERT_EQ(vert.tri_format, CwTris::kVertices);
+    ASSERT_EQ(vert.nodes.size(), woop.nodes.size());
+    EXPECT_EQ(0, std::memcmp(vert.nodes.data(), woop.nodes.data(), woop.nodes.size() * sizeof(CwbvhNode)));
+    EXPECT_EQ(vert.tri_ids, woop.tri_ids);
+    EXPECT_TRUE(vert.tris.empty());
+    ASSERT_EQ(vert.vtris.size(), woop.tris.size());
+    EXPECT_EQ(woop.bytes() - vert.bytes(), woop.tris.size() * 12);
+    for (size_t i = 0; i < vert.vtris.size(); i += 97) {  // v0 and the edges of the mesh triangle
+        const uint32_t t = vert.tri_ids[i];
+        const Vec3 v0 = mesh.vertex(t, 0), e2 = mesh.vertex(t, 2) - v0;
+        EXPECT_EQ(vert.vtris[i].f[0], v0.x);
+        EXPECT_EQ(vert.vtris[i].f[8], e2.z);
+    }
+}
+
+TEST(VertexTriangle, AgreesWithWoopAwayFromEdges) {
+    // Moller-Trumbore and Woop's map round differently, so they may disagree only where a
+    // barycentric is within rounding of an edge; elsewhere (rays not grazing) the hit, t, u and v agree.
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+    size_t hits = 0, compared = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3 a{U(rng), U(rng), U(rng)}, b{U(rng), U(rng), U(rng)}, c{U(rng), U(rng), U(rng)};
+        if (length(cross(b - a, c - a)) < 1e-3f) continue;
+        const WoopTriangle wt = make_woop_triangle(a, b, c);
+        const VertexTriangle vt = make_vertex_triangle(a, b, c);
+        const Vec3 o{4 * U(rng), 4 * U(rng), 4 * U(rng)};
+        const float bu = (1.2f * U(rng) + 0.4f) * 0.5f, bv = (1.2f * U(rng) + 0.4f) * 0.5f;  // the aim's barycentrics
+        const Vec3 target = a + (b - a) * bu + (c - a) * bv;
+        const Vec3 d = target - o, n = cross(b - a, c - a);
+        if (std::fabs(dot(n, d)) < 0.1f * length(n) * length(d)) continue;  // grazing: ill-conditioned in both
+        float tw = 0, uw = 0, vw = 0, tv = 0, uv = 0, vv = 0;
+        const bool hw = wt.intersect(o, d, 0.0f, 1e30f, tw, uw, vw);
+        const bool hv = vt.intersect(o, d, 0.0f, 1e30f, tv, uv, vv);
+        const bool near_edge = std::min({std::fabs(bu), std::fabs(bv), std::fabs(1 - bu - bv)}) < 1e-4f;
+        if (near_edge) continue;
+        ++compared;
+        ASSERT_EQ(hw, hv) << "ray " << i;
+        if (!hw) continue;
+        ++hits;
+        EXPECT_NEAR(tv, tw, 1e-4f * std::fabs(tw));
+        EXPECT_NEAR(uv, uw, 1e-4f);
+        EXPECT_NEAR(vv, vw, 1e-4f);
+    }
+    EXPECT_GT(hits, compared / 4);  // the rays aim at the triangles: most of them hit
+    EXPECT_GT(compared - hits, compared / 10);
 }
 
 TEST(Cwbvh, DeeperThanTheStackIsRefused) {

@@ -89,6 +89,8 @@ expect_error embree-no-kd-stack "--kd-stack does not apply to --device embree" b
 expect_error bad-device "device" bench "$data/cornell_box.obj" --device tpu
 expect_error embree-no-layout "--layout does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --layout cwbvh
 expect_error collapse-needs-cwbvh "--collapse applies to --layout cwbvh" build "$data/cornell_box.obj" --collapse greedy
+expect_error cw-tris-needs-cwbvh "--cw-tris applies to --layout cwbvh" build "$data/cornell_box.obj" --cw-tris vertices
+expect_error cw-tris-embree "--cw-tris does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --cw-tris vertices
 expect_error layout-not-for-kd "--layout applies to BVHs" build "$data/cornell_box.obj" --structure kdtree --layout cwbvh
 expect_error layout-bad-value "layout" build "$data/cornell_box.obj" --layout wide
 expect_error cwbvh-kernel-vs-layout "traces --layout cwbvh, not --layout bvh2" verify "$data/cornell_box.obj" --kernel cwbvh --layout bvh2
@@ -170,6 +172,11 @@ if "$bin" -q build "$data/cornell_box.obj" --layout cwbvh --collapse greedy --js
     pass=$((pass + 1))
 else
     fail=$((fail + 1)); echo "FAIL build --layout cwbvh --json"
+fi
+if "$bin" -q build "$data/cornell_box.obj" --layout cwbvh --cw-tris vertices --json | python3 -c 'import json,sys; r=json.loads(sys.stdin.read()); assert r["structure"]=="cwbvh-vertices/binned" and r["wide"]["triangles"]=="vertices" and r["layout_bytes"]<r["bvh2_layout_bytes"]'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL build --layout cwbvh --cw-tris vertices --json"
 fi
 
 # Outputs never overwrite the command's inputs; invalid rays and foreign hits are refused by index.

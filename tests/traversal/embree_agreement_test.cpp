@@ -62,9 +62,12 @@ void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float 
 
 /// The same with the CWBVH collapsed from a BVH of `builder` (the CPU reference of 'cwbvh').
 void expect_cwbvh_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w,
-                            uint32_t h, accel::BuilderKind builder, accel::CollapseMethod method) {
-    const accel::Cwbvh cw =
-        accel::convert_to_cwbvh(accel::collapse_to_wide(accel::run_builder(builder, mesh, {}).tree, mesh, method), mesh);
+                            uint32_t h, accel::BuilderKind builder, accel::CollapseMethod method,
+                            accel::CwTris tris = accel::CwTris::kWoop) {
+    const accel::Cwbvh cw = accel::convert_to_cwbvh(
+        accel::collapse_to_wide(accel::run_builder(builder, mesh, {}).tree, mesh, method), mesh, tris);
+    ASSERT_EQ(cw.tri_format, tris);
+    ASSERT_EQ(tris == accel::CwTris::kVertices ? cw.vtris.size() : cw.tris.size(), cw.tri_ids.size());
     expect_agreement_with(mesh, cam, ao_length, w, h,
                           [&](const RaySet& set, std::vector<Hit>& hits) { trace_cpu(cw, set.rays, set.query, hits); });
 }
@@ -81,6 +84,8 @@ TEST(EmbreeAgreement, CornellBox) {
         expect_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b);
         for (auto m : {accel::CollapseMethod::kSahOptimal, accel::CollapseMethod::kGreedy})
             expect_cwbvh_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b, m);
+        expect_cwbvh_agreement(mesh, cam, 0.05f * mesh.diagonal(), 160, 120, b, accel::CollapseMethod::kSahOptimal,
+                               accel::CwTris::kVertices);
     }
 }
 
@@ -91,6 +96,8 @@ TEST(EmbreeAgreement, GeneratedScenes) {
             expect_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b);
             for (auto m : {accel::CollapseMethod::kSahOptimal, accel::CollapseMethod::kGreedy})
                 expect_cwbvh_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b, m);
+            expect_cwbvh_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b,
+                                   accel::CollapseMethod::kSahOptimal, accel::CwTris::kVertices);
         }
     }
 }

@@ -31,16 +31,19 @@ std::string no_gpu_reason() {
 #define BVHLAB_SKIP_WITHOUT_GPU()                                       \
     if (const std::string why = no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 
-Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder) {
+Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder,
+                         accel::CwTris tris = accel::CwTris::kWoop) {
     Structure s;
     s.layout = layout;
     if (layout == Layout::kBvh2) {
         s.name = std::string("bvh2/") + accel::builder_name(builder);
         s.bvh2 = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
     } else if (layout == Layout::kCwbvh) {
-        s.name = std::string("cwbvh/") + accel::builder_name(builder);
+        s.name = std::string(tris == accel::CwTris::kVertices ? "cwbvh-vertices/" : "cwbvh/") +
+                 accel::builder_name(builder);
         const accel::BuildTree tree = accel::run_builder(builder, mesh, {}).tree;
-        s.cwbvh = accel::convert_to_cwbvh(accel::collapse_to_wide(tree, mesh, accel::CollapseMethod::kSahOptimal), mesh);
+        s.cwbvh = accel::convert_to_cwbvh(accel::collapse_to_wide(tree, mesh, accel::CollapseMethod::kSahOptimal), mesh,
+                                          tris);
     } else {
         s.name = "kdtree";
         s.kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);
@@ -105,10 +108,14 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
         cfg.camera = scene.camera;
         cfg.primary = {scene.width, scene.height, 1, 0};
         RayProtocol proto(scene.mesh, oracle, cfg);
-        std::vector<accel::BuilderKind> builders{accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh};
-        if (kernel.layout == Layout::kKd) builders = {accel::BuilderKind::kBinned};  // one kd-tree
-        for (accel::BuilderKind builder : builders) {
-            const Structure s = make_structure(scene.mesh, kernel.layout, builder);
+        using Variant = std::pair<accel::BuilderKind, accel::CwTris>;
+        std::vector<Variant> variants{{accel::BuilderKind::kBinned, accel::CwTris::kWoop},
+                                      {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
+        if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
+        // A CWBVH's vertex-triple leaves (--cw-tris vertices) are a second kernel instance.
+        if (kernel.layout == Layout::kCwbvh) variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
+        for (const auto& [builder, tris] : variants) {
+            const Structure s = make_structure(scene.mesh, kernel.layout, builder, tris);
             SCOPED_TRACE(s.name);
             auto device = std::make_shared<const DeviceStructure>(s);
             std::vector<GpuTraceOptions> options{{}};

@@ -47,8 +47,9 @@ void print_build_table(const Scene& s, const Built& b) {
                 w["leaves"].get<size_t>(), w["mean_children"].get<double>(), w["depth"].get<uint32_t>());
     std::printf("wide SAH     %.4f (node %g, triangle %g, root-normalised)\n", w["sah"].get<double>(),
                 w["sah_costs"]["node"].get<double>(), w["sah_costs"]["prim"].get<double>());
-    std::printf("bytes        %zu (cwbvh layout + Woop triangles) against %zu for the bvh2 layout: %.3fx\n",
-                b.structure.bytes(), r["bvh2_layout_bytes"].get<size_t>(), r["bytes_vs_bvh2"].get<double>());
+    std::printf("bytes        %zu (cwbvh layout + %s triangles) against %zu for the bvh2 layout: %.3fx\n",
+                b.structure.bytes(), w["triangles"].get<std::string>() == "vertices" ? "vertex" : "Woop",
+                r["bvh2_layout_bytes"].get<size_t>(), r["bytes_vs_bvh2"].get<double>());
 }
 
 void register_build(CLI::App& app, Globals& g) {

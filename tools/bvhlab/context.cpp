@@ -253,6 +253,11 @@ void BuildOptions::add_to(CLI::App& app) {
                                    "(open the largest child until 8)")
                         ->check(CLI::IsMember({"sah", "greedy"}))
                         ->capture_default_str();
+    cw_tris_flag = app.add_option("--cw-tris", cw_tris,
+                                  "--layout cwbvh: leaf triangles as woop (48-byte Woop maps) or vertices (36-byte "
+                                  "vertex and edges, Moller-Trumbore: 0.75x the triangle bytes)")
+                       ->check(CLI::IsMember({"woop", "vertices"}))
+                       ->capture_default_str();
     kd_stack_flag = app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
         ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
         ->capture_default_str();
@@ -281,6 +286,7 @@ std::string BuildOptions::structure_file() const {
 
 void BuildOptions::check_applicable() const {
     if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
+    if (cw_tris_flag->count() && !is_cwbvh()) throw Error("--cw-tris applies to --layout cwbvh");
     if (!structure_file().empty()) return;
     // config_flags: --bins, --max-leaf, --min-leaf, --alpha, --budget, --spatial-bins, --reinsert.
     auto refuse = [](const CLI::Option* f, const std::string& why) {

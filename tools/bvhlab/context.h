@@ -90,11 +90,13 @@ struct BuildOptions {
     std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
     std::string layout = "bvh2";   ///< --layout of a BVH: bvh2, or cwbvh (collapsed, compressed 8-wide)
     std::string collapse = "sah";  ///< --collapse to 8-wide: sah (Ylitie et al.'s optimum) or greedy
+    std::string cw_tris = "woop";  ///< --cw-tris: a CWBVH's leaf triangles, woop (48 B) or vertices (36 B)
     CLI::Option* builder_flag = nullptr;
     CLI::Option* structure_flag = nullptr;
     CLI::Option* kd_stack_flag = nullptr;
     CLI::Option* layout_flag = nullptr;
     CLI::Option* collapse_flag = nullptr;
+    CLI::Option* cw_tris_flag = nullptr;
 
     bool is_kdtree() const { return structure == "kdtree"; }
     bool is_cwbvh() const { return layout == "cwbvh"; }
@@ -105,7 +107,7 @@ struct BuildOptions {
     std::string structure_file() const;
     /// Refuses, with a one-line bvhlab::Error, an option given explicitly that the chosen
     /// builder does not use (--bins with a kd-tree, --alpha with binned, --kd-ct with a BVH,
-    /// --layout with a kd-tree, --collapse without --layout cwbvh).
+    /// --layout with a kd-tree, --collapse or --cw-tris without --layout cwbvh).
     /// Structure files are checked against their own config when loaded.
     void check_applicable() const;
 };

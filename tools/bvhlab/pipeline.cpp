@@ -139,12 +139,14 @@ static void convert_cwbvh(const Scene& scene, const BuildOptions& opts, const Gl
         const std::string err = accel::validate_wide(w, scene.mesh.triangle_count(), b.result.tree.prim_indices);
         BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide tree: " + err);
         b.structure.layout = trav::Layout::kCwbvh;
-        b.structure.cwbvh = accel::convert_to_cwbvh(w, scene.mesh);
+        b.structure.cwbvh = accel::convert_to_cwbvh(
+            w, scene.mesh, opts.cw_tris == "vertices" ? accel::CwTris::kVertices : accel::CwTris::kWoop);
     }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const accel::WideStats ws = accel::compute_wide_stats(w);
     const size_t bvh2_bytes = bvh2_layout_bytes(b.result.tree);
     b.record["wide"] = {{"collapse", opts.collapse},
+                        {"triangles", opts.cw_tris},
                         {"collapse_ms", ms},
                         {"nodes", ws.nodes},
                         {"leaves", ws.leaves},
@@ -190,7 +192,8 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
     b.record.update(stats_json(b.stats, b.result, builder, scene.mesh));
     if (opts.is_cwbvh()) {
         convert_cwbvh(scene, opts, g, b);
-        b.structure.name = "cwbvh/" + builder;
+        // Woop triangles are the default and keep the plain name; vertex triples are named.
+        b.structure.name = std::string(opts.cw_tris == "vertices" ? "cwbvh-vertices/" : "cwbvh/") + builder;
     } else {
         b.structure.name = "bvh2/" + builder;
         b.structure.layout = trav::Layout::kBvh2;
@@ -271,7 +274,7 @@ void TraceOptions::validate(BuildOptions& build) const {
     }
     if (device == "embree") {
         std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag, build.kd_stack_flag,
-                                              build.layout_flag, build.collapse_flag};
+                                              build.layout_flag, build.collapse_flag, build.cw_tris_flag};
         flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
         flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
         for (const CLI::Option* f : flags)

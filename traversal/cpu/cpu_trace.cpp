@@ -62,10 +62,16 @@ void check_cwbvh_stack(const accel::Cwbvh& cw) {
 void trace_cpu(const accel::Cwbvh& cw, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
                std::vector<TraversalCounters>* counters) {
     check_cwbvh_stack(cw);
-    const CwbvhView view{cw.nodes.data(), cw.tris.data(), cw.tri_ids.data()};
-    trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
-        return traverse_cwbvh<decltype(any)::value>(view, ray, c);
-    });
+    const CwbvhView view{cw.nodes.data(), cw.tris.data(), cw.tri_ids.data(), cw.vtris.data()};
+    if (cw.tri_format == accel::CwTris::kVertices) {
+        trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
+            return traverse_cwbvh<decltype(any)::value, true>(view, ray, c);
+        });
+    } else {
+        trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
+            return traverse_cwbvh<decltype(any)::value, false>(view, ray, c);
+        });
+    }
 }
 
 }  // namespace bvhlab::trav

@@ -34,8 +34,9 @@ static_assert(kCwbvhStackSize >= int(accel::kMaxTreeDepth) + 5, "the CWBVH stack
 /// A CWBVH layout as traversal sees it: plain pointers, host or device memory.
 struct CwbvhView {
     const accel::CwbvhNode* nodes;
-    const accel::WoopTriangle* tris;
+    const accel::WoopTriangle* tris;  ///< the triangles with CwTris::kWoop, else null
     const uint32_t* tri_ids;
+    const accel::VertexTriangle* vtris = nullptr;  ///< the triangles with CwTris::kVertices, else null
     uint32_t one = accel::kCwbvhUnpackOne;  ///< see cwbvh_unpack: a kernel parameter, not a literal
 };
 
@@ -138,15 +139,27 @@ BVHLAB_UNROLL
     return hits;
 }
 
-/// Intersects triangle k: three 16-byte read-only loads on the device, the shared Woop test.
-BVHLAB_HD BVHLAB_FORCEINLINE bool intersect_tri(const accel::WoopTriangle* tris, uint32_t k, Vec3 o, Vec3 d,
-                                                float tmin, float tmax, float& t, float& u, float& v) {
+/// Intersects triangle k. Woop: three 16-byte read-only loads on the device, the shared Woop
+/// test. Vertices: nine 4-byte read-only loads (36-byte records are only 4-byte aligned) and
+/// Moller-Trumbore.
+template <bool kVertexTris>
+BVHLAB_HD BVHLAB_FORCEINLINE bool intersect_tri(const CwbvhView& view, uint32_t k, Vec3 o, Vec3 d, float tmin,
+                                                float tmax, float& t, float& u, float& v) {
 #if defined(__CUDA_ARCH__)
-    const float4* p = reinterpret_cast<const float4*>(tris + k);
-    const float4 r0 = __ldg(p), r1 = __ldg(p + 1), r2 = __ldg(p + 2);
-    return accel::WoopTriangle::intersect_rows(&r0.x, &r1.x, &r2.x, o, d, tmin, tmax, t, u, v);
+    if constexpr (kVertexTris) {
+        const float* p = view.vtris[k].f;
+        float f[9];
+BVHLAB_UNROLL
+        for (int i = 0; i < 9; ++i) f[i] = __ldg(p + i);
+        return accel::VertexTriangle::intersect_values(f, o, d, tmin, tmax, t, u, v);
+    } else {
+        const float4* p = reinterpret_cast<const float4*>(view.tris + k);
+        const float4 r0 = __ldg(p), r1 = __ldg(p + 1), r2 = __ldg(p + 2);
+        return accel::WoopTriangle::intersect_rows(&r0.x, &r1.x, &r2.x, o, d, tmin, tmax, t, u, v);
+    }
 #else
-    return tris[k].intersect(o, d, tmin, tmax, t, u, v);
+    if constexpr (kVertexTris) return view.vtris[k].intersect(o, d, tmin, tmax, t, u, v);
+    else return view.tris[k].intersect(o, d, tmin, tmax, t, u, v);
 #endif
 }
 
@@ -197,7 +210,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE bool cwbvh_done(const CwbvhState& s) { return !(s.g
 /// octant-ordered, see CwbvhNode) is fetched and its eight boxes tested, what is left of the
 /// group waits on the stack, then the triangles of the leaves entered are tested. When the
 /// group is empty the next one is popped; the ray is done when none is left.
-template <bool kAnyHit>
+template <bool kAnyHit, bool kVertexTris = false>
 BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, CwbvhStack& stack,
                                              TraversalCounters* counters) {
     const uint32_t bit = highest_bit(s.group_bits & 0xFF000000u);
@@ -225,7 +238,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, 
         tri_bits &= tri_bits - 1u;
         if (counters) ++counters->tri_tests;
         float t, u, vv;
-        if (cw_detail::intersect_tri(v.tris, k, s.axes.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
+        if (cw_detail::intersect_tri<kVertexTris>(v, k, s.axes.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
             s.t_hit = t;
             s.u_hit = u;
             s.v_hit = vv;
@@ -249,13 +262,14 @@ BVHLAB_HD BVHLAB_FORCEINLINE Hit cwbvh_result(const CwbvhView& v, const CwbvhSta
     return {int32_t(v.tri_ids[s.k_hit]), s.t_hit, s.u_hit, s.v_hit};
 }
 
-/// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
-template <bool kAnyHit>
+/// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`, on a CWBVH whose
+/// triangles are vertex triples (kVertexTris) or Woop maps.
+template <bool kAnyHit, bool kVertexTris = false>
 BVHLAB_HD inline Hit traverse_cwbvh(const CwbvhView& v, const Ray& ray, TraversalCounters* counters = nullptr) {
     CwbvhState s;
     CwbvhStack stack;
     cwbvh_start(s, ray);
-    while (!cwbvh_done(s)) cwbvh_step<kAnyHit>(v, s, stack, counters);
+    while (!cwbvh_done(s)) cwbvh_step<kAnyHit, kVertexTris>(v, s, stack, counters);
     return cwbvh_result(v, s);
 }
 

@@ -15,6 +15,7 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
     } else if (s.layout == Layout::kCwbvh) {
         cw_nodes_.upload(s.cwbvh.nodes);
         bvh_tris_.upload(s.cwbvh.tris);
+        cw_vtris_.upload(s.cwbvh.vtris);
         bvh_ids_.upload(s.cwbvh.tri_ids);
     } else {
         kd_nodes_.upload(s.kd.tree.nodes);

@@ -25,7 +25,7 @@ public:
     /// The device view of a kd layout (null pointers for the other layouts).
     KdView kd() const { return {kd_nodes_.data(), kd_prims_.data(), kd_tris_.data(), kd_bounds_}; }
     /// The device view of a CWBVH layout (null pointers for the other layouts).
-    CwbvhView cwbvh() const { return {cw_nodes_.data(), bvh_tris_.data(), bvh_ids_.data()}; }
+    CwbvhView cwbvh() const { return {cw_nodes_.data(), bvh_tris_.data(), bvh_ids_.data(), cw_vtris_.data()}; }
 
 private:
     Layout layout_;
@@ -34,6 +34,7 @@ private:
     DeviceBuffer<accel::CwbvhNode> cw_nodes_;
     DeviceBuffer<accel::WoopTriangle> bvh_tris_;  // the BVH2's or the CWBVH's triangles
     DeviceBuffer<uint32_t> bvh_ids_;
+    DeviceBuffer<accel::VertexTriangle> cw_vtris_;  // a CWBVH's triangles with CwTris::kVertices
     DeviceBuffer<accel::KdNode> kd_nodes_;
     DeviceBuffer<uint32_t> kd_prims_;
     DeviceBuffer<accel::WoopTriangle> kd_tris_;

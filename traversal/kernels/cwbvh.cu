@@ -7,14 +7,18 @@
 namespace bvhlab::trav {
 namespace {
 
-template <bool kAnyHit>
+template <bool kAnyHit, bool kVertexTris>
 struct CwbvhTrace {
     CwbvhView view;
-    __device__ __forceinline__ Hit operator()(const Ray& r) const { return traverse_cwbvh<kAnyHit>(view, r); }
+    __device__ __forceinline__ Hit operator()(const Ray& r) const {
+        return traverse_cwbvh<kAnyHit, kVertexTris>(view, r);
+    }
 };
 
 void launch(const LaunchArgs& a) {
-    for_query(a, [&](auto any) { launch_per_ray(a, 128, CwbvhTrace<decltype(any)::value>{a.cwbvh}); });
+    for_cwbvh_query(a, [&](auto any, auto vertex_tris) {
+        launch_per_ray(a, 128, CwbvhTrace<decltype(any)::value, decltype(vertex_tris)::value>{a.cwbvh});
+    });
 }
 
 }  // namespace

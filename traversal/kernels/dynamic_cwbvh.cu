@@ -7,22 +7,22 @@
 namespace bvhlab::trav {
 namespace {
 
-template <bool kAnyHit>
+template <bool kAnyHit, bool kVertexTris>
 struct DynamicCwbvhTrace {
     using State = CwbvhState;
     using Stack = CwbvhStack;
     CwbvhView view;
     __device__ __forceinline__ void start(State& s, Stack&, const Ray& r) const { cwbvh_start(s, r); }
     __device__ __forceinline__ void step(State& s, Stack& stack) const {
-        cwbvh_step<kAnyHit>(view, s, stack, nullptr);
+        cwbvh_step<kAnyHit, kVertexTris>(view, s, stack, nullptr);
     }
     __device__ __forceinline__ bool done(const State& s) const { return cwbvh_done(s); }
     __device__ __forceinline__ Hit result(const State& s) const { return cwbvh_result(view, s); }
 };
 
 void launch(const LaunchArgs& a) {
-    for_query(a, [&](auto any) {
-        launch_dynamic_fetch(a, 128, DynamicCwbvhTrace<decltype(any)::value>{a.cwbvh},
+    for_cwbvh_query(a, [&](auto any, auto vertex_tris) {
+        launch_dynamic_fetch(a, 128, DynamicCwbvhTrace<decltype(any)::value, decltype(vertex_tris)::value>{a.cwbvh},
                              a.fetch_threshold ? a.fetch_threshold : kDefaultFetchThreshold);
     });
 }

@@ -174,4 +174,14 @@ void for_query(const LaunchArgs& a, Launch&& launch) {
     else launch(std::false_type{});
 }
 
+/// Calls launch(any, vertex_tris) with the query and a CWBVH's triangle format as
+/// std::bool_constant tags, so that each kernel is compiled for the format it reads.
+template <typename Launch>
+void for_cwbvh_query(const LaunchArgs& a, Launch&& launch) {
+    for_query(a, [&](auto any) {
+        if (a.cwbvh.vtris) launch(any, std::true_type{});
+        else launch(any, std::false_type{});
+    });
+}
+
 }  // namespace bvhlab::trav
