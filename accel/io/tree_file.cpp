@@ -130,8 +130,15 @@ TreeFile read_tree_file(const std::string& path) {
         throw Error("structure file '" + path + "' names an unknown builder (" + std::to_string(h.builder) + ")");
     const bool kd = h.builder == kKdTreeCode;
     const uint64_t node_bytes = kd ? sizeof(KdNode) : sizeof(BuildNode);
+    // The counts are checked by division before any product, so that a forged count near 2^64
+    // cannot wrap the expected size (or the message), and before anything is allocated.
+    const uint64_t body = size >= sizeof h + 8 ? size - sizeof h - 8 : 0;
+    if (h.node_count > body / node_bytes || h.index_count > (body - h.node_count * node_bytes) / 4)
+        throw Error("structure file '" + path + "' is truncated or damaged: its header claims " +
+                    std::to_string(h.node_count) + " nodes and " + std::to_string(h.index_count) +
+                    " indices, more than its " + std::to_string(size) + " bytes hold");
     const uint64_t expect = sizeof h + h.node_count * node_bytes + h.index_count * 4 + 8;
-    if (h.node_count > (1ull << 34) || h.index_count > (1ull << 34) || size != expect)
+    if (size != expect)
         throw Error("structure file '" + path + "' is truncated or has trailing bytes: expected " +
                     std::to_string(expect) + " bytes, found " + std::to_string(size));
     TreeFile f;

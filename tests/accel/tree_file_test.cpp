@@ -81,6 +81,16 @@ TEST(TreeFile, DamagedFiles) {
     bad[8] = 9;
     write(bad);
     expect_read_error(f.path(), "version 9");
+    // Forged counts near 2^64 (node_count at byte 64, index_count at 72): refused by what the
+    // file can hold, with the counts as written, before any allocation.
+    for (size_t at : {size_t(64), size_t(72)}) {
+        bad = good;
+        const uint64_t huge = (1ull << 63) + 5;
+        std::memcpy(&bad[at], &huge, 8);
+        write(bad);
+        expect_read_error(f.path(), "claims");
+        expect_read_error(f.path(), std::to_string(huge));
+    }
     for (size_t pos : {size_t(100), good.size() / 2, good.size() - 20}) {
         bad = good;
         bad[pos] = char(bad[pos] ^ 0x40);
