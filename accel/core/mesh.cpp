@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "accel/core/check.h"
+#include "accel/core/checksum.h"
 
 namespace bvhlab::accel {
 
@@ -66,13 +67,11 @@ bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t ma
 }
 
 std::string scene_hash(const TriangleMesh& mesh) {
-    uint64_t h = 1469598103934665603ull;
+    uint64_t h = kFnvOffset;
     for (size_t i = 0; i < mesh.triangle_count(); ++i) {
         for (int k = 0; k < 3; ++k) {
-            Vec3 v = mesh.vertex(i, k);
-            unsigned char bytes[12];
-            std::memcpy(bytes, &v, 12);
-            for (unsigned char byte : bytes) h = (h ^ byte) * 1099511628211ull;
+            const Vec3 v = mesh.vertex(i, k);
+            h = fnv1a(&v, 12, h);
         }
     }
     char buf[17];

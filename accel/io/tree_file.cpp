@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "accel/core/check.h"
+#include "accel/core/checksum.h"
 #include "accel/io/atomic_file.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "tree files need a little-endian host");
@@ -37,12 +38,6 @@ struct Header {
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
 constexpr uint32_t kKdTreeCode = 3;  // builder field of kd-tree files
-
-uint64_t fnv1a(const void* data, size_t n, uint64_t h = 1469598103934665603ull) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-    return h;
-}
 
 /// Header, node records, indices, checksum; shared by BVH and kd-tree files.
 template <typename Node>

@@ -192,20 +192,33 @@ echo '{"scenes": {"mycb": {"file": "cb.obj"}}}' >"$tmp/cbcat/scenes.json"
 BVHLAB_SCENES="$tmp/cbcat" expect_error build-out-is-catalogue-file "--out .* is this command's input" build mycb -o "$tmp/cbcat/cb.obj"
 if cmp -s "$data/cornell_box.obj" "$tmp/cbcat/cb.obj"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL the catalogue's file was changed"; fi
 if cmp -s "$data/cornell_box.obj" "$tmp/cb_in.obj"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL the input was changed"; fi
-python3 - "$tmp/small.rays" "$tmp/nan.rays" <<'PY'
+# edit_records IN OUT FORMAT OFFSET VALUES... [--keep-checksum]: writes IN with one record
+# field packed at OFFSET after the 48-byte header, then, unless --keep-checksum, the checksum
+# made again (a file that another tool wrote with bad values, not a damaged one).
+edit_records() {
+    python3 - "$@" <<'PY'
 import struct, sys
-d = bytearray(open(sys.argv[1], 'rb').read())
-struct.pack_into('<f', d, 24 + 3 * 32 + 16, float('nan'))  # ray 3: direction x
-open(sys.argv[2], 'wb').write(d)
+src, dst, fmt, off = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+keep = sys.argv[-1] == '--keep-checksum'
+vals = [float(v) if '.' in v or v == 'nan' else int(v) for v in sys.argv[5:len(sys.argv) - keep]]
+d = bytearray(open(src, 'rb').read())
+struct.pack_into('<' + fmt, d, 48 + off, *vals)
+if not keep:  # FNV-1a over 8-byte words of everything before the checksum (README, "File formats")
+    h, body = 1469598103934665603, d[:-8]
+    for i in range(0, len(body) - len(body) % 8, 8):
+        h = ((h ^ struct.unpack_from('<Q', body, i)[0]) * 1099511628211) % 2**64
+    for c in body[len(body) - len(body) % 8:]:
+        h = ((h ^ c) * 1099511628211) % 2**64
+    struct.pack_into('<Q', d, len(d) - 8, h)
+open(dst, 'wb').write(d)
 PY
+}
+edit_records "$tmp/small.rays" "$tmp/nan.rays" f $((3 * 32 + 16)) nan  # ray 3: direction x
 expect_error nan-ray "ray 3 has a non-finite direction" verify "$tmp/cb_in.obj" --rays "$tmp/nan.rays"
+edit_records "$tmp/small.rays" "$tmp/damaged.rays" f $((3 * 32 + 16)) 0.5 --keep-checksum
+expect_error damaged-rays "damaged.rays' is damaged: its checksum does not match" verify "$tmp/cb_in.obj" --rays "$tmp/damaged.rays"
 "$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null
-python3 - "$tmp/small.hits" "$tmp/foreign.hits" <<'PY'
-import struct, sys
-d = bytearray(open(sys.argv[1], 'rb').read())
-struct.pack_into('<ifff', d, 24 + 5 * 16, 999999, 1.0, 0.1, 0.1)  # hit 5: a triangle the scene lacks
-open(sys.argv[2], 'wb').write(d)
-PY
+edit_records "$tmp/small.hits" "$tmp/foreign.hits" ifff $((5 * 16)) 999999 1.0 0.1 0.1  # hit 5: a triangle the scene lacks
 expect_error foreign-hits "hit 5 names triangle 999999" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/foreign.hits"
 
 # Every command's --json lines carry the identifying fields of the schema (README, "JSON lines").

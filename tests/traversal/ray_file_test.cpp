@@ -35,22 +35,76 @@ RaySet sample_set() {
 TEST(RayFile, RoundTripIsByteExact) {
     test::TempFile f("rays.bin");
     RaySet a = sample_set();
+    a.writer = "0123456789ab-dirty";
     write_ray_file(f.path(), a);
     const std::string bytes = test::read_file_bytes(f.path());
-    ASSERT_EQ(bytes.size(), 24u + 2 * 32u);
+    ASSERT_EQ(bytes.size(), 48u + 2 * 32u + 8u);
     EXPECT_EQ(bytes.substr(0, 8), "BVHLRAYS");
     uint32_t version, flags;
     uint64_t count;
     std::memcpy(&version, bytes.data() + 8, 4);
     std::memcpy(&flags, bytes.data() + 12, 4);
     std::memcpy(&count, bytes.data() + 16, 8);
-    EXPECT_EQ(version, 1u);
+    EXPECT_EQ(version, 2u);
     EXPECT_EQ(flags, 1u);  // any-hit
     EXPECT_EQ(count, 2u);
+    EXPECT_EQ(bytes.substr(24, 19), std::string("0123456789ab-dirty\0", 19));
     RaySet b = read_ray_file(f.path());
+    EXPECT_EQ(b.query, Query::kAny);
+    EXPECT_EQ(b.writer, a.writer);
+    EXPECT_EQ(b.version, 2u);
+    ASSERT_EQ(b.rays.size(), 2u);
+    EXPECT_EQ(std::memcmp(a.rays.data(), b.rays.data(), 64), 0);
+    a.writer.clear();  // an unnamed writer is stored as "unknown"
+    write_ray_file(f.path(), a);
+    EXPECT_EQ(read_ray_file(f.path()).writer, "unknown");
+}
+
+TEST(RayFile, Version1FilesAreStillRead) {
+    // The 24-byte header of version 1, then the records; no writer, no checksum.
+    test::TempFile f("v1.rays");
+    const RaySet a = sample_set();
+    std::string bytes("BVHLRAYS\1\0\0\0\1\0\0\0", 16);
+    const uint64_t count = a.rays.size();
+    bytes.append(reinterpret_cast<const char*>(&count), 8);
+    bytes.append(reinterpret_cast<const char*>(a.rays.data()), a.rays.size() * sizeof(Ray));
+    std::ofstream(f.path(), std::ios::binary) << bytes;
+    const RaySet b = read_ray_file(f.path());
+    EXPECT_EQ(b.version, 1u);
+    EXPECT_EQ(b.writer, "");
     EXPECT_EQ(b.query, Query::kAny);
     ASSERT_EQ(b.rays.size(), 2u);
     EXPECT_EQ(std::memcmp(a.rays.data(), b.rays.data(), 64), 0);
+    std::ofstream(f.path(), std::ios::binary) << bytes << "x";
+    expect_error(f.path(), "trailing");
+}
+
+TEST(RayFile, DamageIsNoticedByTheChecksum) {
+    // A flipped bit anywhere (writer, a record, the checksum itself) that leaves the header
+    // readable is "damaged", never a silent change of a ray.
+    test::TempFile f("damaged.rays");
+    RaySet a = sample_set();
+    a.writer = "abc";
+    write_ray_file(f.path(), a);
+    const std::string good = test::read_file_bytes(f.path());
+    for (size_t pos : {size_t(30), size_t(48), size_t(48 + 37), good.size() - 3}) {
+        SCOPED_TRACE(pos);
+        std::string bad = good;
+        bad[pos] = char(bad[pos] ^ 0x10);
+        std::ofstream(f.path(), std::ios::binary) << bad;
+        expect_error(f.path(), "is damaged: its checksum does not match");
+    }
+    HitSet h{{{5, 1.5f, 0.25f, 0.5f}}, Query::kClosest, "abc"};
+    write_hit_file(f.path(), h);
+    std::string bad = test::read_file_bytes(f.path());
+    bad[48 + 4] = char(bad[48 + 4] ^ 1);  // the hit's t
+    std::ofstream(f.path(), std::ios::binary) << bad;
+    try {
+        read_hit_file(f.path());
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("damaged"), std::string::npos) << e.what();
+    }
 }
 
 TEST(RayFile, EmptySetRoundTrips) {
@@ -77,9 +131,9 @@ TEST(RayFile, BadFiles) {
     write(bad);
     expect_error(f.path(), "magic");
     bad = good;
-    bad[8] = 2;  // version 2
+    bad[8] = 3;  // version 3
     write(bad);
-    expect_error(f.path(), "version 2");
+    expect_error(f.path(), "version 3");
     bad = good;
     bad[12] = 4;  // unknown flag bit
     write(bad);

@@ -98,7 +98,7 @@ void register_bench(CLI::App& app, Globals& g) {
             const trav::RaySet set = trav::read_ray_file(o->rays_file);
             std::vector<trav::Hit> out;
             bench_set(set, "file", nullptr, &out);
-            if (!o->hits_out.empty()) trav::write_hit_file(o->hits_out, {out, set.query});
+            if (!o->hits_out.empty()) trav::write_hit_file(o->hits_out, {out, set.query, git_commit()});
             return;
         }
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));

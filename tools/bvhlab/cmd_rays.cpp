@@ -29,10 +29,15 @@ void register_rays(CLI::App& app, Globals& g) {
     sub->callback([o, &g, scene, out, info] {
         if (info->count()) {
             trav::RaySet set = trav::read_ray_file(o->info);
-            nlohmann::json j{{"record", "ray_file"}, {"file", o->info}, {"version", trav::kRayFileVersion},
+            const std::string writer = set.writer.empty() ? "not recorded (version 1)" : set.writer;
+            nlohmann::json j{{"record", "ray_file"}, {"file", o->info}, {"version", set.version},
+                             {"writer", writer}, {"checksum", set.version >= 2 ? "ok" : "none (version 1)"},
                              {"query", set.query == trav::Query::kAny ? "any" : "closest"}, {"rays", set.rays.size()}};
-            if (g.json) emit(j); else std::printf("%s: %zu rays, %s-hit\n", o->info.c_str(), set.rays.size(),
-                                                 set.query == trav::Query::kAny ? "any" : "closest");
+            if (g.json) emit(j);
+            else
+                std::printf("%s: %zu rays, %s-hit, version %u, written by %s%s\n", o->info.c_str(), set.rays.size(),
+                            set.query == trav::Query::kAny ? "any" : "closest", set.version, writer.c_str(),
+                            set.version >= 2 ? ", checksum ok" : "");
             return;
         }
         if (!scene->count()) throw Error("rays needs a scene (or --info FILE)");
@@ -47,6 +52,7 @@ void register_rays(CLI::App& app, Globals& g) {
             Stage st(g, "generating " + o->type + " rays");
             set = proto.make(trav::parse_ray_type(o->type));
         }
+        set.writer = git_commit();
         trav::write_ray_file(o->out, set);
         nlohmann::json j = base_record("rays", s);
         j["ray_type"] = o->type;

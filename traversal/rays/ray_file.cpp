@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Ray and hit files: a 24-byte header (magic, version, flags, count) and packed records.
+// Ray and hit files: a 48-byte header (magic, version, flags, count, writer), packed records and
+// a checksum (version 2); version 1 files (24-byte header, no writer or checksum) are read too.
 #include "traversal/rays/ray_file.h"
 
 #include <cerrno>
@@ -10,6 +11,7 @@
 #include <memory>
 
 #include "accel/core/check.h"
+#include "accel/core/checksum.h"
 #include "accel/io/atomic_file.h"
 
 // Records are written as the in-memory structs, which is the little-endian file layout only on
@@ -21,6 +23,7 @@ namespace {
 
 constexpr uint32_t kFlagAnyHit = 1u;
 
+/// Version 1's header; version 2 follows it with the writer, and ends with the checksum.
 struct Header {
     char magic[8];
     uint32_t version;
@@ -28,6 +31,12 @@ struct Header {
     uint64_t count;
 };
 static_assert(sizeof(Header) == 24, "file header is 24 bytes");
+
+struct HeaderV2 {
+    Header base;
+    char writer[kFileWriterBytes];
+};
+static_assert(sizeof(HeaderV2) == 48, "version 2 header is 48 bytes");
 
 using File = std::unique_ptr<FILE, int (*)(FILE*)>;
 
@@ -40,54 +49,74 @@ File open(const std::string& path, const char* mode) {
 
 template <typename T>
 void write_records(const std::string& path, const char* magic, uint32_t version, Query query,
-                   const std::vector<T>& records) {
-    Header h{};
-    std::memcpy(h.magic, magic, 8);
-    h.version = version;
-    h.flags = query == Query::kAny ? kFlagAnyHit : 0u;
-    h.count = records.size();
+                   const std::vector<T>& records, const std::string& writer) {
+    HeaderV2 h{};
+    std::memcpy(h.base.magic, magic, 8);
+    h.base.version = version;
+    h.base.flags = query == Query::kAny ? kFlagAnyHit : 0u;
+    h.base.count = records.size();
+    const std::string w = writer.empty() ? "unknown" : writer.substr(0, kFileWriterBytes);
+    std::memcpy(h.writer, w.data(), w.size());
+    uint64_t sum = accel::fnv1a_words(&h, sizeof h);
+    sum = accel::fnv1a_words(records.data(), records.size() * sizeof(T), sum);
     accel::write_file_atomically(path, [&](std::FILE* f) {
         std::fwrite(&h, sizeof h, 1, f);
         if (!records.empty()) std::fwrite(records.data(), sizeof(T), records.size(), f);
+        std::fwrite(&sum, sizeof sum, 1, f);
     });
 }
 
 template <typename T>
-std::vector<T> read_records(const std::string& path, const char* magic, uint32_t version,
-                            const char* what, Query& query) {
+std::vector<T> read_records(const std::string& path, const char* magic, uint32_t version, const char* what,
+                            Query& query, std::string& writer, uint32_t& file_version) {
     File f = open(path, "rb");
-    Header h{};
-    if (std::fread(&h, sizeof h, 1, f.get()) != 1)
-        throw Error("'" + path + "' is truncated: shorter than the 24-byte " + what + " header");
-    if (std::memcmp(h.magic, magic, 8) != 0)
+    HeaderV2 h{};
+    if (std::fread(&h.base, sizeof h.base, 1, f.get()) != 1)
+        throw Error("'" + path + "' is truncated: shorter than the 24-byte " + std::string(what) + " header");
+    if (std::memcmp(h.base.magic, magic, 8) != 0)
         throw Error("'" + path + "' is not a " + what + " (magic is not " + std::string(magic, 8) + ")");
-    if (h.version != version)
-        throw Error("'" + path + "' has " + what + " version " + std::to_string(h.version) +
-                    "; this build reads version " + std::to_string(version));
-    if (h.flags & ~kFlagAnyHit)
-        throw Error("'" + path + "' sets unknown flag bits 0x" + std::to_string(h.flags & ~kFlagAnyHit));
-    query = (h.flags & kFlagAnyHit) ? Query::kAny : Query::kClosest;
+    const bool v1 = h.base.version == 1;
+    if (h.base.version != version && !v1)
+        throw Error("'" + path + "' has " + what + " version " + std::to_string(h.base.version) +
+                    "; this build reads versions 1 and " + std::to_string(version));
+    if (h.base.flags & ~kFlagAnyHit)
+        throw Error("'" + path + "' sets unknown flag bits 0x" + std::to_string(h.base.flags & ~kFlagAnyHit));
+    query = (h.base.flags & kFlagAnyHit) ? Query::kAny : Query::kClosest;
+    file_version = h.base.version;
+    const size_t header = v1 ? sizeof(Header) : sizeof(HeaderV2), trailer = v1 ? 0 : sizeof(uint64_t);
+    if (!v1 && std::fread(h.writer, sizeof h.writer, 1, f.get()) != 1)
+        throw Error("'" + path + "' is truncated: shorter than the 48-byte " + std::string(what) + " header");
+    writer = v1 ? std::string() : std::string(h.writer, strnlen(h.writer, sizeof h.writer));
     std::fseek(f.get(), 0, SEEK_END);
     const long size = std::ftell(f.get());
     if (size < 0) throw Error("cannot read '" + path + "': " + std::strerror(errno));
     // The count is checked against the file's size before anything is allocated, by division
     // (a count near 2^64 wrapped the product, and the message with it).
-    const unsigned long long body = (unsigned long long)size - sizeof(Header);
-    if (h.count > body / sizeof(T) || h.count * sizeof(T) != body)
-        throw Error("'" + path + "' is truncated or has trailing bytes: header says " + std::to_string(h.count) +
+    const unsigned long long body = (unsigned long long)size >= header + trailer ? size - header - trailer : 0;
+    if (h.base.count > body / sizeof(T) || h.base.count * sizeof(T) != body)
+        throw Error("'" + path + "' is truncated or has trailing bytes: header says " + std::to_string(h.base.count) +
                     " records of " + std::to_string(sizeof(T)) + " bytes, the file has room for " +
                     std::to_string(body / sizeof(T)) + " (" + std::to_string(size) + " bytes)");
-    std::fseek(f.get(), sizeof(Header), SEEK_SET);
-    std::vector<T> out(h.count);
-    if (h.count && std::fread(out.data(), sizeof(T), out.size(), f.get()) != out.size())
+    std::fseek(f.get(), long(header), SEEK_SET);
+    std::vector<T> out(h.base.count);
+    uint64_t stored = 0;
+    if ((h.base.count && std::fread(out.data(), sizeof(T), out.size(), f.get()) != out.size()) ||
+        (!v1 && std::fread(&stored, sizeof stored, 1, f.get()) != 1))
         throw Error("cannot read '" + path + "': " + std::strerror(errno));
+    if (!v1) {
+        uint64_t sum = accel::fnv1a_words(&h, sizeof h);
+        sum = accel::fnv1a_words(out.data(), out.size() * sizeof(T), sum);
+        if (sum != stored)
+            throw Error("'" + path + "' is damaged: its checksum does not match its contents (" + what + ", " +
+                        std::to_string(h.base.count) + " records)");
+    }
     return out;
 }
 
 }  // namespace
 
 void write_ray_file(const std::string& path, const RaySet& set) {
-    write_records(path, "BVHLRAYS", kRayFileVersion, set.query, set.rays);
+    write_records(path, "BVHLRAYS", kRayFileVersion, set.query, set.rays, set.writer);
 }
 
 std::string invalid_ray(const Ray& r) {
@@ -108,7 +137,7 @@ std::string invalid_ray(const Ray& r) {
 
 RaySet read_ray_file(const std::string& path) {
     RaySet s;
-    s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s.query);
+    s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s.query, s.writer, s.version);
     for (size_t i = 0; i < s.rays.size(); ++i) {
         const std::string why = invalid_ray(s.rays[i]);
         if (!why.empty()) throw Error("ray file '" + path + "': ray " + std::to_string(i) + " has " + why);
@@ -117,12 +146,12 @@ RaySet read_ray_file(const std::string& path) {
 }
 
 void write_hit_file(const std::string& path, const HitSet& set) {
-    write_records(path, "BVHLHITS", kHitFileVersion, set.query, set.hits);
+    write_records(path, "BVHLHITS", kHitFileVersion, set.query, set.hits, set.writer);
 }
 
 HitSet read_hit_file(const std::string& path) {
     HitSet s;
-    s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s.query);
+    s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s.query, s.writer, s.version);
     for (size_t i = 0; i < s.hits.size(); ++i) {
         const Hit& h = s.hits[i];
         if (h.tri < -1) throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has triangle id " +

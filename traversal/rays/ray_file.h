@@ -10,27 +10,36 @@
 
 namespace bvhlab::trav {
 
-constexpr uint32_t kRayFileVersion = 1;
-constexpr uint32_t kHitFileVersion = 1;
+/// Version 2 adds the writer (the commit that wrote the file) and a content checksum; version 1
+/// files (no checksum) are still read.
+constexpr uint32_t kRayFileVersion = 2;
+constexpr uint32_t kHitFileVersion = 2;
+constexpr size_t kFileWriterBytes = 24;  ///< the writer field: NUL-padded ASCII
 
-/// A ray set with the query it asks for.
+/// A ray set with the query it asks for. `writer` is what wrote the file it was read from (a
+/// commit; "" for version 1 files), or what write_ray_file stores ("" writes "unknown").
 struct RaySet {
     std::vector<Ray> rays;
     Query query = Query::kClosest;
+    std::string writer;
+    uint32_t version = 0;  ///< the file version it was read from (0: not read from a file)
 };
 
-/// A hit set with the query that produced it.
+/// A hit set with the query that produced it, and its writer as RaySet's.
 struct HitSet {
     std::vector<Hit> hits;
     Query query = Query::kClosest;
+    std::string writer;
+    uint32_t version = 0;
 };
 
-/// Writes `BVHLRAYS`, version, flags (bit 0 = any-hit), count, then 32 bytes per ray, whole
-/// or not at all (accel::write_file_atomically). Throws bvhlab::Error when it cannot.
+/// Writes `BVHLRAYS`, version, flags (bit 0 = any-hit), count, the writer, then 32 bytes per
+/// ray and a 64-bit checksum of all that came before, whole or not at all
+/// (accel::write_file_atomically). Throws bvhlab::Error when it cannot.
 void write_ray_file(const std::string& path, const RaySet& set);
 /// Reads a ray file. Throws bvhlab::Error naming the problem on a missing file, wrong magic,
-/// unknown version or flags, a size that does not match the count, or an invalid ray (its
-/// index and why: see invalid_ray).
+/// unknown version or flags, a size that does not match the count, a checksum that does not
+/// match (the file is damaged), or an invalid ray (its index and why: see invalid_ray).
 RaySet read_ray_file(const std::string& path);
 
 /// Why `r` cannot be traced, or "" when it can: origin and direction finite, direction not
