@@ -37,6 +37,20 @@ printf 'BVHLRAYS\7\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badversion.rays"
 printf 'BVHLRAYS\1\0\0\0\0\0\0\0\5\0\0\0\0\0\0\0' >"$tmp/truncated.rays"
 
 expect_error missing-file "cannot open|no scene" build "$tmp/nope.obj"
+
+# Out of host memory names the size asked for and the stage (under a 3 GB address-space limit;
+# ASan builds reserve more address space than that at start-up, so they skip it).
+if ldd "$bin" 2>/dev/null | grep -q libasan; then
+    echo "skip host-oom: an ASan build cannot start under an address-space limit"
+else
+    printf '#!/bin/sh\nulimit -v 3000000\nexec "%s" "$@"\n' "$bin" >"$tmp/limited"
+    chmod +x "$tmp/limited"
+    bin_unlimited=$bin
+    bin=$tmp/limited
+    expect_error host-oom "out of host memory: an allocation of [0-9.]+ GB \([0-9]+ bytes\) failed while generating gen:soup:900000000" \
+        build gen:soup:900000000
+    bin=$bin_unlimited
+fi
 expect_error directory "no scene|directory" build "$tmp"
 expect_error malformed-v "line 2: malformed 'v'" build "$tmp/malformed.obj"
 expect_error face-range "out of range" build "$tmp/range.obj"

@@ -15,6 +15,7 @@
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
 #include "tests/support/test_support.h"
+#include "traversal/gpu/device_buffer.h"
 #include "traversal/gpu/gpu_tracer.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
@@ -189,6 +190,25 @@ TEST_P(GpuKernel, OddCountsEmptySetsAndTheDeviceCount) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, GpuKernel, ::testing::ValuesIn(kernel_names()), param_name);
+
+TEST(GpuTrace, OutOfDeviceMemoryNamesTheSize) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    // 4 TB: more than any GPU has. The error names the bytes asked for, and the device still works.
+    const size_t bytes = size_t(1) << 42;
+    try {
+        DeviceBuffer<uint8_t> b;
+        b.resize(bytes);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cannot allocate " + std::to_string(bytes) + " bytes of GPU memory"),
+                  std::string::npos)
+            << e.what();
+    }
+    DeviceBuffer<uint32_t> ok(std::vector<uint32_t>{1, 2, 3});
+    std::vector<uint32_t> back;
+    ok.download(back);
+    EXPECT_EQ(back, (std::vector<uint32_t>{1, 2, 3}));
+}
 
 TEST(GpuTrace, ReportsWhyWithoutDevice) {
     std::string why;

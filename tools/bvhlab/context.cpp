@@ -28,8 +28,19 @@ Stage::Stage(const Globals& g, std::string what)
     if (!g_.quiet) std::fprintf(stderr, "[bvhlab] %s ...\n", what_.c_str());
 }
 
+namespace {
+// The innermost Stage that an exception ended. A fixed buffer: the destructor that fills it may
+// run while unwinding from an allocation failure, where allocating again could terminate.
+char g_failed_stage[160] = {};
+}  // namespace
+
+std::string failed_stage_clause() { return g_failed_stage[0] ? std::string(" while ") + g_failed_stage : ""; }
+
 Stage::~Stage() {
-    if (std::uncaught_exceptions() > exceptions_) return;  // failed: the error line follows
+    if (std::uncaught_exceptions() > exceptions_) {  // failed: the error line follows
+        if (!g_failed_stage[0]) std::snprintf(g_failed_stage, sizeof g_failed_stage, "%s", what_.c_str());
+        return;
+    }
     if (!g_.quiet) std::fprintf(stderr, "[bvhlab] %s: done (%.2f s)\n", what_.c_str(), seconds());
 }
 

@@ -53,6 +53,9 @@ private:
     int exceptions_ = 0;  // std::uncaught_exceptions() at the start
 };
 
+/// " while <stage>" for the last Stage that ended by an exception, or "" (for error lines).
+std::string failed_stage_clause();
+
 /// A scene ready to use: mesh plus camera and AO length from its catalogue entry (or an
 /// automatic framing when it has none).
 struct Scene {

@@ -7,6 +7,7 @@
 
 #include "accel/core/check.h"
 #include "tools/bvhlab/commands.h"
+#include "tools/bvhlab/host_memory.h"
 
 namespace bvhlab::cli {
 int g_exit_code = 0;
@@ -65,8 +66,12 @@ int main(int argc, char** argv) {
     } catch (const bvhlab::Error& e) {
         std::fprintf(stderr, "bvhlab: error: %s\n", e.what());
         return 1;
+    } catch (const OutOfHostMemory& e) {
+        std::fprintf(stderr, "bvhlab: error: out of host memory: an allocation of %s failed%s\n",
+                     describe_bytes(e.bytes()).c_str(), failed_stage_clause().c_str());
+        return 1;
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "bvhlab: error: out of memory\n");
+        std::fprintf(stderr, "bvhlab: error: out of host memory%s\n", failed_stage_clause().c_str());
         return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "bvhlab: error: %s\n", e.what());
