@@ -11,6 +11,8 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string_view>
+#include <vector>
 #include <sys/stat.h>
 
 #include "accel/core/check.h"
@@ -63,10 +65,21 @@ bool parse_face_token(const char* b, const char* e, long& vi) {
     return *end == '\0';
 }
 
+/// Faces with more vertex references than this are triangulated by bvhlab as a fan, in place,
+/// before tinyobjloader sees them: its ear clipping is quadratic or worse in the references (a
+/// face of 50k took 22 s, of 2M minutes). Smaller polygons keep tinyobjloader's ear clipping,
+/// which handles concave ones; 64^2 steps per face bound its cost.
+constexpr size_t kEarClipMaxRefs = 64;
+
+/// Byte ranges [begin, end) of the face lines (their text after the "f") that scan_obj found
+/// with more than kEarClipMaxRefs references.
+using LineRanges = std::vector<std::pair<size_t, size_t>>;
+
 /// Throws on the first malformed v/vt/vn/f line or face index out of range. Returns the
 /// (0-based) indices of vertices with a NaN or infinite coordinate: tinyobjloader reads those
-/// as 0, which would silently move the vertex instead of dropping its triangles.
-std::vector<size_t> scan_obj(const std::string& path, const std::string& text) {
+/// as 0, which would silently move the vertex instead of dropping its triangles. Faces too
+/// large for ear clipping go to `huge_faces`.
+std::vector<size_t> scan_obj(const std::string& path, const std::string& text, LineRanges& huge_faces) {
     std::vector<size_t> non_finite;
     size_t line_no = 0, nv = 0, pos = 0;
     long max_index = 0;
@@ -111,16 +124,24 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text) {
             }
         } else if (key == "f") {
             if (nt < 4) fail(line_no, "malformed 'f' line: a face needs at least 3 vertices");
-            for (int i = 1; i < nt; ++i) {
+            // Every reference, however many (toks holds only the first 31).
+            size_t refs = 0;
+            for (const char* p = toks[1][0]; p < e;) {
+                while (p < e && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
+                if (p >= e || *p == '#') break;
+                const char* s = p;
+                while (p < e && *p != ' ' && *p != '\t' && *p != '\r' && *p != '#') ++p;
+                ++refs;
                 long vi = 0;
-                if (!parse_face_token(toks[i][0], toks[i][1], vi))
-                    fail(line_no, "malformed 'f' line: bad vertex reference '" + std::string(toks[i][0], toks[i][1]) + "'");
+                if (!parse_face_token(s, p, vi))
+                    fail(line_no, "malformed 'f' line: bad vertex reference '" + std::string(s, p) + "'");
                 if (vi < 0 && size_t(-vi) > nv) fail(line_no, "face index " + std::to_string(vi) + " out of range");
                 if (vi > max_index) {
                     max_index = vi;
                     max_line = line_no;
                 }
             }
+            if (refs > kEarClipMaxRefs) huge_faces.push_back({size_t(toks[1][0] - text.data()), size_t(e - text.data())});
         }
     }
     if (size_t(max_index) > nv)
@@ -129,11 +150,40 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text) {
     return non_finite;
 }
 
+/// `text` with each face of `huge` (ranges from scan_obj) replaced by its fan, one "f" line per
+/// triangle: references r0 r1 ... become "f r0 r1 r2", "f r0 r2 r3", ... in place, so the
+/// triangles keep the face's position, material and group. Linear in the references.
+std::string fan_huge_faces(const std::string& text, const LineRanges& huge) {
+    std::string out;
+    out.reserve(text.size() + text.size() / 2);
+    size_t copied = 0;
+    for (const auto& [b, e] : huge) {
+        out.append(text, copied, b - copied);  // up to and including "f "
+        std::vector<std::string_view> refs;
+        for (size_t p = b; p < e;) {
+            while (p < e && (text[p] == ' ' || text[p] == '\t' || text[p] == '\r')) ++p;
+            if (p >= e || text[p] == '#') break;
+            const size_t s = p;
+            while (p < e && text[p] != ' ' && text[p] != '\t' && text[p] != '\r' && text[p] != '#') ++p;
+            refs.emplace_back(text.data() + s, p - s);
+        }
+        for (size_t i = 1; i + 1 < refs.size(); ++i) {
+            if (i > 1) out += "\nf ";
+            out.append(refs[0]).append(" ").append(refs[i]).append(" ").append(refs[i + 1]);
+        }
+        copied = e;
+    }
+    out.append(text, copied, std::string::npos);
+    return out;
+}
+
 }  // namespace
 
 TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings) {
-    const std::string text = read_file(path);
-    const std::vector<size_t> non_finite = scan_obj(path, text);
+    std::string text = read_file(path);
+    LineRanges huge_faces;
+    const std::vector<size_t> non_finite = scan_obj(path, text, huge_faces);
+    if (!huge_faces.empty()) text = fan_huge_faces(text, huge_faces);
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;

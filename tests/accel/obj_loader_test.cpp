@@ -77,6 +77,35 @@ TEST(ObjLoader, TriangulatesPolygonsAndNegativeIndices) {
     EXPECT_NEAR(m.surface_area(), 1.5, 1e-6);
 }
 
+TEST(ObjLoader, LargePolygonsAreFannedInPlaceAndFullyChecked) {
+    // A convex 1000-gon (more than the 64 references ear clipping is given): 998 triangles of
+    // its fan, in place between a triangle before it and one after, with the polygon's area.
+    const int n = 1000;
+    std::string text = std::string(kTri) + "f 1 2 3\n";
+    for (int i = 0; i < n; ++i)
+        text += "v " + std::to_string(std::cos(2 * M_PI * i / n)) + " " + std::to_string(std::sin(2 * M_PI * i / n)) + " 5\n";
+    text += "f";
+    for (int i = 0; i < n; ++i) text += " " + std::to_string(4 + i) + (i % 2 ? "//" + std::to_string(1 + i % 3) : "");
+    text += "  # a comment\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1 3 2\n";
+    TempFile f("ngon.obj", text);
+    accel::TriangleMesh m = accel::load_obj(f.path());
+    ASSERT_EQ(m.triangle_count(), 1u + (n - 2) + 1u);
+    const double ngon = 0.5 * n * std::sin(2 * M_PI / n);
+    EXPECT_NEAR(m.surface_area(), 0.5 + ngon + 0.5, 1e-3);
+    EXPECT_EQ(m.vertex(0, 0).z, 0.0f);  // the triangle before
+    EXPECT_EQ(m.vertex(1, 0).z, 5.0f);  // the fan: r0, r1, r2
+    EXPECT_EQ(m.vertex(1, 0).x, 1.0f);
+    EXPECT_EQ(m.vertex(n - 2, 0).x, 1.0f);  // every fan triangle starts at r0
+    EXPECT_EQ(m.vertex(n - 1, 1).z, 0.0f);  // the triangle after
+    // References beyond the 31st are checked too, with the line number.
+    std::string bad = std::string(kTri) + "f";
+    for (int i = 0; i < 40; ++i) bad += i == 35 ? " 1x" : " " + std::to_string(1 + i % 3);
+    expect_load_error("bad_far_ref.obj", bad + "\n", "line 4: malformed 'f' line: bad vertex reference '1x'");
+    std::string far = std::string(kTri) + "f";
+    for (int i = 0; i < 100; ++i) far += " " + std::to_string(i == 80 ? 99 : 1 + i % 3);
+    expect_load_error("far_range.obj", far + "\n", "face index 99 out of range");
+}
+
 TEST(ObjLoader, CornellBoxKeepsMaterialsAndEmission) {
     accel::TriangleMesh m = accel::load_obj(test::data_dir() + "/cornell_box.obj");
     EXPECT_EQ(m.triangle_count(), 32u);
