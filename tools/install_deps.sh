@@ -6,7 +6,7 @@
 set -euo pipefail
 
 pkgs=(build-essential cmake git python3 libembree-dev libtinyobjloader-dev libglm-dev libtbb-dev
-      libcli11-dev nlohmann-json3-dev libbenchmark-dev libgtest-dev)
+      libcli11-dev nlohmann-json3-dev libbenchmark-dev libgtest-dev clang-format-14)
 for arg in "$@"; do
     case "$arg" in
         --with-oiio) pkgs+=(libopenimageio-dev) ;;

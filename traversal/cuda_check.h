@@ -19,29 +19,29 @@ public:
 
 }  // namespace bvhlab
 
-#define BVHLAB_CUDA_CHECK(expr)                                                                 \
-    do {                                                                                        \
-        const cudaError_t bvhlab_err_ = (expr);                                                 \
-        if (bvhlab_err_ != cudaSuccess)                                                         \
+#define BVHLAB_CUDA_CHECK(expr)                                                                       \
+    do {                                                                                              \
+        const cudaError_t bvhlab_err_ = (expr);                                                       \
+        if (bvhlab_err_ != cudaSuccess)                                                               \
             throw ::bvhlab::CudaError(std::string("CUDA error: ") + cudaGetErrorString(bvhlab_err_) + \
                                       " in '" #expr "' at " __FILE__ ":" + std::to_string(__LINE__)); \
     } while (0)
 
 /// For destructors: logs and never throws.
-#define BVHLAB_CUDA_CHECK_LOG(expr)                                                             \
-    do {                                                                                        \
-        const cudaError_t bvhlab_err_ = (expr);                                                 \
-        if (bvhlab_err_ != cudaSuccess)                                                         \
-            std::fprintf(stderr, "bvhlab: CUDA error %s in '%s' at %s:%d\n",                    \
-                         cudaGetErrorString(bvhlab_err_), #expr, __FILE__, __LINE__);           \
+#define BVHLAB_CUDA_CHECK_LOG(expr)                                                                                  \
+    do {                                                                                                             \
+        const cudaError_t bvhlab_err_ = (expr);                                                                      \
+        if (bvhlab_err_ != cudaSuccess)                                                                              \
+            std::fprintf(stderr, "bvhlab: CUDA error %s in '%s' at %s:%d\n", cudaGetErrorString(bvhlab_err_), #expr, \
+                         __FILE__, __LINE__);                                                                        \
     } while (0)
 
 /// After every launch; with BVHLAB_SYNC_AFTER_LAUNCH also synchronises to surface faults at once.
 #if defined(BVHLAB_SYNC_AFTER_LAUNCH)
-#define BVHLAB_CHECK_LAUNCH()                            \
-    do {                                                 \
-        BVHLAB_CUDA_CHECK(cudaGetLastError());           \
-        BVHLAB_CUDA_CHECK(cudaDeviceSynchronize());      \
+#define BVHLAB_CHECK_LAUNCH()                       \
+    do {                                            \
+        BVHLAB_CUDA_CHECK(cudaGetLastError());      \
+        BVHLAB_CUDA_CHECK(cudaDeviceSynchronize()); \
     } while (0)
 #else
 #define BVHLAB_CHECK_LAUNCH() BVHLAB_CUDA_CHECK(cudaGetLastError())

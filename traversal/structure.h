@@ -22,9 +22,9 @@ const char* layout_name(Layout layout);
 struct Structure {
     std::string name;  ///< "bvh2/binned", "bvh2/sweep", "bvh2/sbvh", "cwbvh/<builder>" or "kdtree"
     Layout layout = Layout::kBvh2;
-    accel::Bvh2 bvh2;      ///< the structure when layout == kBvh2
-    accel::KdLayout kd;    ///< the structure when layout == kKd
-    accel::Cwbvh cwbvh;    ///< the structure when layout == kCwbvh
+    accel::Bvh2 bvh2;    ///< the structure when layout == kBvh2
+    accel::KdLayout kd;  ///< the structure when layout == kKd
+    accel::Cwbvh cwbvh;  ///< the structure when layout == kCwbvh
 
     /// Stack entries a full-stack traversal needs (interior nodes on the longest path).
     uint32_t depth() const {

@@ -83,8 +83,7 @@ public:
     }
 
     /// Exact SAH sweep for a small node: sort by centroid on each axis, sweep, recurse.
-    void build_small(uint32_t slot, uint32_t b, uint32_t e, const AABB& bounds, const AABB& cbounds,
-                     uint32_t depth) {
+    void build_small(uint32_t slot, uint32_t b, uint32_t e, const AABB& bounds, const AABB& cbounds, uint32_t depth) {
         const uint32_t count = e - b;
         float best_weight = std::numeric_limits<float>::infinity();
         int best_axis = -1;
@@ -210,8 +209,8 @@ private:
 
     /// Hoare partition by bin that also gathers both sides' bounds and centroid bounds, so
     /// the children need no separate bounds pass.
-    uint32_t partition(uint32_t b, uint32_t e, const Split& s, const BinMapping& map, AABB& lb,
-                       AABB& lc, AABB& rb, AABB& rc) {
+    uint32_t partition(uint32_t b, uint32_t e, const Split& s, const BinMapping& map, AABB& lb, AABB& lc, AABB& rb,
+                       AABB& rc) {
         lb = lc = rb = rc = AABB::empty();
         auto left = [&](const PrimRef& r) { return map.bin(r.centroid()[s.axis], s.axis) <= s.bin; };
         auto add = [](const PrimRef& r, AABB& box, AABB& cbox) {
@@ -250,9 +249,7 @@ private:
 
 }  // namespace
 
-BuildTree BinnedSahBuilder::build(const TriangleMesh& mesh) const {
-    return build(make_prim_refs(mesh));
-}
+BuildTree BinnedSahBuilder::build(const TriangleMesh& mesh) const { return build(make_prim_refs(mesh)); }
 
 BuildTree BinnedSahBuilder::build(std::vector<PrimRef> refs) const {
     BVHLAB_CHECK(!refs.empty(), "cannot build a BVH over zero triangles");

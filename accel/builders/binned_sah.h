@@ -13,11 +13,11 @@ namespace bvhlab::accel {
 class BinnedSahBuilder {
 public:
     struct Config : BuildConfig {
-        int num_bins = 32;                    ///< bins per axis, 2..256
+        int num_bins = 32;  ///< bins per axis, 2..256
         /// Nodes with at most this many references (<= 64) are split by an exact SAH sweep
         /// over sorted centroids: cheaper than sweeping 3 x num_bins bins, and never worse.
         uint32_t sweep_threshold = 16;
-        uint32_t task_threshold = 4096;       ///< subtrees at least this big become TBB tasks
+        uint32_t task_threshold = 4096;              ///< subtrees at least this big become TBB tasks
         uint32_t parallel_bin_threshold = 1u << 16;  ///< nodes at least this big bin in parallel
     };
 

@@ -19,8 +19,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/task_arena.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -299,8 +299,10 @@ void sort_by_pos(Event* a, Event* t, size_t m) {
 /// stole; on a 16-core host furball's tree came out with 24x the triangle tests per ray.
 template <typename F>
 void run_tasks(int count, bool parallel, const F& f) {
-    if (parallel) tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, count, f); });
-    else for (int i = 0; i < count; ++i) f(i);
+    if (parallel)
+        tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, count, f); });
+    else
+        for (int i = 0; i < count; ++i) f(i);
 }
 
 /// A subtree built by one thread, in the final layout (children of a node side by side) but
@@ -360,13 +362,18 @@ struct ThreadState {
 class Recursion {
 public:
     Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
-        : c_(c), max_depth_(max_depth), small_(c.small_node_size), corners_(mesh.triangle_count()),
+        : c_(c),
+          max_depth_(max_depth),
+          small_(c.small_node_size),
+          corners_(mesh.triangle_count()),
           parallel_(corners_.size() >= kParallelMin) {
         const auto copy = [&](size_t t) {
             for (int i = 0; i < 3; ++i) corners_[t].v[i] = mesh.vertex(t, i);
         };
-        if (parallel_) tbb::parallel_for(size_t(0), corners_.size(), copy);
-        else for (size_t t = 0; t < corners_.size(); ++t) copy(t);
+        if (parallel_)
+            tbb::parallel_for(size_t(0), corners_.size(), copy);
+        else
+            for (size_t t = 0; t < corners_.size(); ++t) copy(t);
     }
 
     /// A free Work with room for n triangles: the pooled one with the least capacity that
@@ -461,7 +468,7 @@ public:
                              : bound(all, AABB::empty());
         std::vector<Event> scratch[3];
         const size_t lo[2] = {0, half}, hi[2] = {half, n};
-        size_t second_half[3];  // per axis, where the second half's events start
+        size_t second_half[3];         // per axis, where the second half's events start
         for (int k = 0; k < 3; ++k) {  // no fill: Event's default constructor writes nothing
             second_half[k] = 2 * half - flat[0][k];
             w->events[k].resize(second_half[k] + 2 * (n - half) - flat[1][k]);
@@ -628,7 +635,7 @@ private:
     AxisCost axis_cost(const AABB& voxel, int k, float inv_area) const {
         const Vec3 ext = voxel.hi - voxel.lo;
         const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
-        return {voxel.lo[k], voxel.hi[k], 2.0f * a * b * inv_area, 2.0f * (a + b) * inv_area,
+        return {voxel.lo[k],       voxel.hi[k],          2.0f * a * b * inv_area, 2.0f * (a + b) * inv_area,
                 c_.traversal_cost, c_.intersection_cost, 1.0f - c_.empty_bonus};
     }
 
@@ -686,7 +693,8 @@ private:
     }
 #endif
     template <bool kFlat>
-    __attribute__((always_inline)) static inline Plane price_body(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
+    __attribute__((always_inline)) static inline Plane price_body(const Sweep& s, uint32_t n, int k,
+                                                                  const AxisCost& cost) {
         // Loads kLanes records from entry i (an out parameter: a vector return value would
         // change the ABI between the two copies).
         const auto load = [](IV& v, const std::vector<uint32_t>& a, size_t i) {
@@ -854,8 +862,8 @@ private:
             }
             const uint32_t t = w.tris[s];
             uint32_t part[2];
-            const auto boxes = polygons ? split_part(t, w.polygon(s), w.voxel, p, *polygons, part)
-                                        : split_straddler(t, w.voxel, p);
+            const auto boxes =
+                polygons ? split_part(t, w.polygon(s), w.voxel, p, *polygons, part) : split_straddler(t, w.voxel, p);
             for (int i = 0; i < 2; ++i) {
                 const AABB& box = i == 0 ? boxes.first : boxes.second;
                 if (box.is_empty()) continue;
@@ -988,7 +996,8 @@ private:
     /// get a version with one, nodes of up to 2 and 4 kLanes ones with two and four, so that
     /// loops unroll and vectors stay in registers.
     template <bool kFlat>
-    __attribute__((always_inline)) static inline Plane small_axis_sized(const SmallWork& w, int k, const AxisCost& cost) {
+    __attribute__((always_inline)) static inline Plane small_axis_sized(const SmallWork& w, int k,
+                                                                        const AxisCost& cost) {
         constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
         if (w.n <= kLanes) return small_axis_body<kFlat, 1>(w, k, cost);
         if (w.n <= 2 * kLanes) return small_axis_body<kFlat, 2>(w, k, cost);
@@ -996,7 +1005,8 @@ private:
         return small_axis_body<kFlat, kVecs>(w, k, cost);
     }
     template <bool kFlat, uint32_t kMax>
-    __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k, const AxisCost& cost) {
+    __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k,
+                                                                       const AxisCost& cost) {
         const uint32_t n = w.n, vecs = kMax == 1 ? 1 : (n + kLanes - 1) / kLanes;
         const FV inf = FV{} + INFINITY;
         // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
@@ -1222,9 +1232,12 @@ std::string validate_kd(const KdTree& tree, size_t triangles) {
     std::string err;
     walk_cells(tree, [&](uint32_t i, const KdNode& n, const AABB& cell, uint32_t) {
         const std::string where = "kd node " + std::to_string(i) + ": ";
-        if (seen[i]++) err = where + "reached twice";
-        else if (n.is_leaf() && size_t(n.first()) + n.count() > tree.prim_indices.size()) err = where + "leaf range out of range";
-        else if (!n.is_leaf() && size_t(n.child()) + 1 >= tree.nodes.size()) err = where + "child out of range";
+        if (seen[i]++)
+            err = where + "reached twice";
+        else if (n.is_leaf() && size_t(n.first()) + n.count() > tree.prim_indices.size())
+            err = where + "leaf range out of range";
+        else if (!n.is_leaf() && size_t(n.child()) + 1 >= tree.nodes.size())
+            err = where + "child out of range";
         else if (!n.is_leaf() && !(n.split() >= cell.lo[int(n.axis())] && n.split() <= cell.hi[int(n.axis())]))
             err = where + "split outside its cell";
         return err.empty();  // stop descending once something is wrong

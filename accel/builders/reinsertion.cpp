@@ -219,8 +219,10 @@ ReinsertionOptimizer::Stats ReinsertionOptimizer::optimize(BuildTree& tree) cons
         t.index(pre, depth, size);
         std::vector<uint32_t> roots, top;
         for (uint32_t n : pre) {
-            if (size[n] > cut) top.push_back(n);
-            else if (n == t.root() || size[t.parent(n)] > cut) roots.push_back(n);
+            if (size[n] > cut)
+                top.push_back(n);
+            else if (n == t.root() || size[t.parent(n)] > cut)
+                roots.push_back(n);
         }
         std::vector<uint32_t> first(t.size());  // preorder position
         for (size_t i = 0; i < pre.size(); ++i) first[pre[i]] = uint32_t(i);

@@ -13,12 +13,12 @@
 #include <algorithm>
 #include <memory>
 
+#include "accel/builders/reinsertion.h"
+#include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/prim_ref.h"
 #include "accel/core/sah.h"
 #include "accel/core/spatial_split.h"
-#include "accel/builders/reinsertion.h"
-#include "accel/builders/top_down.h"
 
 namespace bvhlab::accel {
 namespace {
@@ -77,8 +77,8 @@ public:
         const bool spatial = spa.weight < (1.0f - c_.spatial_margin) * obj.weight;
         const float best = spatial ? spa.weight : obj.weight;
         const float pa = bounds.half_area();
-        const float cost = std::isfinite(best) ? c_.traversal_cost + c_.intersection_cost * (pa > 0 ? best / pa : 0.0f)
-                                               : INFINITY;
+        const float cost =
+            std::isfinite(best) ? c_.traversal_cost + c_.intersection_cost * (pa > 0 ? best / pa : 0.0f) : INFINITY;
         const SplitDecision d = decide_split(c_, n, depth, cost);
         if (d == SplitDecision::kLeaf) {
             node->prims.reserve(n);
@@ -90,13 +90,13 @@ public:
             partition_spatial(refs, spa, left, right, budget);
         } else if (d == SplitDecision::kSplit) {
             const BinMapping map(cb, c_.object_bins);
-            for (PrimRef& r : refs)
-                (map.bin(r.centroid()[obj.axis], obj.axis) <= obj.bin ? left : right).push_back(r);
+            for (PrimRef& r : refs) (map.bin(r.centroid()[obj.axis], obj.axis) <= obj.bin ? left : right).push_back(r);
         }
         if (left.empty() || right.empty()) median(refs, cb, left, right);
         refs = {};  // release before recursing
         const AABB lb = bounds_of(left), rb = bounds_of(right);
-        const double wl = double(lb.half_area()) * double(left.size()), wr = double(rb.half_area()) * double(right.size());
+        const double wl = double(lb.half_area()) * double(left.size()),
+                     wr = double(rb.half_area()) * double(right.size());
         const auto budget_left = int64_t(double(budget) * (wl + wr > 0 ? wl / (wl + wr) : 0.5));
         int64_t bl = budget_left, br = budget - budget_left;
         auto l = [&] { node->child[0] = build(std::move(left), lb, depth + 1, bl); };
@@ -270,8 +270,8 @@ BuildTree flatten(const TNode& root) {
 
 BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a BVH over zero triangles");
-    BVHLAB_CHECK(config_.object_bins >= 2 && config_.object_bins <= kMaxBins &&
-                     config_.spatial_bins >= 2 && config_.spatial_bins <= kMaxBins,
+    BVHLAB_CHECK(config_.object_bins >= 2 && config_.object_bins <= kMaxBins && config_.spatial_bins >= 2 &&
+                     config_.spatial_bins <= kMaxBins,
                  "SBVH bin counts must be in [2, 256]");
     BVHLAB_CHECK(config_.reference_budget >= 1.0f, "the SBVH reference budget must be at least 1");
     BVHLAB_CHECK(config_.alpha >= 0.0f, "SBVH alpha must be non-negative");

@@ -12,8 +12,8 @@ namespace bvhlab::accel {
 class SbvhBuilder {
 public:
     struct Config : BuildConfig {
-        int object_bins = 32;          ///< bins per axis for object splits
-        int spatial_bins = 32;         ///< bins per axis for spatial splits (<= 256)
+        int object_bins = 32;   ///< bins per axis for object splits
+        int spatial_bins = 32;  ///< bins per axis for spatial splits (<= 256)
         /// Spatial splits are tried only where the best object split's children overlap by
         /// more than alpha times the root's surface area (Stich et al.'s alpha).
         float alpha = 1e-5f;

@@ -20,8 +20,7 @@ namespace {
 class Recursion {
 public:
     Recursion(const SweepSahBuilder::Config& c, const std::vector<PrimRef>& refs, SparseTree& tree)
-        : c_(c), refs_(refs), tree_(tree), goes_left_(refs.size()), area_(refs.size()),
-          scratch_(refs.size()) {
+        : c_(c), refs_(refs), tree_(tree), goes_left_(refs.size()), area_(refs.size()), scratch_(refs.size()) {
         for (int a = 0; a < 3; ++a) {
             order_[a].resize(refs.size());
             for (uint32_t i = 0; i < refs.size(); ++i) order_[a][i] = i;
@@ -57,8 +56,7 @@ public:
                     acc.extend(refs_[ord[i]].bounds);
                     // Splitting between equal centroids cannot be reproduced by a plane; skip.
                     if (refs_[ord[i]].centroid()[a] == refs_[ord[i + 1]].centroid()[a]) continue;
-                    float cost = sah_split_cost(c_, parent_area, acc.half_area(), i + 1 - b,
-                                                area_[i + 1], e - i - 1);
+                    float cost = sah_split_cost(c_, parent_area, acc.half_area(), i + 1 - b, area_[i + 1], e - i - 1);
                     if (cost < best_cost) {
                         best_cost = cost;
                         best_axis = a;
@@ -104,7 +102,10 @@ private:
             uint32_t l = b, r = m;
             for (uint32_t i = b; i < e; ++i) {
                 uint32_t id = ord[i];
-                if (goes_left_[id]) ord[l++] = id; else scratch_[r++] = id;
+                if (goes_left_[id])
+                    ord[l++] = id;
+                else
+                    scratch_[r++] = id;
             }
             for (uint32_t i = m; i < e; ++i) ord[i] = scratch_[i];
         }

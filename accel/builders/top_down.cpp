@@ -36,8 +36,7 @@ BuildTree SparseTree::compact(std::vector<uint32_t> prim_ids) const {
     return tree;
 }
 
-SplitDecision decide_split(const BuildConfig& c, uint32_t count, uint32_t depth,
-                           float best_split_cost) {
+SplitDecision decide_split(const BuildConfig& c, uint32_t count, uint32_t depth, float best_split_cost) {
     BVHLAB_CHECK(c.max_leaf_size >= 1 && c.min_leaf_size <= c.max_leaf_size,
                  "leaf size limits must satisfy 1 <= max_leaf_size and min_leaf_size <= max_leaf_size");
     if (count <= c.min_leaf_size) return SplitDecision::kLeaf;

@@ -18,8 +18,14 @@ struct AABB {
     BVHLAB_HD static AABB of_point(Vec3 p) { return {p, p}; }
 
     BVHLAB_HD bool is_empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
-    BVHLAB_HD void extend(Vec3 p) { lo = vmin(lo, p); hi = vmax(hi, p); }
-    BVHLAB_HD void extend(const AABB& b) { lo = vmin(lo, b.lo); hi = vmax(hi, b.hi); }
+    BVHLAB_HD void extend(Vec3 p) {
+        lo = vmin(lo, p);
+        hi = vmax(hi, p);
+    }
+    BVHLAB_HD void extend(const AABB& b) {
+        lo = vmin(lo, b.lo);
+        hi = vmax(hi, b.hi);
+    }
     BVHLAB_HD Vec3 extent() const { return hi - lo; }
     BVHLAB_HD Vec3 center() const { return (lo + hi) * 0.5f; }
 
@@ -42,12 +48,10 @@ struct AABB {
     }
     /// True when `b` lies inside this box (inclusive).
     BVHLAB_HD bool contains(const AABB& b) const {
-        return b.lo.x >= lo.x && b.lo.y >= lo.y && b.lo.z >= lo.z && b.hi.x <= hi.x &&
-               b.hi.y <= hi.y && b.hi.z <= hi.z;
+        return b.lo.x >= lo.x && b.lo.y >= lo.y && b.lo.z >= lo.z && b.hi.x <= hi.x && b.hi.y <= hi.y && b.hi.z <= hi.z;
     }
     BVHLAB_HD bool overlaps(const AABB& b) const {
-        return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y &&
-               lo.z <= b.hi.z && b.lo.z <= hi.z;
+        return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z && b.lo.z <= hi.z;
     }
 };
 static_assert(sizeof(AABB) == 24, "AABB is six floats");

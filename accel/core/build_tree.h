@@ -29,9 +29,7 @@ struct BuildTree {
     std::vector<uint32_t> prim_indices;
 
     bool empty() const { return nodes.empty(); }
-    size_t bytes() const {
-        return nodes.size() * sizeof(BuildNode) + prim_indices.size() * sizeof(uint32_t);
-    }
+    size_t bytes() const { return nodes.size() * sizeof(BuildNode) + prim_indices.size() * sizeof(uint32_t); }
 };
 
 /// The deepest tree any builder makes (interior nodes on a root-to-leaf path), BVH or kd-tree.
@@ -42,10 +40,10 @@ constexpr uint32_t kMaxTreeDepth = 64;
 
 /// Settings every top-down builder shares. Builders nest their own Config deriving from it.
 struct BuildConfig {
-    float traversal_cost = 1.0f;     ///< Ct: cost of visiting an interior node
-    float intersection_cost = 1.0f;  ///< Ci: cost of one triangle test
-    uint32_t min_leaf_size = 1;      ///< nodes this small always become leaves
-    uint32_t max_leaf_size = 8;      ///< nodes larger than this are always split
+    float traversal_cost = 1.0f;         ///< Ct: cost of visiting an interior node
+    float intersection_cost = 1.0f;      ///< Ci: cost of one triangle test
+    uint32_t min_leaf_size = 1;          ///< nodes this small always become leaves
+    uint32_t max_leaf_size = 8;          ///< nodes larger than this are always split
     uint32_t max_depth = kMaxTreeDepth;  ///< the traversal stacks are sized for this depth
 };
 

@@ -20,7 +20,7 @@ public:
 }  // namespace bvhlab
 
 /// Always-on invariant check; throws bvhlab::Error with file:line on failure.
-#define BVHLAB_CHECK(expr, msg)                                          \
-    do {                                                                 \
+#define BVHLAB_CHECK(expr, msg)                                              \
+    do {                                                                     \
         if (!(expr)) ::bvhlab::check_failed(__FILE__, __LINE__, #expr, msg); \
     } while (0)

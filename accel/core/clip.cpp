@@ -98,8 +98,8 @@ namespace {
 /// edge that crosses the plane adds its crossing, exactly on the plane, to both. With kParts,
 /// the two parts' vertices are written too, in order.
 template <bool kParts>
-std::pair<AABB, AABB> split_pass(const P3* poly, int n, const AABB& box, int axis, float pos, P3* below,
-                                 int* n_below, P3* above, int* n_above) {
+std::pair<AABB, AABB> split_pass(const P3* poly, int n, const AABB& box, int axis, float pos, P3* below, int* n_below,
+                                 P3* above, int* n_above) {
     AABB side[2] = {AABB::empty(), AABB::empty()};
     int m[2] = {0, 0};
     for (int i = 0; i < n; ++i) {

@@ -11,7 +11,7 @@ namespace bvhlab::accel {
 
 /// Result of clipping one triangle to a box: the clipped polygon's area and bounds.
 struct ClipResult {
-    double area = 0.0;        ///< area of the part of the triangle inside the box
+    double area = 0.0;            ///< area of the part of the triangle inside the box
     AABB bounds = AABB::empty();  ///< bounds of that part; empty when nothing is inside
 };
 

@@ -43,8 +43,7 @@ TriangleCheck check_triangle(Vec3 a, Vec3 b, Vec3 c) {
     if (!finite(a) || !finite(b) || !finite(c)) return TriangleCheck::kNonFinite;
     double e1[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
     double e2[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                   e1[0] * e2[1] - e1[1] * e2[0]};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
     if (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0) return TriangleCheck::kZeroArea;
     return TriangleCheck::kOk;
 }

@@ -29,8 +29,8 @@ struct DropCounts {
 /// [0, triangle_count()). Every triangle kept has finite vertices and a non-zero area.
 struct TriangleMesh {
     std::vector<Vec3> vertices;
-    std::vector<uint32_t> indices;       ///< 3 per triangle
-    std::vector<int32_t> material_ids;   ///< one per triangle, -1 = none
+    std::vector<uint32_t> indices;      ///< 3 per triangle
+    std::vector<int32_t> material_ids;  ///< one per triangle, -1 = none
     std::vector<Material> materials;
     DropCounts dropped;
 

@@ -13,8 +13,10 @@ namespace bvhlab::accel {
 
 /// The part of `box` on one side of the plane x[axis] = pos.
 inline AABB clamp_box(AABB box, int axis, float pos, bool keep_left) {
-    if (keep_left) box.hi[axis] = min_f(box.hi[axis], pos);
-    else box.lo[axis] = max_f(box.lo[axis], pos);
+    if (keep_left)
+        box.hi[axis] = min_f(box.hi[axis], pos);
+    else
+        box.lo[axis] = max_f(box.lo[axis], pos);
     return box;
 }
 
@@ -40,8 +42,7 @@ inline AABB plane_crossings(const Vec3 (&v)[3], int axis, float pos) {
 /// vertices and its edges' crossings of the plane go to the side(s) they lie on, and each side
 /// is intersected with the reference's current bounds. O(1) per plane, unlike a full polygon
 /// clip against a box; exact up to the reference's earlier splits. Either side may be empty.
-inline void split_reference(const TriangleMesh& mesh, const PrimRef& r, int axis, float pos, AABB& left,
-                            AABB& right) {
+inline void split_reference(const TriangleMesh& mesh, const PrimRef& r, int axis, float pos, AABB& left, AABB& right) {
     const Vec3 v[3] = {mesh.vertex(r.prim_id, 0), mesh.vertex(r.prim_id, 1), mesh.vertex(r.prim_id, 2)};
     left = right = plane_crossings<double>(v, axis, pos);
     for (const Vec3& p : v) {

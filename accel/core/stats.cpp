@@ -82,8 +82,7 @@ double compute_epo(const BuildTree& tree, const TriangleMesh& mesh, const BuildC
 
 }  // namespace
 
-TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs,
-                        bool with_epo) {
+TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs, bool with_epo) {
     BVHLAB_CHECK(!tree.empty(), "statistics of an empty tree");
     TreeStats s;
     s.nodes = tree.nodes.size();

@@ -13,11 +13,11 @@ namespace bvhlab::accel {
 struct TreeStats {
     uint64_t nodes = 0;
     uint64_t leaves = 0;
-    uint64_t references = 0;   ///< sum of leaf sizes (= triangles without spatial splits)
-    uint32_t depth = 0;        ///< deepest leaf; the root is at depth 0
+    uint64_t references = 0;  ///< sum of leaf sizes (= triangles without spatial splits)
+    uint32_t depth = 0;       ///< deepest leaf; the root is at depth 0
     double mean_leaf_size = 0;
     uint32_t max_leaf_size = 0;
-    uint64_t bytes = 0;        ///< BuildTree nodes plus primitive indices
+    uint64_t bytes = 0;  ///< BuildTree nodes plus primitive indices
     /// SAH cost with the config's Ct (per interior node) and Ci (per triangle in a leaf),
     /// normalised by the root's surface area.
     double sah = 0;

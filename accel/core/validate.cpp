@@ -38,8 +38,7 @@ std::string validate(const BuildTree& tree, const TriangleMesh& mesh, const Buil
             }
             continue;
         }
-        if (size_t(n.first_index) + 1 >= nn || n.first_index == 0)
-            return where + "child index out of range";
+        if (size_t(n.first_index) + 1 >= nn || n.first_index == 0) return where + "child index out of range";
         for (uint32_t c = n.first_index; c <= n.first_index + 1; ++c) {
             if (seen[c]++) return where + "child " + std::to_string(c) + " reached twice";
             if (!n.bounds.contains(tree.nodes[c].bounds))

@@ -5,6 +5,7 @@
 
 #include <tiny_obj_loader.h>
 
+#include <sys/stat.h>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -13,7 +14,6 @@
 #include <sstream>
 #include <string_view>
 #include <vector>
-#include <sys/stat.h>
 
 #include "accel/core/check.h"
 #include "accel/io/atomic_file.h"
@@ -22,14 +22,13 @@ namespace bvhlab::accel {
 namespace {
 
 std::string read_file(const std::string& path) {
-    struct stat st{};
+    struct stat st {};
     if (stat(path.c_str(), &st) != 0) throw Error("cannot open '" + path + "': " + std::strerror(errno));
     if (S_ISDIR(st.st_mode)) throw Error("cannot read '" + path + "': it is a directory");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open '" + path + "': " + std::strerror(errno));
     std::string data(size_t(st.st_size), '\0');
-    if (!in.read(data.data(), std::streamsize(data.size())))
-        throw Error("cannot read '" + path + "': read failed");
+    if (!in.read(data.data(), std::streamsize(data.size()))) throw Error("cannot read '" + path + "': read failed");
     return data;
 }
 
@@ -110,11 +109,13 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, L
         const std::string key(toks[0][0], toks[0][1]);
         if (key == "v" || key == "vn" || key == "vt") {
             const int need = key == "vt" ? 1 : 3;
-            if (nt - 1 < need) fail(line_no, "malformed '" + key + "' line: needs " + std::to_string(need) + " numbers");
+            if (nt - 1 < need)
+                fail(line_no, "malformed '" + key + "' line: needs " + std::to_string(need) + " numbers");
             bool finite = true;
             for (int i = 1; i < nt; ++i) {
                 if (!is_number(toks[i][0], toks[i][1]))
-                    fail(line_no, "malformed '" + key + "' line: '" + std::string(toks[i][0], toks[i][1]) + "' is not a number");
+                    fail(line_no,
+                         "malformed '" + key + "' line: '" + std::string(toks[i][0], toks[i][1]) + "' is not a number");
                 if (i <= 3 && !std::isfinite(std::strtod(std::string(toks[i][0], toks[i][1]).c_str(), nullptr)))
                     finite = false;
             }
@@ -141,12 +142,13 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, L
                     max_line = line_no;
                 }
             }
-            if (refs > kEarClipMaxRefs) huge_faces.push_back({size_t(toks[1][0] - text.data()), size_t(e - text.data())});
+            if (refs > kEarClipMaxRefs)
+                huge_faces.push_back({size_t(toks[1][0] - text.data()), size_t(e - text.data())});
         }
     }
     if (size_t(max_index) > nv)
-        fail(max_line, "face index " + std::to_string(max_index) + " out of range (the file has " +
-                           std::to_string(nv) + " vertices)");
+        fail(max_line, "face index " + std::to_string(max_index) + " out of range (the file has " + std::to_string(nv) +
+                           " vertices)");
     return non_finite;
 }
 
@@ -195,7 +197,8 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
                                      /*triangulate=*/true, /*default_vcols_fallback=*/false);
     if (!ok || !err.empty()) {
         while (!err.empty() && (err.back() == '\n' || err.back() == '.')) err.pop_back();
-        for (char& ch : err) if (ch == '\n') ch = ' ';
+        for (char& ch : err)
+            if (ch == '\n') ch = ' ';
         throw Error("cannot parse '" + path + "': " + (err.empty() ? "tinyobjloader failed" : err));
     }
     if (warnings && !warn.empty()) {
@@ -242,9 +245,9 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     }
     if (mesh.triangle_count() == 0) {
         throw Error("'" + path + "' has no usable triangles" +
-                    (mesh.dropped.total() ? " (all " + std::to_string(mesh.dropped.total()) +
-                                                " were dropped as non-finite or zero-area)"
-                                          : ""));
+                    (mesh.dropped.total()
+                         ? " (all " + std::to_string(mesh.dropped.total()) + " were dropped as non-finite or zero-area)"
+                         : ""));
     }
     return mesh;
 }

@@ -29,7 +29,8 @@ TriangleMesh soup(uint64_t n, uint64_t seed) {
                 Vec3 v[3];
                 for (int k = 0; k < 3; ++k)
                     v[k] = c + Vec3{unit(s, i, 3 + 3 * k) - 0.5f, unit(s, i, 4 + 3 * k) - 0.5f,
-                                    unit(s, i, 5 + 3 * k) - 0.5f} * size;
+                                    unit(s, i, 5 + 3 * k) - 0.5f} *
+                                   size;
                 if (check_triangle(v[0], v[1], v[2]) != TriangleCheck::kOk) continue;
                 for (int k = 0; k < 3; ++k) {
                     m.vertices[3 * i + k] = v[k];

@@ -23,17 +23,17 @@ namespace {
 
 /// Fixed header, 88 bytes.
 struct Header {
-    char magic[8];           // "BVHLTREE"
-    uint32_t version;        // kTreeFileVersion
-    uint32_t builder;        // BuilderKind, or kKdTreeCode
-    uint64_t triangles;      // triangle count of the scene
-    uint64_t scene_hash;     // scene_hash() as a number
+    char magic[8];        // "BVHLTREE"
+    uint32_t version;     // kTreeFileVersion
+    uint32_t builder;     // BuilderKind, or kKdTreeCode
+    uint64_t triangles;   // triangle count of the scene
+    uint64_t scene_hash;  // scene_hash() as a number
     uint32_t num_bins, min_leaf, max_leaf, max_depth;
     float traversal_cost, intersection_cost, sbvh_alpha, sbvh_budget;
-    uint64_t node_count;     // BuildNode records (32 bytes each) that follow
-    uint64_t index_count;    // uint32 primitive indices that follow the nodes
-    uint32_t spatial_bins;   // SBVH spatial bins
-    uint32_t reinsertion;    // BVH files: reinsertion passes run after the build (was reserved, 0)
+    uint64_t node_count;    // BuildNode records (32 bytes each) that follow
+    uint64_t index_count;   // uint32 primitive indices that follow the nodes
+    uint32_t spatial_bins;  // SBVH spatial bins
+    uint32_t reinsertion;   // BVH files: reinsertion passes run after the build (was reserved, 0)
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
@@ -41,7 +41,8 @@ constexpr uint32_t kKdTreeCode = 3;  // builder field of kd-tree files
 
 /// Header, node records, indices, checksum; shared by BVH and kd-tree files.
 template <typename Node>
-void write_file(const std::string& path, Header h, const std::vector<Node>& nodes, const std::vector<uint32_t>& indices) {
+void write_file(const std::string& path, Header h, const std::vector<Node>& nodes,
+                const std::vector<uint32_t>& indices) {
     std::memcpy(h.magic, "BVHLTREE", 8);
     h.version = kTreeFileVersion;
     h.node_count = nodes.size();

@@ -87,7 +87,8 @@ Bvh2 convert_to_bvh2(const BuildTree& tree, const TriangleMesh& mesh) {
         set_child_box(n, slot, c.bounds);
         if (c.is_leaf()) {
             if (c.prim_count > Bvh2Node::kMaxLeafCount)
-                throw Error("a leaf of " + std::to_string(c.prim_count) + " triangles does not fit the BVH2 layout (at most " +
+                throw Error("a leaf of " + std::to_string(c.prim_count) +
+                            " triangles does not fit the BVH2 layout (at most " +
                             std::to_string(Bvh2Node::kMaxLeafCount) + ")");
             if (c.first_index > Bvh2Node::kMaxLeafFirst)
                 throw Error("the BVH2 layout holds at most 2^25 triangle references; this tree has " +

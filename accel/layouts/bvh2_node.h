@@ -24,7 +24,7 @@ struct alignas(16) Bvh2Node {
     uint32_t reserved[2];                      // 8 bytes: zero; total 64 bytes
 
     static constexpr uint32_t kLeafCountBits = 6;
-    static constexpr uint32_t kMaxLeafCount = 1u << kLeafCountBits;         ///< 64
+    static constexpr uint32_t kMaxLeafCount = 1u << kLeafCountBits;               ///< 64
     static constexpr uint32_t kMaxLeafFirst = (1u << (31 - kLeafCountBits)) - 1;  ///< 2^25 - 1
 
     /// A leaf reference; count in 1..kMaxLeafCount, first <= kMaxLeafFirst.
@@ -47,8 +47,7 @@ struct Bvh2 {
     uint32_t depth = 0;
 
     size_t bytes() const {
-        return nodes.size() * sizeof(Bvh2Node) + tris.size() * sizeof(WoopTriangle) +
-               tri_ids.size() * sizeof(uint32_t);
+        return nodes.size() * sizeof(Bvh2Node) + tris.size() * sizeof(WoopTriangle) + tri_ids.size() * sizeof(uint32_t);
     }
 };
 

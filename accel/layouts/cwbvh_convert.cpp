@@ -142,14 +142,18 @@ Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh, CwTris tri_f
         }
     }
     out.tri_format = tri_format;
-    if (tri_format == CwTris::kWoop) out.tris.resize(out.tri_ids.size());
-    else out.vtris.resize(out.tri_ids.size());
+    if (tri_format == CwTris::kWoop)
+        out.tris.resize(out.tri_ids.size());
+    else
+        out.vtris.resize(out.tri_ids.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tri_ids.size(), 4096), [&](const auto& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             const uint32_t t = out.tri_ids[i];
             const Vec3 a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
-            if (tri_format == CwTris::kWoop) out.tris[i] = make_woop_triangle(a, b, c);
-            else out.vtris[i] = make_vertex_triangle(a, b, c);
+            if (tri_format == CwTris::kWoop)
+                out.tris[i] = make_woop_triangle(a, b, c);
+            else
+                out.vtris[i] = make_vertex_triangle(a, b, c);
         }
     });
     return out;

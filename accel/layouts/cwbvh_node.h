@@ -31,14 +31,14 @@ namespace bvhlab::accel {
 /// ray whose direction has sign bits m (bit k set for a non-negative component) meets the
 /// children roughly in decreasing order of s ^ m.
 struct alignas(16) CwbvhNode {
-    float p[3];             // 12 bytes: origin (the node box's lower corner)
-    uint8_t e[3];           // 3 bytes: per-axis scale exponents, biased by 127
-    uint8_t imask;          // 1 byte: bit s set when slot s holds an interior node
-    uint32_t child_base;    // 4 bytes: index of the first interior child
-    uint32_t tri_base;      // 4 bytes: index of the first triangle of the leaves
-    uint8_t meta[8];        // 8 bytes
-    uint8_t qlo[3][8];      // 24 bytes: quantised lower planes, axis-major
-    uint8_t qhi[3][8];      // 24 bytes: quantised upper planes; total 80 bytes
+    float p[3];           // 12 bytes: origin (the node box's lower corner)
+    uint8_t e[3];         // 3 bytes: per-axis scale exponents, biased by 127
+    uint8_t imask;        // 1 byte: bit s set when slot s holds an interior node
+    uint32_t child_base;  // 4 bytes: index of the first interior child
+    uint32_t tri_base;    // 4 bytes: index of the first triangle of the leaves
+    uint8_t meta[8];      // 8 bytes
+    uint8_t qlo[3][8];    // 24 bytes: quantised lower planes, axis-major
+    uint8_t qhi[3][8];    // 24 bytes: quantised upper planes; total 80 bytes
 
     static constexpr uint8_t kInteriorMeta = 1u << 5;
     static constexpr uint32_t kInteriorBit = 24;

@@ -15,8 +15,8 @@ namespace bvhlab::accel {
 struct VertexTriangle {
     float f[9];  // v0.xyz, e1.xyz, e2.xyz
 
-    BVHLAB_HD BVHLAB_FORCEINLINE bool intersect(Vec3 o, Vec3 d, float tmin, float tmax, float& t_out,
-                                                float& u_out, float& v_out) const {
+    BVHLAB_HD BVHLAB_FORCEINLINE bool intersect(Vec3 o, Vec3 d, float tmin, float tmax, float& t_out, float& u_out,
+                                                float& v_out) const {
         return intersect_values(f, o, d, tmin, tmax, t_out, u_out, v_out);
     }
 

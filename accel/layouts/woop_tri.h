@@ -21,16 +21,16 @@ struct alignas(16) WoopTriangle {
 
     /// Intersects the ray o + t d with t in (tmin, tmax). On a hit writes t, u, v and
     /// returns true. Parallel rays give a NaN or infinite t, which the comparisons reject.
-    BVHLAB_HD BVHLAB_FORCEINLINE bool intersect(Vec3 o, Vec3 d, float tmin, float tmax, float& t_out,
-                                                float& u_out, float& v_out) const {
+    BVHLAB_HD BVHLAB_FORCEINLINE bool intersect(Vec3 o, Vec3 d, float tmin, float tmax, float& t_out, float& u_out,
+                                                float& v_out) const {
         return intersect_rows(row[0], row[1], row[2], o, d, tmin, tmax, t_out, u_out, v_out);
     }
 
     /// The same test on three rows held elsewhere: the GPU kernels load them as three
     /// 16-byte read-only loads and call this, so every tracer shares one triangle test.
-    BVHLAB_HD BVHLAB_FORCEINLINE static bool intersect_rows(const float* r0, const float* r1, const float* r2,
-                                                            Vec3 o, Vec3 d, float tmin, float tmax, float& t_out,
-                                                            float& u_out, float& v_out) {
+    BVHLAB_HD BVHLAB_FORCEINLINE static bool intersect_rows(const float* r0, const float* r1, const float* r2, Vec3 o,
+                                                            Vec3 d, float tmin, float tmax, float& t_out, float& u_out,
+                                                            float& v_out) {
         const float oz = r0[3] - (o.x * r0[0] + o.y * r0[1] + o.z * r0[2]);
         const float dz = d.x * r0[0] + d.y * r0[1] + d.z * r0[2];
         const float t = oz / dz;

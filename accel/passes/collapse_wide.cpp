@@ -212,8 +212,8 @@ private:
     void emit(uint32_t n, uint32_t wi, uint32_t depth, WideTree& w) {
         w.depth = std::max(w.depth, depth);
         const auto kids = children_of(n);
-        BVHLAB_CHECK(kids.size() >= 2 && kids.size() <= kWideArity, "collapse gave a node of " +
-                                                                         std::to_string(kids.size()) + " children");
+        BVHLAB_CHECK(kids.size() >= 2 && kids.size() <= kWideArity,
+                     "collapse gave a node of " + std::to_string(kids.size()) + " children");
         w.nodes[wi].bounds = t_.nodes[n].bounds;
         w.nodes[wi].child_count = uint32_t(kids.size());
         for (size_t i = 0; i < kids.size(); ++i) {

@@ -55,8 +55,7 @@ struct WideCost {
 
 /// Collapses a binary tree over `mesh` (leaves of any size: larger than 3 are first split at
 /// their centroid median). The result is at most as deep as the binary tree plus the splits.
-WideTree collapse_to_wide(const BuildTree& tree, const TriangleMesh& mesh, CollapseMethod method,
-                          WideCost cost = {});
+WideTree collapse_to_wide(const BuildTree& tree, const TriangleMesh& mesh, CollapseMethod method, WideCost cost = {});
 
 struct WideStats {
     size_t nodes = 0, leaves = 0, references = 0;

@@ -36,8 +36,13 @@ struct BenchScene {
 inline std::vector<BenchScene> bench_scenes(bool with_procedural = true) {
     std::vector<BenchScene> out;
     if (with_procedural) {
-        out.push_back({"soup-1M", [] { return accel::make_procedural(accel::ProceduralKind::kSoup, 1000000, 1); }, {}, false, 0});
-        out.push_back({"structured-1M", [] { return accel::make_procedural(accel::ProceduralKind::kStructured, 1000000, 1); }, {}, false, 0});
+        out.push_back(
+            {"soup-1M", [] { return accel::make_procedural(accel::ProceduralKind::kSoup, 1000000, 1); }, {}, false, 0});
+        out.push_back({"structured-1M",
+                       [] { return accel::make_procedural(accel::ProceduralKind::kStructured, 1000000, 1); },
+                       {},
+                       false,
+                       0});
     }
     const char* dir = std::getenv("BVHLAB_SCENES");
     if (!dir || !*dir) return out;

@@ -76,22 +76,36 @@ int main(int argc, char** argv) {
         // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
         auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
         auto load = scene.load;
-        const std::pair<accel::BuilderKind, int> variants[] = {
-            {accel::BuilderKind::kBinned, -1}, {accel::BuilderKind::kSweep, -1}, {accel::BuilderKind::kSweep, 3},
-            {accel::BuilderKind::kSbvh, -1},   {accel::BuilderKind::kSbvh, 0}};
+        const std::pair<accel::BuilderKind, int> variants[] = {{accel::BuilderKind::kBinned, -1},
+                                                               {accel::BuilderKind::kSweep, -1},
+                                                               {accel::BuilderKind::kSweep, 3},
+                                                               {accel::BuilderKind::kSbvh, -1},
+                                                               {accel::BuilderKind::kSbvh, 0}};
         for (const auto& [kind, reinsertion] : variants) {
             const std::string suffix = reinsertion < 0 ? "" : "-r" + std::to_string(reinsertion);
             const std::string name = std::string("BM_Build/") + accel::builder_name(kind) + suffix + "/" + scene.name;
-            benchmark::RegisterBenchmark(name.c_str(), [holder, load, kind = kind, reinsertion = reinsertion](benchmark::State& st) {
-                if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
-                bench::bm_build(st, kind, reinsertion, *holder);
-            })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
+            benchmark::RegisterBenchmark(name.c_str(),
+                                         [holder, load, kind = kind, reinsertion = reinsertion](benchmark::State& st) {
+                                             if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+                                             bench::bm_build(st, kind, reinsertion, *holder);
+                                         })
+                ->Unit(benchmark::kMillisecond)
+                ->MinWarmUpTime(0.2)
+                ->UseRealTime()
+                ->Repetitions(3)
+                ->ReportAggregatesOnly(true);
         }
         // The same protocol as the BVH builders (a warm-up, then 3 repetitions), so that the
         // kd build / binned build ratio compares like with like.
-        benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(), [holder, load](benchmark::State& st) {
-            if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
-            bench::bm_build_kd(st, *holder);
-        })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
+        benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(),
+                                     [holder, load](benchmark::State& st) {
+                                         if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+                                         bench::bm_build_kd(st, *holder);
+                                     })
+            ->Unit(benchmark::kMillisecond)
+            ->MinWarmUpTime(0.2)
+            ->UseRealTime()
+            ->Repetitions(3)
+            ->ReportAggregatesOnly(true);
     });
 }

@@ -53,26 +53,33 @@ int main(int argc, char** argv) {
     return bench::bench_main(argc, argv, [](const bench::BenchScene& scene) {
         auto holder = std::make_shared<std::shared_ptr<bench::Prepared>>();
         for (int t = 0; t < 4; ++t) {
-            const std::string name = std::string("BM_Trace/bvh2/cpu-stack/") + scene.name + "/" +
-                                     trav::ray_type_name(trav::RayType(t));
-            benchmark::RegisterBenchmark(name.c_str(), [holder, scene, t](benchmark::State& st) {
-                if (!*holder) *holder = bench::prepare(scene);
-                const bench::Prepared& p = **holder;
-                if (!p.errors[size_t(t)].empty()) {
-                    st.SkipWithError(p.errors[size_t(t)].c_str());
-                    return;
-                }
-                const trav::RaySet& set = p.sets[size_t(t)];
-                std::vector<trav::Hit> hits;
-                for (auto _ : st) {
-                    trav::trace_cpu(p.bvh, set.rays, set.query, hits);
-                    benchmark::DoNotOptimize(hits.data());
-                }
-                st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(set.rays.size()));
-                st.counters["rays"] = double(set.rays.size());
-                st.counters["Mrays_per_s"] = benchmark::Counter(double(set.rays.size()) * 1e-6,
-                                                                benchmark::Counter::kIsIterationInvariantRate);
-            })->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
+            const std::string name =
+                std::string("BM_Trace/bvh2/cpu-stack/") + scene.name + "/" + trav::ray_type_name(trav::RayType(t));
+            benchmark::RegisterBenchmark(name.c_str(),
+                                         [holder, scene, t](benchmark::State& st) {
+                                             if (!*holder) *holder = bench::prepare(scene);
+                                             const bench::Prepared& p = **holder;
+                                             if (!p.errors[size_t(t)].empty()) {
+                                                 st.SkipWithError(p.errors[size_t(t)].c_str());
+                                                 return;
+                                             }
+                                             const trav::RaySet& set = p.sets[size_t(t)];
+                                             std::vector<trav::Hit> hits;
+                                             for (auto _ : st) {
+                                                 trav::trace_cpu(p.bvh, set.rays, set.query, hits);
+                                                 benchmark::DoNotOptimize(hits.data());
+                                             }
+                                             st.SetItemsProcessed(int64_t(st.iterations()) * int64_t(set.rays.size()));
+                                             st.counters["rays"] = double(set.rays.size());
+                                             st.counters["Mrays_per_s"] =
+                                                 benchmark::Counter(double(set.rays.size()) * 1e-6,
+                                                                    benchmark::Counter::kIsIterationInvariantRate);
+                                         })
+                ->Unit(benchmark::kMillisecond)
+                ->MinWarmUpTime(0.2)
+                ->UseRealTime()
+                ->Repetitions(3)
+                ->ReportAggregatesOnly(true);
         }
     });
 }

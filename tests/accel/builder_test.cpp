@@ -64,11 +64,10 @@ TEST_P(BuilderProperty, Deterministic) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Soups, BuilderProperty,
-    ::testing::Combine(::testing::Values(BuilderKind::kBinned, BuilderKind::kSweep),
-                       ::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured),
-                       ::testing::Values(1, 2, 17, 1000, 50000), ::testing::Values(1, 99)));
+INSTANTIATE_TEST_SUITE_P(Soups, BuilderProperty,
+                         ::testing::Combine(::testing::Values(BuilderKind::kBinned, BuilderKind::kSweep),
+                                            ::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured),
+                                            ::testing::Values(1, 2, 17, 1000, 50000), ::testing::Values(1, 99)));
 
 TEST(BinnedSahBuilder, IdenticalTrianglesFallBackToMedianSplits) {
     TriangleMesh m;

@@ -109,8 +109,8 @@ TriangleMesh random_scene(std::mt19937& rng) {
     std::uniform_real_distribution<float> scale_exp(-12.0f, 12.0f), offset(-300.0f, 300.0f);
     const float scale = std::exp2(scale_exp(rng));
     const Vec3 shift = Vec3{offset(rng), offset(rng), offset(rng)} * scale;
-    TriangleMesh m = make_procedural(rng() % 2 ? ProceduralKind::kSoup : ProceduralKind::kStructured,
-                                     200 + rng() % 3000, rng());
+    TriangleMesh m =
+        make_procedural(rng() % 2 ? ProceduralKind::kSoup : ProceduralKind::kStructured, 200 + rng() % 3000, rng());
     for (Vec3& v : m.vertices) v = v * scale + shift;
     TriangleMesh kept;  // drop the triangles that the shift rounded to zero area
     for (size_t t = 0; t < m.triangle_count(); ++t)
@@ -250,8 +250,8 @@ TEST(Cwbvh, DeeperThanTheStackIsRefused) {
     const TriangleMesh mesh = make_procedural(ProceduralKind::kSoup, 100, 1);
     trav::Structure s;
     s.layout = trav::Layout::kCwbvh;
-    s.cwbvh = convert_to_cwbvh(collapse_to_wide(build(mesh, BuilderKind::kBinned, 4), mesh,
-                                                CollapseMethod::kSahOptimal), mesh);
+    s.cwbvh = convert_to_cwbvh(
+        collapse_to_wide(build(mesh, BuilderKind::kBinned, 4), mesh, CollapseMethod::kSahOptimal), mesh);
     EXPECT_NO_THROW(trav::make_cpu_tracer(s));
     s.cwbvh.depth = trav::kCwbvhStackSize + 1;  // a forged depth: refused before any ray
     EXPECT_THROW(trav::make_cpu_tracer(s), Error);

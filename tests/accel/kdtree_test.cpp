@@ -11,8 +11,8 @@
 #include "accel/core/clip.h"
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
-#include "tests/support/test_support.h"
 #include "accel/layouts/kd_convert.h"
+#include "tests/support/test_support.h"
 #include "traversal/cpu/kd_trace.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
@@ -54,13 +54,15 @@ TEST(KdTreeBuilder, EveryOverlappingTriangleIsInTheLeaf) {
     for_each_leaf(t, [&](const KdNode& leaf, const AABB& cell) {
         ++leaves;
         std::vector<uint8_t> in_leaf(m.triangle_count(), 0);
-        for (uint32_t k = leaf.first(); k < leaf.first() + leaf.count(); ++k) in_leaf[t.prim_indices[k]] = referenced[t.prim_indices[k]] = 1;
+        for (uint32_t k = leaf.first(); k < leaf.first() + leaf.count(); ++k)
+            in_leaf[t.prim_indices[k]] = referenced[t.prim_indices[k]] = 1;
         for (uint32_t i = 0; i < m.triangle_count(); ++i) {
             if (!m.triangle_bounds(i).overlaps(cell)) continue;
             const double area = clip_triangle(m.vertex(i, 0), m.vertex(i, 1), m.vertex(i, 2), cell).area;
             if (area > 1e-12) {
                 ++checked;
-                ASSERT_TRUE(in_leaf[i]) << "triangle " << i << " overlaps a leaf cell (area " << area << ") but is not in it";
+                ASSERT_TRUE(in_leaf[i]) << "triangle " << i << " overlaps a leaf cell (area " << area
+                                        << ") but is not in it";
             }
         }
     });
@@ -101,10 +103,9 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
 // event positions), axis-aligned (planar) triangles and random soup; the 6000-triangle soup
 // is above the size from which the root's setup runs as parallel tasks.
 TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
-    const TriangleMesh scenes[] = {make_procedural(ProceduralKind::kStructured, 3000, 3),
-                                   make_procedural(ProceduralKind::kSoup, 2000, 5),
-                                   make_procedural(ProceduralKind::kSoup, 6000, 7),
-                                   load_obj(test::data_dir() + "/cornell_box.obj")};
+    const TriangleMesh scenes[] = {
+        make_procedural(ProceduralKind::kStructured, 3000, 3), make_procedural(ProceduralKind::kSoup, 2000, 5),
+        make_procedural(ProceduralKind::kSoup, 6000, 7), load_obj(test::data_dir() + "/cornell_box.obj")};
     for (const TriangleMesh& m : scenes) {
         KdTreeBuilder::Config c;
         // The plain algorithm: every node is a parallel task (so no counts are carried over

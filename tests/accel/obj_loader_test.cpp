@@ -83,7 +83,8 @@ TEST(ObjLoader, LargePolygonsAreFannedInPlaceAndFullyChecked) {
     const int n = 1000;
     std::string text = std::string(kTri) + "f 1 2 3\n";
     for (int i = 0; i < n; ++i)
-        text += "v " + std::to_string(std::cos(2 * M_PI * i / n)) + " " + std::to_string(std::sin(2 * M_PI * i / n)) + " 5\n";
+        text += "v " + std::to_string(std::cos(2 * M_PI * i / n)) + " " + std::to_string(std::sin(2 * M_PI * i / n)) +
+                " 5\n";
     text += "f";
     for (int i = 0; i < n; ++i) text += " " + std::to_string(4 + i) + (i % 2 ? "//" + std::to_string(1 + i % 3) : "");
     text += "  # a comment\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1 3 2\n";

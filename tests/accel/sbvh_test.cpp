@@ -84,7 +84,7 @@ TEST(SbvhBuilder, SplitsLongThinTriangles) {
     const TreeStats s = compute_stats(sbvh, m, o.config, false);
     const TreeStats w = compute_stats(sweep, m, o.config, false);
     EXPECT_GT(s.references, m.triangle_count() * 3 / 2);  // spatial splits happened
-    EXPECT_LT(s.sah, 0.85 * w.sah);                         // and paid off (measured: 0.79x)
+    EXPECT_LT(s.sah, 0.85 * w.sah);                       // and paid off (measured: 0.79x)
     expect_full_coverage(sbvh, m);
 }
 
@@ -103,7 +103,7 @@ TEST(SbvhBuilder, BindingBudgetIsDeterministic) {
     TriangleMesh m = make_procedural(ProceduralKind::kSoup, 60000, 8);
     SbvhBuilder::Config c;
     c.reference_budget = 1.02f;
-    c.alpha = 0.0f;          // spatial splits wanted everywhere, so the budget binds
+    c.alpha = 0.0f;  // spatial splits wanted everywhere, so the budget binds
     c.spatial_margin = 0.0f;
     c.task_threshold = 256;  // plenty of parallel subtrees
     const auto build_with = [&](size_t threads) {

@@ -97,8 +97,8 @@ TEST(WoopTriangle, BarycentricsFollowEmbreeConvention) {
 TEST(WoopTriangle, RespectsIntervalAndRejectsParallelRays) {
     const accel::WoopTriangle w = accel::make_woop_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
     float t, u, v;
-    EXPECT_FALSE(w.intersect({0.2f, 0.2f, 1.0f}, {0, 0, -1}, 0.0f, 0.5f, t, u, v));  // beyond tmax
-    EXPECT_FALSE(w.intersect({0.2f, 0.2f, 1.0f}, {0, 0, -1}, 1.5f, 9.0f, t, u, v));  // before tmin
+    EXPECT_FALSE(w.intersect({0.2f, 0.2f, 1.0f}, {0, 0, -1}, 0.0f, 0.5f, t, u, v));     // beyond tmax
+    EXPECT_FALSE(w.intersect({0.2f, 0.2f, 1.0f}, {0, 0, -1}, 1.5f, 9.0f, t, u, v));     // before tmin
     EXPECT_FALSE(w.intersect({0.2f, 0.2f, 1.0f}, {1, 0, 0}, 0.0f, INFINITY, t, u, v));  // parallel
     EXPECT_FALSE(w.intersect({0.2f, 0.2f, 0.0f}, {1, 0, 0}, 0.0f, INFINITY, t, u, v));  // in-plane
     EXPECT_TRUE(w.intersect({0.2f, 0.2f, -1.0f}, {0, 0, 1}, 0.0f, INFINITY, t, u, v));  // back face

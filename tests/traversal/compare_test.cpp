@@ -10,15 +10,12 @@
 namespace bvhlab::trav {
 namespace {
 
-CompareReport one(const accel::TriangleMesh& m, const Ray& r, Query q, Hit ours, Hit oracle,
-                  Hit lookup = Hit::miss()) {
+CompareReport one(const accel::TriangleMesh& m, const Ray& r, Query q, Hit ours, Hit oracle, Hit lookup = Hit::miss()) {
     return compare_hits(m, {r}, q, {ours}, {oracle}, [lookup](const Ray&) { return lookup; });
 }
 
 // Two triangles sharing the edge x = 1 (a unit square split in two), in the z = 0 plane.
-accel::TriangleMesh square() {
-    return test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0}, {1, 0, 0, 2, 0, 0, 1, 1, 0}});
-}
+accel::TriangleMesh square() { return test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0}, {1, 0, 0, 2, 0, 0, 1, 1, 0}}); }
 
 }  // namespace
 

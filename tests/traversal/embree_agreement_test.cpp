@@ -25,8 +25,8 @@ namespace {
 using Tracer = std::function<void(const RaySet&, std::vector<Hit>&)>;
 
 /// Traces all four ray types with `trace` and expects zero real mismatches.
-void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w,
-                           uint32_t h, const Tracer& trace) {
+void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+                           const Tracer& trace) {
     EmbreeOracle oracle(mesh);
     ProtocolConfig cfg;
     cfg.camera = cam;
@@ -39,8 +39,8 @@ void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, f
         std::vector<Hit> ours, ref;
         trace(set, ours);
         oracle.trace(set.rays, set.query, ref);
-        CompareReport rep = compare_hits(mesh, set.rays, set.query, ours, ref,
-                                         [&](const Ray& r) { return oracle.intersect(r); });
+        CompareReport rep =
+            compare_hits(mesh, set.rays, set.query, ours, ref, [&](const Ray& r) { return oracle.intersect(r); });
         EXPECT_EQ(rep.mismatches, 0u);
         for (const auto& d : rep.first_mismatches)
             ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
@@ -56,13 +56,14 @@ void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, f
 void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
                       accel::BuilderKind builder) {
     const accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
-    expect_agreement_with(mesh, cam, ao_length, w, h,
-                          [&](const RaySet& set, std::vector<Hit>& hits) { trace_cpu(bvh, set.rays, set.query, hits); });
+    expect_agreement_with(mesh, cam, ao_length, w, h, [&](const RaySet& set, std::vector<Hit>& hits) {
+        trace_cpu(bvh, set.rays, set.query, hits);
+    });
 }
 
 /// The same with the CWBVH collapsed from a BVH of `builder` (the CPU reference of 'cwbvh').
-void expect_cwbvh_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w,
-                            uint32_t h, accel::BuilderKind builder, accel::CollapseMethod method,
+void expect_cwbvh_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+                            accel::BuilderKind builder, accel::CollapseMethod method,
                             accel::CwTris tris = accel::CwTris::kWoop) {
     const accel::Cwbvh cw = accel::convert_to_cwbvh(
         accel::collapse_to_wide(accel::run_builder(builder, mesh, {}).tree, mesh, method), mesh, tris);
@@ -144,10 +145,9 @@ TEST(EmbreeAgreement, BenchmarkScenes) {
         const accel::KdLayout kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);
         for (int stack : {64, 2}) {
             SCOPED_TRACE("kdtree stack " + std::to_string(stack));
-            expect_agreement_with(mesh, cam, e.ao_length, 160, 120,
-                                  [&](const RaySet& set, std::vector<Hit>& hits) {
-                                      trace_kd_cpu(kd, stack, set.rays, set.query, hits);
-                                  });
+            expect_agreement_with(mesh, cam, e.ao_length, 160, 120, [&](const RaySet& set, std::vector<Hit>& hits) {
+                trace_kd_cpu(kd, stack, set.rays, set.query, hits);
+            });
         }
     }
 }

@@ -29,7 +29,7 @@ std::string no_gpu_reason() {
     return gpu_available(&why) ? std::string() : why;
 }
 
-#define BVHLAB_SKIP_WITHOUT_GPU()                                       \
+#define BVHLAB_SKIP_WITHOUT_GPU() \
     if (const std::string why = no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 
 Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder,
@@ -40,8 +40,8 @@ Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::
         s.name = std::string("bvh2/") + accel::builder_name(builder);
         s.bvh2 = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
     } else if (layout == Layout::kCwbvh) {
-        s.name = std::string(tris == accel::CwTris::kVertices ? "cwbvh-vertices/" : "cwbvh/") +
-                 accel::builder_name(builder);
+        s.name =
+            std::string(tris == accel::CwTris::kVertices ? "cwbvh-vertices/" : "cwbvh/") + accel::builder_name(builder);
         const accel::BuildTree tree = accel::run_builder(builder, mesh, {}).tree;
         s.cwbvh = accel::convert_to_cwbvh(accel::collapse_to_wide(tree, mesh, accel::CollapseMethod::kSahOptimal), mesh,
                                           tris);
@@ -114,7 +114,8 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
                                       {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
         if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
         // A CWBVH's vertex-triple leaves (--cw-tris vertices) are a second kernel instance.
-        if (kernel.layout == Layout::kCwbvh) variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
+        if (kernel.layout == Layout::kCwbvh)
+            variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
         for (const auto& [builder, tris] : variants) {
             const Structure s = make_structure(scene.mesh, kernel.layout, builder, tris);
             SCOPED_TRACE(s.name);
@@ -163,9 +164,10 @@ TEST_P(GpuKernel, OddCountsEmptySetsAndTheDeviceCount) {
         tracer->trace({rays, Query::kClosest}, ours);
         ASSERT_EQ(ours.size(), n);
         oracle.trace(rays, Query::kClosest, ref);
-        EXPECT_EQ(compare_hits(mesh, rays, Query::kClosest, ours, ref, [&](const Ray& r) { return oracle.intersect(r); })
-                      .mismatches,
-                  0u);
+        EXPECT_EQ(
+            compare_hits(mesh, rays, Query::kClosest, ours, ref, [&](const Ray& r) { return oracle.intersect(r); })
+                .mismatches,
+            0u);
     }
     // A queue whose device count is below its capacity: rays past the count stay untouched
     // (poisoned), the first `count` are traced. This is how a wavefront renderer calls it.
@@ -215,10 +217,10 @@ TEST(GpuTrace, ReportsWhyWithoutDevice) {
     if (gpu_available(&why)) GTEST_SKIP() << "a GPU is present: " << gpu_description();
     EXPECT_FALSE(why.empty());
     Structure s;
-    s.bvh2 = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned,
-                                                       accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1), {})
-                                        .tree,
-                                    accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1));
+    s.bvh2 = accel::convert_to_bvh2(
+        accel::run_builder(accel::BuilderKind::kBinned, accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1), {})
+            .tree,
+        accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1));
     EXPECT_THROW(DeviceStructure d(s), Error);
 }
 

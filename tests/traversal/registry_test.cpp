@@ -8,8 +8,8 @@
 
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
-#include "accel/io/procedural.h"
 #include "accel/core/stats.h"
+#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -51,13 +51,13 @@ TEST(KernelRegistry, NamesTheIssueKernelsOnceEachWithADescription) {
 }
 
 TEST(KernelRegistry, RefusesWhatAKernelCannotTrace) {
-    const KernelInfo full{"test-full", Layout::kBvh2, "a BVH2 kernel with a 64-entry stack for this test", 64,
-                          false, 128, nullptr};
-    const KernelInfo shorty{"test-short", Layout::kKd, "a kd kernel with a short stack for this test", kNoStackLimit,
-                            true, 128, nullptr};
+    const KernelInfo full{"test-full", Layout::kBvh2, "a BVH2 kernel with a 64-entry stack for this test", 64, false,
+                          128,         nullptr};
+    const KernelInfo shorty{
+        "test-short", Layout::kKd, "a kd kernel with a short stack for this test", kNoStackLimit, true, 128, nullptr};
     EXPECT_NO_THROW(check_kernel_fits(full, Layout::kBvh2, 64, {}));
-    EXPECT_THROW(check_kernel_fits(full, Layout::kBvh2, 65, {}), Error);   // deeper than its stack
-    EXPECT_THROW(check_kernel_fits(full, Layout::kKd, 10, {}), Error);     // wrong layout
+    EXPECT_THROW(check_kernel_fits(full, Layout::kBvh2, 65, {}), Error);       // deeper than its stack
+    EXPECT_THROW(check_kernel_fits(full, Layout::kKd, 10, {}), Error);         // wrong layout
     EXPECT_THROW(check_kernel_fits(full, Layout::kBvh2, 10, {4, 48}), Error);  // block not whole warps
     EXPECT_NO_THROW(check_kernel_fits(full, Layout::kBvh2, 10, {4, 256}));
     KernelInfo bounded = full;
@@ -113,7 +113,8 @@ TEST(Bvh2Layout, ADeeperTreeThanTheStackIsRefusedBeforeTracing) {
     EXPECT_THROW(make_cpu_tracer(s), Error);
     if (built_with_cuda())
         for (const KernelInfo& k : registered_kernels())
-            if (k.layout == Layout::kBvh2) EXPECT_THROW(check_kernel_fits(k, Layout::kBvh2, s.depth(), {}), Error) << k.name;
+            if (k.layout == Layout::kBvh2)
+                EXPECT_THROW(check_kernel_fits(k, Layout::kBvh2, s.depth(), {}), Error) << k.name;
 }
 
 }  // namespace bvhlab::trav

@@ -7,10 +7,10 @@
 #include "accel/builders/builder.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/reference/ref_intersect.h"
-#include "tests/support/test_support.h"
 
 namespace bvhlab::trav {
 namespace {
@@ -42,15 +42,17 @@ TEST_P(TraverseVsBruteForce, ClosestAndAnyHit) {
                 // Only a hit within float error of an edge (or the same t) may differ.
                 const Hit& h = ref.is_hit() ? ref : closest[i];
                 const float w = 1.0f - h.u - h.v;
-                const bool tie = std::min({h.u, h.v, w}) < 1e-4f ||
-                                 (ref.is_hit() && closest[i].is_hit() &&
-                                  std::fabs(ref.t - closest[i].t) <= t_tolerance(rays[i], ref.t, mesh.vertex(ref.tri, 0),
-                                                                                 mesh.vertex(ref.tri, 1), mesh.vertex(ref.tri, 2)));
+                const bool tie =
+                    std::min({h.u, h.v, w}) < 1e-4f ||
+                    (ref.is_hit() && closest[i].is_hit() &&
+                     std::fabs(ref.t - closest[i].t) <= t_tolerance(rays[i], ref.t, mesh.vertex(ref.tri, 0),
+                                                                    mesh.vertex(ref.tri, 1), mesh.vertex(ref.tri, 2)));
                 EXPECT_TRUE(tie) << "ray " << i << " ref " << ref.tri << " got " << closest[i].tri;
                 ++edge;
             } else if (ref.is_hit()) {
-                EXPECT_NEAR(closest[i].t, ref.t, t_tolerance(rays[i], ref.t, mesh.vertex(ref.tri, 0),
-                                                             mesh.vertex(ref.tri, 1), mesh.vertex(ref.tri, 2)));
+                EXPECT_NEAR(closest[i].t, ref.t,
+                            t_tolerance(rays[i], ref.t, mesh.vertex(ref.tri, 0), mesh.vertex(ref.tri, 1),
+                                        mesh.vertex(ref.tri, 2)));
             }
             // Any-hit reports a hit exactly when a closest hit exists (up to edge ties).
             if (any[i].is_hit() != closest[i].is_hit()) ++edge;

@@ -41,12 +41,14 @@ void register_bench(CLI::App& app, Globals& g) {
         "bench", "benchmark traversal in Mrays/s on protocol rays or a ray file (hits checked against Embree first)");
     sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
     auto* types = sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
-    auto* file = sub->add_option("--rays", o->rays_file, "trace this ray file instead of protocol rays")->check(CLI::ExistingFile);
+    auto* file = sub->add_option("--rays", o->rays_file, "trace this ray file instead of protocol rays")
+                     ->check(CLI::ExistingFile);
     file->excludes(types);
     auto* hits = sub->add_option("--hits-out", o->hits_out, "write the hits of the last run (needs --rays)");
     hits->needs(file);
-    auto* runs = sub->add_option("--runs", o->bench.runs, "timed runs, the median is reported (default 10; 5 on the cpu)")
-                     ->check(CLI::Range(1, 1000));
+    auto* runs =
+        sub->add_option("--runs", o->bench.runs, "timed runs, the median is reported (default 10; 5 on the cpu)")
+            ->check(CLI::Range(1, 1000));
     sub->add_option("--warmup", o->bench.warmup, "untimed warm-up runs after the checked run")
         ->check(CLI::Range(0, 100))
         ->capture_default_str();
@@ -73,7 +75,10 @@ void register_bench(CLI::App& app, Globals& g) {
         if (!o->hits_out.empty() && tracers.size() != 1)
             throw Error("--hits-out writes one tracer's hits; --device embree runs two");
         auto report = [&](const nlohmann::json& j) {
-            if (g.json) emit(j); else print_bench_row(j);
+            if (g.json)
+                emit(j);
+            else
+                print_bench_row(j);
             if (j["status"] != "ok") g_exit_code = 1;
         };
         const bool from_file = file->count() > 0;
@@ -103,8 +108,10 @@ void register_bench(CLI::App& app, Globals& g) {
         }
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
         const nlohmann::json protocol = protocol_json(o->rays.for_scene(s));
-        for (trav::RayType t : parse_ray_types(o->types)) bench_set(proto.make(t), trav::ray_type_name(t), protocol, nullptr);
-        if (g_exit_code) std::fprintf(stderr, "bvhlab: error: a tracer disagrees with Embree and was not timed (see above)\n");
+        for (trav::RayType t : parse_ray_types(o->types))
+            bench_set(proto.make(t), trav::ray_type_name(t), protocol, nullptr);
+        if (g_exit_code)
+            std::fprintf(stderr, "bvhlab: error: a tracer disagrees with Embree and was not timed (see above)\n");
     });
 }
 

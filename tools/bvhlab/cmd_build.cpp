@@ -14,7 +14,8 @@ namespace bvhlab::cli {
 void print_build_table(const Scene& s, const Built& b) {
     const auto& r = b.record;
     if (b.is_kd()) {
-        std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
+        std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(),
+                    s.hash.c_str());
         std::printf("builder      SAH kd-tree (Wald-Havran O(N log N))  build %.1f ms, depth %llu of %d\n",
                     b.result.build_ms, (unsigned long long)r["depth"].get<uint64_t>(), r["max_depth"].get<int>());
         std::printf("nodes        %zu (%llu leaves); references %zu (%.3fx the triangles)\n", r["nodes"].get<size_t>(),
@@ -86,11 +87,16 @@ void register_build(CLI::App& app, Globals& g) {
                 meta.builder = o->build.kind();
                 meta.options = o->build.opts;
             }
-            if (b.is_kd()) accel::write_kd_file(o->out, b.structure.kd.tree, meta);
-            else accel::write_tree_file(o->out, b.result.tree, meta);
+            if (b.is_kd())
+                accel::write_kd_file(o->out, b.structure.kd.tree, meta);
+            else
+                accel::write_tree_file(o->out, b.result.tree, meta);
             b.record["structure_file"] = o->out;
         }
-        if (g.json) emit(b.record); else print_build_table(s, b);
+        if (g.json)
+            emit(b.record);
+        else
+            print_build_table(s, b);
     });
 }
 

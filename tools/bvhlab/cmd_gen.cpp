@@ -19,7 +19,9 @@ void register_gen(CLI::App& app, Globals& g) {
     sub->add_option("--kind", o->kind, "soup (random triangles) or structured (height field and boxes)")
         ->check(CLI::IsMember({"soup", "structured"}))
         ->capture_default_str();
-    sub->add_option("-n,--triangles", o->triangles, "number of triangles")->check(CLI::Range(uint64_t(1), uint64_t(1) << 30))->capture_default_str();
+    sub->add_option("-n,--triangles", o->triangles, "number of triangles")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 30))
+        ->capture_default_str();
     sub->add_option("--seed", o->seed, "random seed")->capture_default_str();
     sub->add_option("-o,--out", o->out, "OBJ file to write")->required();
     sub->callback([o, &g] {
@@ -33,8 +35,11 @@ void register_gen(CLI::App& app, Globals& g) {
             accel::write_obj(m, o->out);
         }
         nlohmann::json j{{"record", "gen"}, {"kind", o->kind}, {"triangles", m.triangle_count()},
-                         {"seed", o->seed}, {"file", o->out}, {"scene_hash", accel::scene_hash(m)}};
-        if (g.json) emit(j); else std::printf("wrote %zu %s triangles to %s\n", m.triangle_count(), o->kind.c_str(), o->out.c_str());
+                         {"seed", o->seed}, {"file", o->out},  {"scene_hash", accel::scene_hash(m)}};
+        if (g.json)
+            emit(j);
+        else
+            std::printf("wrote %zu %s triangles to %s\n", m.triangle_count(), o->kind.c_str(), o->out.c_str());
     });
 }
 

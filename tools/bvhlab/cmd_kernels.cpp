@@ -18,12 +18,19 @@ void register_kernels(CLI::App& app, Globals& g) {
                                           ? std::string(k.short_stack ? "short, 1-8 + restart" : "unlimited")
                                           : std::to_string(k.stack_entries);
             if (g.json) {
-                emit({{"record", "kernel"}, {"commit", git_commit()}, {"kernel", k.name},
-                      {"layout", trav::layout_name(k.layout)}, {"stack_entries", stack}, {"short_stack", k.short_stack}, {"dynamic_fetch", k.dynamic_fetch}, {"max_block", k.max_block},
-                      {"default_block", k.default_block}, {"description", k.description}});
+                emit({{"record", "kernel"},
+                      {"commit", git_commit()},
+                      {"kernel", k.name},
+                      {"layout", trav::layout_name(k.layout)},
+                      {"stack_entries", stack},
+                      {"short_stack", k.short_stack},
+                      {"dynamic_fetch", k.dynamic_fetch},
+                      {"max_block", k.max_block},
+                      {"default_block", k.default_block},
+                      {"description", k.description}});
             } else {
-                std::printf("%-28s %-7s stack %-22s block %4d  %s\n", k.name, trav::layout_name(k.layout), stack.c_str(),
-                            k.default_block, k.description);
+                std::printf("%-28s %-7s stack %-22s block %4d  %s\n", k.name, trav::layout_name(k.layout),
+                            stack.c_str(), k.default_block, k.description);
             }
         }
     });

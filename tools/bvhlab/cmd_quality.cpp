@@ -46,11 +46,15 @@ void register_quality(CLI::App& app, Globals& g) {
     sub->callback([o, &g] {
         Scene s = load_scene(o->scene, g);
         Built b = build_scene(s, o->build, g);
-        if (g.json) emit(b.record); else print_build_table(s, b);
+        if (g.json)
+            emit(b.record);
+        else
+            print_build_table(s, b);
         trav::EmbreeOracle oracle(s.mesh);
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
-        if (!g.json) std::printf("\n%-10s %10s   %-22s %-22s %-22s\n", "rays", "count", "nodes mean/p50/p99",
-                                 "leaves mean/p50/p99", "tri tests mean/p50/p99");
+        if (!g.json)
+            std::printf("\n%-10s %10s   %-22s %-22s %-22s\n", "rays", "count", "nodes mean/p50/p99",
+                        "leaves mean/p50/p99", "tri tests mean/p50/p99");
         for (trav::RayType t : parse_ray_types(o->types)) {
             const trav::RaySet set = proto.make(t);
             std::vector<trav::Hit> hits;

@@ -17,23 +17,30 @@ void register_rays(CLI::App& app, Globals& g) {
         RayOptions rays;
     };
     auto o = std::make_shared<Opts>();
-    CLI::App* sub = app.add_subcommand("rays", "generate a seeded ray set and export it as a ray file, or describe a ray file");
+    CLI::App* sub =
+        app.add_subcommand("rays", "generate a seeded ray set and export it as a ray file, or describe a ray file");
     auto* scene = sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]");
     auto* type = sub->add_option("--type", o->type, "primary, ao, diffuse or shadow")
                      ->check(CLI::IsMember({"primary", "ao", "diffuse", "shadow"}))
                      ->capture_default_str();
     auto* out = sub->add_option("-o,--out", o->out, "ray file to write");
-    auto* info = sub->add_option("--info", o->info, "print the header and ray count of a ray file")->check(CLI::ExistingFile);
+    auto* info =
+        sub->add_option("--info", o->info, "print the header and ray count of a ray file")->check(CLI::ExistingFile);
     info->excludes(scene)->excludes(out)->excludes(type);
     o->rays.add_to(*sub);
     sub->callback([o, &g, scene, out, info] {
         if (info->count()) {
             trav::RaySet set = trav::read_ray_file(o->info);
             const std::string writer = set.writer.empty() ? "not recorded (version 1)" : set.writer;
-            nlohmann::json j{{"record", "ray_file"}, {"file", o->info}, {"version", set.version},
-                             {"writer", writer}, {"checksum", set.version >= 2 ? "ok" : "none (version 1)"},
-                             {"query", set.query == trav::Query::kAny ? "any" : "closest"}, {"rays", set.rays.size()}};
-            if (g.json) emit(j);
+            nlohmann::json j{{"record", "ray_file"},
+                             {"file", o->info},
+                             {"version", set.version},
+                             {"writer", writer},
+                             {"checksum", set.version >= 2 ? "ok" : "none (version 1)"},
+                             {"query", set.query == trav::Query::kAny ? "any" : "closest"},
+                             {"rays", set.rays.size()}};
+            if (g.json)
+                emit(j);
             else
                 std::printf("%s: %zu rays, %s-hit, version %u, written by %s%s\n", o->info.c_str(), set.rays.size(),
                             set.query == trav::Query::kAny ? "any" : "closest", set.version, writer.c_str(),
@@ -59,7 +66,10 @@ void register_rays(CLI::App& app, Globals& g) {
         j["rays"] = set.rays.size();
         j["file"] = o->out;
         j["seed"] = o->rays.cfg.seed;
-        if (g.json) emit(j); else std::printf("wrote %zu %s rays to %s\n", set.rays.size(), o->type.c_str(), o->out.c_str());
+        if (g.json)
+            emit(j);
+        else
+            std::printf("wrote %zu %s rays to %s\n", set.rays.size(), o->type.c_str(), o->out.c_str());
     });
 }
 

@@ -29,7 +29,9 @@ void register_run(CLI::App& app, Globals& g) {
         "run", "build, benchmark and verify: cornell-box plus every scene in $BVHLAB_SCENES unless scenes are given");
     sub->add_option("scenes", o->scenes, "scenes (OBJ files, catalogue names or gen: specs)");
     sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
-    sub->add_option("--runs", o->bench.runs, "timed runs per ray type")->check(CLI::Range(1, 1000))->capture_default_str();
+    sub->add_option("--runs", o->bench.runs, "timed runs per ray type")
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
@@ -85,7 +87,8 @@ void register_run(CLI::App& app, Globals& g) {
             rows.push_back(std::move(row));
         }
         if (!g.json) {
-            std::printf("\n== summary (%s, %s build, commit %s) ==\n", machine_description().c_str(), build_type(), git_commit());
+            std::printf("\n== summary (%s, %s build, commit %s) ==\n", machine_description().c_str(), build_type(),
+                        git_commit());
             std::printf("%-16s %10s %8s %8s %9s", "scene", "triangles", "SAH", "EPO", "build ms");
             for (auto t : types) std::printf(" %10s", (std::string(trav::ray_type_name(t)) + " Mr/s").c_str());
             std::printf(" %10s\n", "mismatch");

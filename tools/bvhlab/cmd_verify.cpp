@@ -36,9 +36,11 @@ void register_verify(CLI::App& app, Globals& g) {
     CLI::App* sub = app.add_subcommand("verify", "compare every hit with Embree; exit 1 on any real mismatch");
     sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
     auto* types = sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
-    auto* file = sub->add_option("--rays", o->rays_file, "verify on this ray file instead of protocol rays")->check(CLI::ExistingFile);
+    auto* file = sub->add_option("--rays", o->rays_file, "verify on this ray file instead of protocol rays")
+                     ->check(CLI::ExistingFile);
     file->excludes(types);
-    auto* hits = sub->add_option("--hits", o->hits_file, "check this hit file (e.g. from another tool) instead of bvhlab's tracer")
+    auto* hits = sub->add_option("--hits", o->hits_file,
+                                 "check this hit file (e.g. from another tool) instead of bvhlab's tracer")
                      ->check(CLI::ExistingFile)
                      ->needs(file);
     o->build.add_to(*sub);
@@ -91,7 +93,10 @@ void register_verify(CLI::App& app, Globals& g) {
         }
         if (!g.json) print_verify_header();
         for (const auto& j : rows) {
-            if (g.json) emit(j); else print_verify_row(j);
+            if (g.json)
+                emit(j);
+            else
+                print_verify_row(j);
             if (j["mismatches"].get<size_t>() > 0) g_exit_code = 1;
         }
         if (g_exit_code) std::fprintf(stderr, "bvhlab: error: real mismatches against Embree (see above)\n");

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "tools/bvhlab/context.h"
 
-#include <glm/geometric.hpp>
 #include <tbb/info.h>
 #include <unistd.h>
+#include <glm/geometric.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -70,9 +70,7 @@ CLI::Validator FiniteRange(double lo, double hi) {
 
 CLI::Validator Finite() { return FiniteRange(-3.0e38, 3.0e38); }
 
-double Stage::seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-}
+double Stage::seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
 
 void Stage::progress(size_t done, size_t total) const {
     if (g_.quiet || !isatty(fileno(stderr))) return;
@@ -130,7 +128,8 @@ std::vector<std::string> catalogue_scene_names() {
     if (!fs::is_directory(dir)) throw Error("BVHLAB_SCENES='" + dir + "' is not a folder");
     if (!fs::exists(fs::path(dir) / "scenes.json")) throw Error("BVHLAB_SCENES='" + dir + "' has no scenes.json");
     for (const auto& e : trav::read_catalogue(dir)) names.push_back(e.name);
-    if (names.empty()) throw Error("'" + dir + "/scenes.json' lists no scenes (expected {\"scenes\": {NAME: {\"file\": ...}}})");
+    if (names.empty())
+        throw Error("'" + dir + "/scenes.json' lists no scenes (expected {\"scenes\": {NAME: {\"file\": ...}}})");
     return names;
 }
 
@@ -200,8 +199,9 @@ Scene load_scene(const std::string& spec, const Globals& g) {
     if (!std::isfinite(box.half_area())) {
         char b[160];
         const Vec3 e = box.extent();
-        std::snprintf(b, sizeof b, "its bounding box (extent %g x %g x %g) overflows float surface areas; scale it down",
-                      e.x, e.y, e.z);
+        std::snprintf(b, sizeof b,
+                      "its bounding box (extent %g x %g x %g) overflows float surface areas; scale it down", e.x, e.y,
+                      e.z);
         throw Error("scene '" + spec + "': " + b);
     }
     if (entry) apply_entry(s, *entry);
@@ -221,8 +221,9 @@ void BuildOptions::add_to(CLI::App& app) {
                                   "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits)")
                        ->check(CLI::IsMember({"binned", "sweep", "sbvh"}))
                        ->capture_default_str();
-    auto* st = structure_flag = app.add_option("--structure", structure,
-                              "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building");
+    auto* st = structure_flag = app.add_option(
+        "--structure", structure,
+        "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building");
     st->excludes(builder_flag);
     config_flags = {
         app.add_option("--bins", opts.num_bins, "bins per axis (binned builder, SBVH object splits)")
@@ -234,7 +235,8 @@ void BuildOptions::add_to(CLI::App& app) {
         app.add_option("--min-leaf", opts.config.min_leaf_size, "nodes this small always become leaves")
             ->check(CLI::Range(1, 64))
             ->capture_default_str(),
-        app.add_option("--alpha", opts.sbvh_alpha, "SBVH: try spatial splits where child overlap exceeds alpha x root area")
+        app.add_option("--alpha", opts.sbvh_alpha,
+                       "SBVH: try spatial splits where child overlap exceeds alpha x root area")
             ->check(FiniteRange(0.0, 1.0))
             ->capture_default_str(),
         app.add_option("--budget", opts.sbvh_budget, "SBVH: at most this many references per triangle in all")
@@ -243,35 +245,41 @@ void BuildOptions::add_to(CLI::App& app) {
         app.add_option("--spatial-bins", opts.sbvh_spatial_bins, "SBVH: bins per axis for spatial splits")
             ->check(CLI::Range(2, 256))
             ->capture_default_str(),
-        app.add_option("--reinsert", opts.reinsertion_passes,
-                       "at most this many passes of SAH-lowering subtree reinsertion after the BVH build (it stops "
-                       "after a pass that gains under 1%); -1 = the builder's default (3 for sbvh, 0 for binned and sweep)")
+        app.add_option(
+               "--reinsert", opts.reinsertion_passes,
+               "at most this many passes of SAH-lowering subtree reinsertion after the BVH build (it stops "
+               "after a pass that gains under 1%); -1 = the builder's default (3 for sbvh, 0 for binned and sweep)")
             ->check(CLI::Range(-1, 16))
             ->capture_default_str(),
     };
     // --structure NAME picks the builder; a path is checked when the command runs.
     st->each([this](const std::string& v) {
-        if (v == "bvh" || v == "binned") builder = "binned";
-        else if (v == "sweep" || v == "sbvh") builder = v;
+        if (v == "bvh" || v == "binned")
+            builder = "binned";
+        else if (v == "sweep" || v == "sbvh")
+            builder = v;
     });
-    layout_flag = app.add_option("--layout", layout,
-                                 "BVH traversal layout: bvh2 (binary, Aila-Laine nodes) or cwbvh (collapsed to a compressed "
-                                 "8-wide BVH, Ylitie et al. 2017); default: bvh2, or the layout that --kernel traces")
-                      ->check(CLI::IsMember({"bvh2", "cwbvh"}))
-                      ->capture_default_str();
-    collapse_flag = app.add_option("--collapse", collapse,
-                                   "--layout cwbvh: sah (the least wide-SAH collapse, by dynamic programming) or greedy "
-                                   "(open the largest child until 8)")
-                        ->check(CLI::IsMember({"sah", "greedy"}))
-                        ->capture_default_str();
+    layout_flag =
+        app.add_option("--layout", layout,
+                       "BVH traversal layout: bvh2 (binary, Aila-Laine nodes) or cwbvh (collapsed to a compressed "
+                       "8-wide BVH, Ylitie et al. 2017); default: bvh2, or the layout that --kernel traces")
+            ->check(CLI::IsMember({"bvh2", "cwbvh"}))
+            ->capture_default_str();
+    collapse_flag =
+        app.add_option("--collapse", collapse,
+                       "--layout cwbvh: sah (the least wide-SAH collapse, by dynamic programming) or greedy "
+                       "(open the largest child until 8)")
+            ->check(CLI::IsMember({"sah", "greedy"}))
+            ->capture_default_str();
     cw_tris_flag = app.add_option("--cw-tris", cw_tris,
                                   "--layout cwbvh: leaf triangles as woop (48-byte Woop maps) or vertices (36-byte "
                                   "vertex and edges, Moller-Trumbore: 0.75x the triangle bytes)")
                        ->check(CLI::IsMember({"woop", "vertices"}))
                        ->capture_default_str();
-    kd_stack_flag = app.add_option("--kd-stack", kd_stack, "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
-        ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
-        ->capture_default_str();
+    kd_stack_flag = app.add_option("--kd-stack", kd_stack,
+                                   "kd-tree traversal stack: 64 = full stack, 1..8 = short stack with restart")
+                        ->check(CLI::IsMember({1, 2, 3, 4, 5, 6, 7, 8, 64}))
+                        ->capture_default_str();
     kd_flags = {
         app.add_option("--kd-ct", kd.traversal_cost, "kd-tree SAH: cost of a traversal step (Wald-Havran K_T)")
             ->check(FiniteRange(0.001, 1e6))
@@ -316,12 +324,17 @@ void BuildOptions::check_applicable() const {
     const accel::BuilderKind k = kind();
     if (k != accel::BuilderKind::kSbvh)
         for (size_t i : {3, 4, 5}) refuse(config_flags[i], "applies to --builder sbvh, not " + builder);
-    if (k == accel::BuilderKind::kSweep) refuse(config_flags[0], "does not apply to the sweep builder (it has no bins)");
+    if (k == accel::BuilderKind::kSweep)
+        refuse(config_flags[0], "does not apply to the sweep builder (it has no bins)");
 }
 
 void RayOptions::add_to(CLI::App& app) {
-    app.add_option("--width", cfg.primary.width, "image width in pixels")->check(CLI::Range(1, 65536))->capture_default_str();
-    app.add_option("--height", cfg.primary.height, "image height in pixels")->check(CLI::Range(1, 65536))->capture_default_str();
+    app.add_option("--width", cfg.primary.width, "image width in pixels")
+        ->check(CLI::Range(1, 65536))
+        ->capture_default_str();
+    app.add_option("--height", cfg.primary.height, "image height in pixels")
+        ->check(CLI::Range(1, 65536))
+        ->capture_default_str();
     app.add_option("--spp", cfg.primary.samples, "samples per pixel, a perfect square (regular sub-grid)")
         ->check(CLI::Range(1, 1024))
         ->check(CLI::Validator(
@@ -329,14 +342,19 @@ void RayOptions::add_to(CLI::App& app) {
                 const long n = std::strtol(text.c_str(), nullptr, 10);
                 long k = 1;
                 while (k * k < n) ++k;
-                return k * k == n ? "" : "--spp " + text + " is not a perfect square (1, 4, 9, 16, ...): the samples form a regular sub-grid";
+                return k * k == n
+                           ? ""
+                           : "--spp " + text +
+                                 " is not a perfect square (1, 4, 9, 16, ...): the samples form a regular sub-grid";
             },
             "a perfect square"))
         ->capture_default_str();
     app.add_option("--tile", cfg.primary.tile, "order primary rays in TxT pixel tiles (0 = row-major)")
         ->check(CLI::Range(0, 4096))
         ->capture_default_str();
-    app.add_option("--ao-rays", cfg.ao_rays, "AO rays per primary hit")->check(CLI::Range(1, 1024))->capture_default_str();
+    app.add_option("--ao-rays", cfg.ao_rays, "AO rays per primary hit")
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
     app.add_option("--diffuse-rays", cfg.diffuse_rays, "diffuse rays per primary hit")
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
@@ -359,13 +377,19 @@ trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
 }
 
 nlohmann::json protocol_json(const trav::ProtocolConfig& c) {
-    return {{"width", c.primary.width}, {"height", c.primary.height}, {"spp", c.primary.samples},
-            {"tile", c.primary.tile},   {"ao_rays", c.ao_rays},        {"diffuse_rays", c.diffuse_rays},
-            {"ao_length", c.ao_length}, {"seed", c.seed},
-            {"camera", {{"eye", {c.camera.eye.x, c.camera.eye.y, c.camera.eye.z}},
-                        {"target", {c.camera.target.x, c.camera.target.y, c.camera.target.z}},
-                        {"up", {c.camera.up.x, c.camera.up.y, c.camera.up.z}},
-                        {"fov_y_deg", c.camera.fov_y_deg}}}};
+    return {{"width", c.primary.width},
+            {"height", c.primary.height},
+            {"spp", c.primary.samples},
+            {"tile", c.primary.tile},
+            {"ao_rays", c.ao_rays},
+            {"diffuse_rays", c.diffuse_rays},
+            {"ao_length", c.ao_length},
+            {"seed", c.seed},
+            {"camera",
+             {{"eye", {c.camera.eye.x, c.camera.eye.y, c.camera.eye.z}},
+              {"target", {c.camera.target.x, c.camera.target.y, c.camera.target.z}},
+              {"up", {c.camera.up.x, c.camera.up.y, c.camera.up.z}},
+              {"fov_y_deg", c.camera.fov_y_deg}}}};
 }
 
 std::vector<trav::RayType> parse_ray_types(const std::string& list) {
@@ -393,8 +417,8 @@ std::string machine_description() {
 }
 
 nlohmann::json base_record(const char* kind, const Scene& scene) {
-    return {{"record", kind},          {"commit", git_commit()}, {"build_type", build_type()},
-            {"scene", scene.name},     {"scene_hash", scene.hash}, {"triangles", scene.mesh.triangle_count()}};
+    return {{"record", kind},      {"commit", git_commit()},   {"build_type", build_type()},
+            {"scene", scene.name}, {"scene_hash", scene.hash}, {"triangles", scene.mesh.triangle_count()}};
 }
 
 void emit(const nlohmann::json& record) {

@@ -87,13 +87,13 @@ struct BuildOptions {
     std::string structure;
     accel::BuilderOptions opts;
     bool epo = true;
-    int kd_stack = 64;  ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
-    accel::KdTreeBuilder::Config kd;            ///< kd-tree build constants (--kd-*)
-    std::vector<CLI::Option*> kd_flags;         ///< kd flags whose explicit values a cache must match
+    int kd_stack = 64;                       ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
+    accel::KdTreeBuilder::Config kd;         ///< kd-tree build constants (--kd-*)
+    std::vector<CLI::Option*> kd_flags;      ///< kd flags whose explicit values a cache must match
     std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
-    std::string layout = "bvh2";   ///< --layout of a BVH: bvh2, or cwbvh (collapsed, compressed 8-wide)
-    std::string collapse = "sah";  ///< --collapse to 8-wide: sah (Ylitie et al.'s optimum) or greedy
-    std::string cw_tris = "woop";  ///< --cw-tris: a CWBVH's leaf triangles, woop (48 B) or vertices (36 B)
+    std::string layout = "bvh2";             ///< --layout of a BVH: bvh2, or cwbvh (collapsed, compressed 8-wide)
+    std::string collapse = "sah";            ///< --collapse to 8-wide: sah (Ylitie et al.'s optimum) or greedy
+    std::string cw_tris = "woop";            ///< --cw-tris: a CWBVH's leaf triangles, woop (48 B) or vertices (36 B)
     CLI::Option* builder_flag = nullptr;
     CLI::Option* structure_flag = nullptr;
     CLI::Option* kd_stack_flag = nullptr;

@@ -15,8 +15,8 @@ int g_exit_code = 0;
 
 int main(int argc, char** argv) {
     using namespace bvhlab::cli;
-    CLI::App app{"bvhlab: ray-tracing acceleration structure testbed (commit " +
-                 std::string(bvhlab::git_commit()) + ")"};
+    CLI::App app{"bvhlab: ray-tracing acceleration structure testbed (commit " + std::string(bvhlab::git_commit()) +
+                 ")"};
     app.require_subcommand(1);
     Globals g;
     app.add_flag("--json", g.json, "print one JSON object per line on stdout");

@@ -45,7 +45,8 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     }
     for (const CLI::Option* flag : opts.kd_flags)
         if (flag->count())
-            throw Error("structure file '" + file + "' holds a BVH, but kd-tree option " + flag->get_name() + " was given");
+            throw Error("structure file '" + file + "' holds a BVH, but kd-tree option " + flag->get_name() +
+                        " was given");
     if (opts.kd_stack_flag->count())
         throw Error("structure file '" + file + "' holds a BVH; --kd-stack applies to kd-trees");
     accel::BuilderOptions asked = f.meta.options;
@@ -62,7 +63,8 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     const std::string have = accel::describe_config(f.meta.builder, f.meta.options);
     const std::string want = accel::describe_config(f.meta.builder, asked);
     if (have != want)
-        throw Error("stale structure file '" + file + "': it was built with " + have + ", but " + want + " was asked for");
+        throw Error("stale structure file '" + file + "': it was built with " + have + ", but " + want +
+                    " was asked for");
     return f;
 }
 
@@ -133,9 +135,9 @@ static void convert_cwbvh(const Scene& scene, const BuildOptions& opts, const Gl
     accel::WideTree w;
     {
         Stage st(g, "collapsing to an 8-wide BVH (" + opts.collapse + ") and quantising its boxes");
-        w = accel::collapse_to_wide(b.result.tree, scene.mesh,
-                                    opts.collapse == "greedy" ? accel::CollapseMethod::kGreedy
-                                                              : accel::CollapseMethod::kSahOptimal);
+        w = accel::collapse_to_wide(
+            b.result.tree, scene.mesh,
+            opts.collapse == "greedy" ? accel::CollapseMethod::kGreedy : accel::CollapseMethod::kSahOptimal);
         const std::string err = accel::validate_wide(w, scene.mesh.triangle_count(), b.result.tree.prim_indices);
         BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide tree: " + err);
         b.structure.layout = trav::Layout::kCwbvh;
@@ -174,7 +176,8 @@ Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals
         opts.opts = f.meta.options;
         b.result.tree = std::move(f.tree);
     } else {
-        Stage st(g, "building " + opts.builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
+        Stage st(g, "building " + opts.builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) +
+                        " triangles");
         b.result = accel::run_builder(opts.kind(), scene.mesh, opts.opts);
     }
     const std::string builder = opts.builder;
@@ -220,15 +223,17 @@ void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
     std::vector<std::string> devices{"cpu", "gpu"};
     if (allow_embree) devices.push_back("embree");
     app.add_option("--device", device,
-                   allow_embree ? "cpu (TBB over the shared traversal), gpu (a CUDA kernel) or embree (Embree 3 on every "
-                                  "core: rtcIntersect1/rtcOccluded1 and the 16-wide packet calls, the faster reported)"
-                                : "cpu (TBB over the shared traversal) or gpu (a CUDA kernel, see --kernel)")
+                   allow_embree
+                       ? "cpu (TBB over the shared traversal), gpu (a CUDA kernel) or embree (Embree 3 on every "
+                         "core: rtcIntersect1/rtcOccluded1 and the 16-wide packet calls, the faster reported)"
+                       : "cpu (TBB over the shared traversal) or gpu (a CUDA kernel, see --kernel)")
         ->check(CLI::IsMember(devices))
         ->capture_default_str();
-    kernel_flag = app.add_option("--kernel", kernel,
-                                 "GPU kernel (`bvhlab kernels` lists them) or all; on --device cpu, plain or cwbvh: the CPU "
-                                 "runs that kernel's traversal; default: cwbvh for --layout cwbvh, dynamic-speculative-fma for BVHs, "
-                                 "kd-full-stack or kd-short-stack (with --kd-stack 1..8) for kd-trees");
+    kernel_flag = app.add_option(
+        "--kernel", kernel,
+        "GPU kernel (`bvhlab kernels` lists them) or all; on --device cpu, plain or cwbvh: the CPU "
+        "runs that kernel's traversal; default: cwbvh for --layout cwbvh, dynamic-speculative-fma for BVHs, "
+        "kd-full-stack or kd-short-stack (with --kd-stack 1..8) for kd-trees");
     block_flag = app.add_option("--block-size", block_size, "GPU threads per block (default: the kernel's)")
                      ->check(CLI::Range(32, 1024));
     fetch_flag = app.add_option("--fetch-threshold", fetch_threshold,
@@ -251,14 +256,16 @@ void TraceOptions::validate(BuildOptions& build) const {
         if (device == "cpu") {
             const auto l = cpu_reference_layout(kernel);
             if (!l)
-                throw Error("--kernel " + kernel + " has no CPU form: it needs --device gpu (on the CPU, --kernel takes "
+                throw Error("--kernel " + kernel +
+                            " has no CPU form: it needs --device gpu (on the CPU, --kernel takes "
                             "plain or cwbvh, whose traversals the CPU runs)");
             layout = *l;
         } else {
             layout = trav::find_kernel(kernel).layout;
         }
         if (layout == trav::Layout::kCwbvh) {
-            if (build.is_kdtree()) throw Error("kernel '" + kernel + "' traces a CWBVH, which is built from a BVH, not a kd-tree");
+            if (build.is_kdtree())
+                throw Error("kernel '" + kernel + "' traces a CWBVH, which is built from a BVH, not a kd-tree");
             if (build.layout_flag->count() && !build.is_cwbvh())
                 throw Error("kernel '" + kernel + "' traces --layout cwbvh, not --layout " + build.layout);
             build.layout = "cwbvh";
@@ -273,8 +280,8 @@ void TraceOptions::validate(BuildOptions& build) const {
         if (fetch_flag->count()) throw Error("--fetch-threshold applies to GPU kernels; it needs --device gpu");
     }
     if (device == "embree") {
-        std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag, build.kd_stack_flag,
-                                              build.layout_flag, build.collapse_flag, build.cw_tris_flag};
+        std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag,  build.kd_stack_flag,
+                                              build.layout_flag,    build.collapse_flag, build.cw_tris_flag};
         flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
         flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
         for (const CLI::Option* f : flags)
@@ -301,7 +308,7 @@ std::string default_kernel(const Built& b, int kd_stack) {
 }  // namespace
 
 std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,
-                                                       const trav::EmbreeOracle* oracle) {
+                                                        const trav::EmbreeOracle* oracle) {
     std::vector<std::unique_ptr<trav::Tracer>> out;
     if (t.device == "cpu") {
         out.push_back(trav::make_cpu_tracer(built.structure, b.kd_stack));
@@ -336,11 +343,13 @@ std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const Trac
             throw Error(std::string("--kd-stack ") + std::to_string(b.kd_stack) + " sizes a short stack; kernel '" +
                         k.name + "' has a full stack (use kd-short-stack)");
         if (b.kd_stack_flag->count() && !short_given && k.short_stack)
-            throw Error(std::string("kernel '") + k.name + "' takes a short stack of 1..8 entries (--kd-stack), not 64");
+            throw Error(std::string("kernel '") + k.name +
+                        "' takes a short stack of 1..8 entries (--kd-stack), not 64");
         options.push_back(o);
     }
     if (!built.device) built.device = std::make_shared<trav::DeviceStructure>(built.structure);
-    for (size_t i = 0; i < kernels.size(); ++i) out.push_back(trav::make_gpu_tracer(built.device, kernels[i], options[i]));
+    for (size_t i = 0; i < kernels.size(); ++i)
+        out.push_back(trav::make_gpu_tracer(built.device, kernels[i], options[i]));
     return out;
 }
 
@@ -359,15 +368,17 @@ nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer) {
             {"kernel", tracer.name()},
             {"block_size", gpu ? nlohmann::json(tracer.block_size()) : nlohmann::json(nullptr)},
             {"short_stack", tracer.short_stack() ? nlohmann::json(tracer.short_stack()) : nlohmann::json(nullptr)},
-            {"fetch_threshold", tracer.fetch_threshold() ? nlohmann::json(tracer.fetch_threshold()) : nlohmann::json(nullptr)},
+            {"fetch_threshold",
+             tracer.fetch_threshold() ? nlohmann::json(tracer.fetch_threshold()) : nlohmann::json(nullptr)},
             {"gpu", gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr)},
             {"driver", gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr)}};
 }
 
 nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle, const CheckedSet& cs,
                            const std::vector<trav::Hit>& ours, const trav::CompareConfig& cc) {
-    trav::CompareReport rep = trav::compare_hits(scene.mesh, cs.set.rays, cs.set.query, ours, cs.reference,
-                                                 [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
+    trav::CompareReport rep = trav::compare_hits(
+        scene.mesh, cs.set.rays, cs.set.query, ours, cs.reference,
+        [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
     for (const auto& d : rep.first_mismatches) {
         std::fprintf(stderr, "[bvhlab] MISMATCH %s ray %zu: ours tri %d t %.9g, embree tri %d t %.9g: %s\n",
                      cs.ray_type.c_str(), d.ray, d.ours.tri, d.ours.t, d.oracle.tri, d.oracle.t, d.reason.c_str());

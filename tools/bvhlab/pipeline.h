@@ -24,7 +24,7 @@ struct Built {
     accel::BuildResult result;  ///< the BuildTree of a BVH (empty for a kd-tree)
     accel::TreeStats stats;
     trav::Structure structure;
-    nlohmann::json record;  ///< the "build" JSON line
+    nlohmann::json record;                                ///< the "build" JSON line
     std::shared_ptr<const trav::DeviceStructure> device;  ///< uploaded on first GPU use
     std::optional<accel::TreeFileMeta> loaded_meta;       ///< provenance when loaded from a structure file
 
@@ -58,7 +58,7 @@ struct TraceOptions {
 /// of the structure's layout for --kernel all), Embree's for --device embree (`oracle`
 /// required then). Throws bvhlab::Error for a kernel that does not fit.
 std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,
-                                                       const trav::EmbreeOracle* oracle);
+                                                        const trav::EmbreeOracle* oracle);
 
 /// A ray set with Embree's answers, computed once and shared by every tracer checked on it.
 struct CheckedSet {

@@ -44,9 +44,7 @@ public:
     }
     std::string name() const override { return name_; }
     std::string device() const override { return "cpu"; }
-    int short_stack() const override {
-        return s_.layout == Layout::kKd && kd_stack_ != kKdFullStack ? kd_stack_ : 0;
-    }
+    int short_stack() const override { return s_.layout == Layout::kKd && kd_stack_ != kKdFullStack ? kd_stack_ : 0; }
     void set_rays(const std::vector<Ray>& rays, Query query) override {
         set_.rays = rays;
         set_.query = query;

@@ -19,10 +19,10 @@ static_assert(kBvh2StackSize >= int(accel::kMaxTreeDepth), "the BVH2 stack must 
 
 /// Per-ray work counters, filled when a non-null pointer is given.
 struct TraversalCounters {
-    uint32_t nodes = 0;     ///< interior nodes fetched
-    uint32_t leaves = 0;    ///< leaves whose box the ray entered
-    uint32_t tri_tests = 0; ///< triangle intersection tests
-    uint32_t restarts = 0;  ///< short-stack restarts from the root (kd-tree short stack)
+    uint32_t nodes = 0;      ///< interior nodes fetched
+    uint32_t leaves = 0;     ///< leaves whose box the ray entered
+    uint32_t tri_tests = 0;  ///< triangle intersection tests
+    uint32_t restarts = 0;   ///< short-stack restarts from the root (kd-tree short stack)
 };
 
 /// A BVH2 layout as traversal sees it: plain pointers, host or device memory.
@@ -43,8 +43,8 @@ BVHLAB_HD BVHLAB_FORCEINLINE Vec3 safe_reciprocal(Vec3 d) {
 /// Entry distance into a box, or +inf when the ray misses it within [tmin, tmax]. The exit
 /// distance is widened by 2 ulp-scale units so rays grazing a flat box are not lost to
 /// rounding (Ize 2013, "Robust BVH ray traversal").
-BVHLAB_HD BVHLAB_FORCEINLINE float slab_entry(float lox, float hix, float loy, float hiy, float loz,
-                                              float hiz, Vec3 o, Vec3 inv, float tmin, float tmax) {
+BVHLAB_HD BVHLAB_FORCEINLINE float slab_entry(float lox, float hix, float loy, float hiy, float loz, float hiz, Vec3 o,
+                                              Vec3 inv, float tmin, float tmax) {
     const float x0 = (lox - o.x) * inv.x, x1 = (hix - o.x) * inv.x;
     const float y0 = (loy - o.y) * inv.y, y1 = (hiy - o.y) * inv.y;
     const float z0 = (loz - o.z) * inv.z, z1 = (hiz - o.z) * inv.z;
@@ -58,8 +58,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE float slab_entry(float lox, float hix, float loy, f
 /// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
 template <bool kAnyHit>
 BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::WoopTriangle* tris,
-                                   const uint32_t* tri_ids, const Ray& ray,
-                                   TraversalCounters* counters = nullptr) {
+                                   const uint32_t* tri_ids, const Ray& ray, TraversalCounters* counters = nullptr) {
     Hit hit = Hit::miss();
     float tmax = ray.tmax;
     const Vec3 o = ray.org, d = ray.dir, inv = safe_reciprocal(ray.dir);
@@ -69,10 +68,8 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
     while (true) {
         const accel::Bvh2Node& n = nodes[node];
         if (counters) ++counters->nodes;
-        float t0 = slab_entry(n.c0_lo_x, n.c0_hi_x, n.c0_lo_y, n.c0_hi_y, n.c0_lo_z, n.c0_hi_z, o,
-                              inv, ray.tmin, tmax);
-        float t1 = slab_entry(n.c1_lo_x, n.c1_hi_x, n.c1_lo_y, n.c1_hi_y, n.c1_lo_z, n.c1_hi_z, o,
-                              inv, ray.tmin, tmax);
+        float t0 = slab_entry(n.c0_lo_x, n.c0_hi_x, n.c0_lo_y, n.c0_hi_y, n.c0_lo_z, n.c0_hi_z, o, inv, ray.tmin, tmax);
+        float t1 = slab_entry(n.c1_lo_x, n.c1_hi_x, n.c1_lo_y, n.c1_hi_y, n.c1_lo_z, n.c1_hi_z, o, inv, ray.tmin, tmax);
         int32_t next[2];
         float tnext[2];
         int nnext = 0;
@@ -115,7 +112,8 @@ BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::Wo
 
 /// The same over a view.
 template <bool kAnyHit>
-BVHLAB_HD BVHLAB_FORCEINLINE Hit traverse_bvh2(const Bvh2View& v, const Ray& ray, TraversalCounters* counters = nullptr) {
+BVHLAB_HD BVHLAB_FORCEINLINE Hit traverse_bvh2(const Bvh2View& v, const Ray& ray,
+                                               TraversalCounters* counters = nullptr) {
     return traverse_bvh2<kAnyHit>(v.nodes, v.tris, v.tri_ids, ray, counters);
 }
 

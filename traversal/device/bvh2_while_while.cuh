@@ -22,8 +22,8 @@ struct ExactSlabs {
     ExactSlabs() = default;
     __device__ __forceinline__ ExactSlabs(Vec3 org, Vec3 inv_dir) : o(org), inv(inv_dir) {}
     /// Whether the box is entered within [tmin, tmax]; its entry distance in `tn`.
-    __device__ __forceinline__ bool entry(float lox, float hix, float loy, float hiy, float loz, float hiz,
-                                          float tmin, float tmax, float& tn) const {
+    __device__ __forceinline__ bool entry(float lox, float hix, float loy, float hiy, float loz, float hiz, float tmin,
+                                          float tmax, float& tn) const {
         tn = slab_entry(lox, hix, loy, hiy, loz, hiz, o, inv, tmin, tmax);
         return tn != INFINITY;
     }
@@ -37,14 +37,13 @@ struct ExactSlabs {
 /// of ood = o * inv (at most 2^-24 |ood|, and as much again for rounding ood +- s) and its own
 /// relative rounding. So each axis's near distance is lowered by s = 2^-22 |ood| (twice the
 /// bound) and its far distance raised by the same, and the far distances carry slab_entry's
-/// relative widening (folded into a widened reciprocal and offset, so it costs nothing per box). The slack is per axis: on an
-/// axis nearly parallel to the ray |ood| is huge, but so is every distance on that axis, and
-/// the slack moves only planes within 2^-22 |o| of the origin. (A first version added the
-/// largest axis's slack to the exit distance in t units; on furball's diffuse rays it cost
-/// 25%: one such lane per warp made the whole warp enter extra boxes.)
+/// relative widening (folded into a widened reciprocal and offset, so it costs nothing per box). The slack is per axis:
+/// on an axis nearly parallel to the ray |ood| is huge, but so is every distance on that axis, and the slack moves only
+/// planes within 2^-22 |o| of the origin. (A first version added the largest axis's slack to the exit distance in t
+/// units; on furball's diffuse rays it cost 25%: one such lane per warp made the whole warp enter extra boxes.)
 struct FmaSlabs {
-    Vec3 inv, inv_far;        // reciprocal direction; widened by (1 + 2^-21) for far planes
-    Vec3 ood_near, ood_far;   // o * inv plus / minus the slack (widened for far planes)
+    Vec3 inv, inv_far;         // reciprocal direction; widened by (1 + 2^-21) for far planes
+    Vec3 ood_near, ood_far;    // o * inv plus / minus the slack (widened for far planes)
     bool neg_x, neg_y, neg_z;  // direction negative: the near plane is hi
     FmaSlabs() = default;
     __device__ __forceinline__ FmaSlabs(Vec3 org, Vec3 inv_dir) : inv(inv_dir) {
@@ -65,8 +64,8 @@ struct FmaSlabs {
     }
     /// Whether the box is entered within [tmin, tmax]; its entry distance in `tn`. (Returning
     /// +inf for a miss, as slab_entry does, cost 4 more compares and selects per node.)
-    __device__ __forceinline__ bool entry(float lox, float hix, float loy, float hiy, float loz, float hiz,
-                                          float tmin, float tmax, float& tn) const {
+    __device__ __forceinline__ bool entry(float lox, float hix, float loy, float hiy, float loz, float hiz, float tmin,
+                                          float tmax, float& tn) const {
         const float nx = fmaf(neg_x ? hix : lox, inv.x, -ood_near.x);
         const float ny = fmaf(neg_y ? hiy : loy, inv.y, -ood_near.y);
         const float nz = fmaf(neg_z ? hiz : loz, inv.z, -ood_near.z);
@@ -127,8 +126,8 @@ constexpr int32_t kWhileWhileSentinel = 0x76543210;
 /// - Stack = SharedStack: the stack in shared memory instead of local memory.
 template <bool kAnyHit, bool kSpeculative, class Slabs, class Stack>
 __device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3 d, const Slabs& slabs, float tmin,
-                                                 float& t_hit, float& u_hit, float& v_hit, int32_t& k_hit,
-                                                 Stack& stack, int& sp, int32_t& node, int32_t& leaf) {
+                                                 float& t_hit, float& u_hit, float& v_hit, int32_t& k_hit, Stack& stack,
+                                                 int& sp, int32_t& node, int32_t& leaf) {
     while (uint32_t(node) < uint32_t(kWhileWhileSentinel)) {
         // One 64-bit address and immediate offsets (4 * node + 1 in int arithmetic had cost an
         // address computation per load).
@@ -208,8 +207,8 @@ struct WhileWhileTrace {
         stack[0] = kWhileWhileSentinel;
         int sp = 0;
         while (node != kWhileWhileSentinel)
-            while_while_step<kAnyHit, kSpeculative>(view, r.org, r.dir, slabs, r.tmin, t_hit, u_hit, v_hit, k_hit, stack,
-                                                    sp, node, leaf);
+            while_while_step<kAnyHit, kSpeculative>(view, r.org, r.dir, slabs, r.tmin, t_hit, u_hit, v_hit, k_hit,
+                                                    stack, sp, node, leaf);
         return hit(k_hit, t_hit, u_hit, v_hit);
     }
 

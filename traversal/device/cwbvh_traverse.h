@@ -37,7 +37,7 @@ struct CwbvhView {
     const accel::WoopTriangle* tris;  ///< the triangles with CwTris::kWoop, else null
     const uint32_t* tri_ids;
     const accel::VertexTriangle* vtris = nullptr;  ///< the triangles with CwTris::kVertices, else null
-    uint32_t one = accel::kCwbvhUnpackOne;  ///< see cwbvh_unpack: a kernel parameter, not a literal
+    uint32_t one = accel::kCwbvhUnpackOne;         ///< see cwbvh_unpack: a kernel parameter, not a literal
 };
 
 namespace cw_detail {
@@ -46,7 +46,7 @@ namespace cw_detail {
 BVHLAB_HD BVHLAB_FORCEINLINE void load_node(const accel::CwbvhNode* n, uint32_t (&w)[20]) {
 #if defined(__CUDA_ARCH__)
     const uint4* p = reinterpret_cast<const uint4*>(n);
-BVHLAB_UNROLL
+    BVHLAB_UNROLL
     for (int i = 0; i < 5; ++i) {
         const uint4 v = __ldg(p + i);
         w[4 * i] = v.x;
@@ -83,11 +83,11 @@ struct RayAxes {
 /// 2^-22 (|orig| + |sc|), and far planes are widened by 1 + 2^-21 for their own rounding. The
 /// |sc| term is 1/128 of one quantisation step.
 BVHLAB_HD BVHLAB_FORCEINLINE uint32_t intersect_children(const uint32_t (&w)[20], const RayAxes& r, float tmin,
-                                                          float tmax, uint32_t one, uint32_t& leaves_hit) {
+                                                         float tmax, uint32_t one, uint32_t& leaves_hit) {
     constexpr float kWiden = 1.0000005f;  // 1 + 2^-21
     float sc_near[3], sc_far[3], off_near[3], off_far[3];
     uint32_t qn[3][2], qf[3][2];
-BVHLAB_UNROLL
+    BVHLAB_UNROLL
     for (int k = 0; k < 3; ++k) {
         const float p = float_from_bits(w[k]);
         const float sc = accel::cwbvh_scale((w[kWordExponents] >> (8 * k)) & 0xFFu) * 32768.0f * r.inv[k];
@@ -98,7 +98,7 @@ BVHLAB_UNROLL
         off_near[k] = orig - slack;
         off_far[k] = (orig + slack) * kWiden;
         // The near plane of a positive axis is the lower one.
-BVHLAB_UNROLL
+        BVHLAB_UNROLL
         for (int h = 0; h < 2; ++h) {
             const uint32_t lo = w[kWordQlo + 2 * k + h], hi = w[kWordQhi + 2 * k + h];
             qn[k][h] = r.neg[k] ? hi : lo;
@@ -110,7 +110,7 @@ BVHLAB_UNROLL
     // Per node this costs ~10 word operations instead of ~5 per slot.
     const uint32_t imask = w[kWordExponents] >> 24, octant4 = r.octant * 0x01010101u;
     uint32_t shift4[2], bits4[2];
-BVHLAB_UNROLL
+    BVHLAB_UNROLL
     for (int h = 0; h < 2; ++h) {
         const uint32_t meta4 = w[kWordMeta + h];
         const uint32_t inner4 = ((((imask >> (4 * h)) & 0xFu) * 0x00204081u) & 0x01010101u) * 0xFFu;
@@ -118,7 +118,7 @@ BVHLAB_UNROLL
         bits4[h] = (meta4 >> 5) & 0x07070707u;
     }
     uint32_t hits = 0, leaves = 0;
-BVHLAB_UNROLL
+    BVHLAB_UNROLL
     for (uint32_t s = 0; s < 8; ++s) {
         const uint32_t h = s >> 2, b = s & 3;
         const float nx = fmaf(accel::cwbvh_unpack(qn[0][h], b, one), sc_near[0], off_near[0]);
@@ -149,7 +149,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE bool intersect_tri(const CwbvhView& view, uint32_t 
     if constexpr (kVertexTris) {
         const float* p = view.vtris[k].f;
         float f[9];
-BVHLAB_UNROLL
+        BVHLAB_UNROLL
         for (int i = 0; i < 9; ++i) f[i] = __ldg(p + i);
         return accel::VertexTriangle::intersect_values(f, o, d, tmin, tmax, t, u, v);
     } else {
@@ -158,8 +158,10 @@ BVHLAB_UNROLL
         return accel::WoopTriangle::intersect_rows(&r0.x, &r1.x, &r2.x, o, d, tmin, tmax, t, u, v);
     }
 #else
-    if constexpr (kVertexTris) return view.vtris[k].intersect(o, d, tmin, tmax, t, u, v);
-    else return view.tris[k].intersect(o, d, tmin, tmax, t, u, v);
+    if constexpr (kVertexTris)
+        return view.vtris[k].intersect(o, d, tmin, tmax, t, u, v);
+    else
+        return view.tris[k].intersect(o, d, tmin, tmax, t, u, v);
 #endif
 }
 

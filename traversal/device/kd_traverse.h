@@ -51,7 +51,7 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
     };
     Entry stack[kCap];
     int top = -1, count = 0;
-    bool dropped = false;          // a push overwrote an entry since the last (re)start
+    bool dropped = false;            // a push overwrote an entry since the last (re)start
     float restarted_at = -INFINITY;  // guards against restarts that make no progress
     uint32_t node = 0;
     float tn = t_enter, tf = t_exit;

@@ -30,9 +30,12 @@ namespace {
 LaunchArgs make_args(const DeviceStructure& s, RayQueue& queue, Query query, uint32_t* d_next_ray,
                      const GpuTraceOptions& opts, void* stream) {
     LaunchArgs a;
-    if (s.layout() == Layout::kBvh2) a.bvh2 = s.bvh2();
-    else if (s.layout() == Layout::kCwbvh) a.cwbvh = s.cwbvh();
-    else a.kd = s.kd();
+    if (s.layout() == Layout::kBvh2)
+        a.bvh2 = s.bvh2();
+    else if (s.layout() == Layout::kCwbvh)
+        a.cwbvh = s.cwbvh();
+    else
+        a.kd = s.kd();
     a.queue = queue.view();
     a.capacity = uint32_t(queue.capacity());
     a.query = query;

@@ -11,8 +11,8 @@
 namespace bvhlab::trav {
 
 struct GpuTraceOptions {
-    int kd_stack = 4;     ///< short-stack entries for kernels that take one (1..8)
-    int block_size = 0;   ///< threads per block; 0 = the kernel's default
+    int kd_stack = 4;         ///< short-stack entries for kernels that take one (1..8)
+    int block_size = 0;       ///< threads per block; 0 = the kernel's default
     int fetch_threshold = 0;  ///< dynamic-fetch kernels: idle lanes (1..32) that start new rays; 0 = default
 };
 

@@ -23,7 +23,7 @@ struct LaunchArgs {
     KdView kd{};
     CwbvhView cwbvh{};
     RayQueueView queue{};
-    uint32_t capacity = 0;           ///< the queue's capacity: the grid covers it, threads read the count
+    uint32_t capacity = 0;  ///< the queue's capacity: the grid covers it, threads read the count
     Query query = Query::kClosest;
     int kd_stack = 0;                ///< short-stack entries (kernels with short_stack)
     int block_size = 0;              ///< threads per block; 0 = the kernel's default
@@ -39,15 +39,15 @@ constexpr uint32_t kDefaultFetchThreshold = 8;
 constexpr uint32_t kNoStackLimit = UINT32_MAX;
 
 struct KernelInfo {
-    const char* name;         ///< e.g. "speculative"
-    Layout layout;            ///< the layout it traces
-    const char* description;  ///< one line
-    uint32_t stack_entries;   ///< deepest tree (interior nodes) it traces, or kNoStackLimit
-    bool short_stack;         ///< takes a short-stack size (--kd-stack 1..8)
-    int default_block;        ///< threads per block unless asked otherwise
+    const char* name;                   ///< e.g. "speculative"
+    Layout layout;                      ///< the layout it traces
+    const char* description;            ///< one line
+    uint32_t stack_entries;             ///< deepest tree (interior nodes) it traces, or kNoStackLimit
+    bool short_stack;                   ///< takes a short-stack size (--kd-stack 1..8)
+    int default_block;                  ///< threads per block unless asked otherwise
     void (*launch)(const LaunchArgs&);  ///< asynchronous on args.stream; throws CudaError
-    int max_block = 1024;     ///< the largest block it launches (its __launch_bounds__)
-    bool dynamic_fetch = false;  ///< takes a fetch threshold (--fetch-threshold 1..32)
+    int max_block = 1024;               ///< the largest block it launches (its __launch_bounds__)
+    bool dynamic_fetch = false;         ///< takes a fetch threshold (--fetch-threshold 1..32)
 };
 
 /// Adds a kernel; throws bvhlab::Error on a duplicate name. Returns true (for static init).
@@ -63,6 +63,6 @@ const KernelInfo& find_kernel(const std::string& name);
 #define BVHLAB_REGISTER_KERNEL_CAT2(a, b) a##b
 #define BVHLAB_REGISTER_KERNEL_CAT(a, b) BVHLAB_REGISTER_KERNEL_CAT2(a, b)
 /// At namespace scope in a kernel's .cu file: BVHLAB_REGISTER_KERNEL({"name", Layout::kBvh2, ...});
-#define BVHLAB_REGISTER_KERNEL(...)                                                              \
-    static const bool BVHLAB_REGISTER_KERNEL_CAT(bvhlab_registered_, __LINE__) =                 \
+#define BVHLAB_REGISTER_KERNEL(...)                                              \
+    static const bool BVHLAB_REGISTER_KERNEL_CAT(bvhlab_registered_, __LINE__) = \
         ::bvhlab::trav::register_kernel(::bvhlab::trav::KernelInfo __VA_ARGS__)

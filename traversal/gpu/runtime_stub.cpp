@@ -10,7 +10,7 @@ namespace {
 #define BVHLAB_NO_CUDA_REASON "it was built without CUDA"
 #endif
 const char* const kNoCuda = "this bvhlab was built without CUDA: " BVHLAB_NO_CUDA_REASON;
-}
+}  // namespace
 
 bool gpu_available(std::string* why) {
     if (why) *why = kNoCuda;

@@ -23,8 +23,9 @@ void launch(const LaunchArgs& a) {
 
 }  // namespace
 
-BVHLAB_REGISTER_KERNEL({"kd-short-stack", Layout::kKd,
-                        "kd-tree, one thread per ray, short stack of 1-8 entries (--kd-stack) with restart (Horn et al. 2007)",
-                        kNoStackLimit, true, 128, launch});
+BVHLAB_REGISTER_KERNEL(
+    {"kd-short-stack", Layout::kKd,
+     "kd-tree, one thread per ray, short stack of 1-8 entries (--kd-stack) with restart (Horn et al. 2007)",
+     kNoStackLimit, true, 128, launch});
 
 }  // namespace bvhlab::trav

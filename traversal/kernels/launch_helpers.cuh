@@ -132,8 +132,10 @@ void launch_per_ray(const LaunchArgs& a, int default_block, const PerRay& f, uin
         const size_t smem = shared_bytes(kernel, block, smem_per_thread);
         kernel<<<grid, block, smem, static_cast<cudaStream_t>(a.stream)>>>(a.queue, f);
     };
-    if constexpr (kMinBlocks > 0) launch(per_ray_kernel_bounded<PerRay, kMaxThreads, kMinBlocks>);
-    else launch(per_ray_kernel<PerRay>);
+    if constexpr (kMinBlocks > 0)
+        launch(per_ray_kernel_bounded<PerRay, kMaxThreads, kMinBlocks>);
+    else
+        launch(per_ray_kernel<PerRay>);
     BVHLAB_CHECK_LAUNCH();
 }
 
@@ -170,8 +172,10 @@ void launch_dynamic_fetch(const LaunchArgs& a, int default_block, const Trace& f
 /// closest-hit ones, so a kernel file instantiates both forms from one line.
 template <class Launch>
 void for_query(const LaunchArgs& a, Launch&& launch) {
-    if (a.query == Query::kAny) launch(std::true_type{});
-    else launch(std::false_type{});
+    if (a.query == Query::kAny)
+        launch(std::true_type{});
+    else
+        launch(std::false_type{});
 }
 
 /// Calls launch(any, vertex_tris) with the query and a CWBVH's triangle format as
@@ -179,8 +183,10 @@ void for_query(const LaunchArgs& a, Launch&& launch) {
 template <typename Launch>
 void for_cwbvh_query(const LaunchArgs& a, Launch&& launch) {
     for_query(a, [&](auto any) {
-        if (a.cwbvh.vtris) launch(any, std::true_type{});
-        else launch(any, std::false_type{});
+        if (a.cwbvh.vtris)
+            launch(any, std::true_type{});
+        else
+            launch(any, std::false_type{});
     });
 }
 

@@ -18,8 +18,9 @@ void launch(const LaunchArgs& a) {
 
 }  // namespace
 
-BVHLAB_REGISTER_KERNEL({"plain", Layout::kBvh2,
-                        "baseline: one thread per ray, the traversal the CPU tracer runs (near child first, generic loads)",
-                        kBvh2StackSize, false, 128, launch});
+BVHLAB_REGISTER_KERNEL(
+    {"plain", Layout::kBvh2,
+     "baseline: one thread per ray, the traversal the CPU tracer runs (near child first, generic loads)",
+     kBvh2StackSize, false, 128, launch});
 
 }  // namespace bvhlab::trav

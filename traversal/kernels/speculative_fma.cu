@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: MIT
-// Kernel 'speculative-fma': speculative with one-FMA slab distances: near and far planes picked by the direction sign, per-axis rounding slack.
+// Kernel 'speculative-fma': speculative with one-FMA slab distances: near and far planes picked by the direction sign,
+// per-axis rounding slack.
 #include "traversal/kernels/while_while_launch.cuh"
 
 namespace bvhlab::trav {
 
-BVHLAB_REGISTER_KERNEL({"speculative-fma", Layout::kBvh2, "speculative with one-FMA slab distances: near and far planes picked by the direction sign, per-axis rounding slack", kBvh2StackSize, false, 128,
-                        launch_while_while<true, true, Fetch::kPerRay, false>});
+BVHLAB_REGISTER_KERNEL({"speculative-fma", Layout::kBvh2,
+                        "speculative with one-FMA slab distances: near and far planes picked by the direction sign, "
+                        "per-axis rounding slack",
+                        kBvh2StackSize, false, 128, launch_while_while<true, true, Fetch::kPerRay, false>});
 
 }  // namespace bvhlab::trav

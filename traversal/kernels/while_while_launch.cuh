@@ -19,11 +19,14 @@ void launch_while_while(const LaunchArgs& a) {
     static_assert(kFetch == Fetch::kPerRay || !kSharedStack, "only the per-ray launch takes shared memory");
     for_query(a, [&](auto any) {
         const WhileWhileTrace<decltype(any)::value, kSpeculative, kFmaSlabs, kSharedStack> f{a.bvh2};
-        if constexpr (kFetch == Fetch::kPersistent) launch_persistent(a, kBlock, f);
+        if constexpr (kFetch == Fetch::kPersistent)
+            launch_persistent(a, kBlock, f);
         else if constexpr (kFetch == Fetch::kDynamic)
             launch_dynamic_fetch(a, kBlock, f, a.fetch_threshold ? a.fetch_threshold : kDefaultFetchThreshold);
-        else if constexpr (kMinBlocks > 0) launch_per_ray<kBlock, kMinBlocks>(a, kBlock, f, kSmem);
-        else launch_per_ray(a, kBlock, f, kSmem);
+        else if constexpr (kMinBlocks > 0)
+            launch_per_ray<kBlock, kMinBlocks>(a, kBlock, f, kSmem);
+        else
+            launch_per_ray(a, kBlock, f, kSmem);
     });
 }
 

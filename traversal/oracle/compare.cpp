@@ -53,7 +53,8 @@ public:
     /// The hit lies at tmin or tmax within the float error of its t (an absolute bound: at
     /// tmin = 0 a relative one would be meaningless).
     bool at_interval_end(const Hit& h, const Ray& r) const {
-        const double tol = t_tolerance(r, h.t, mesh_.vertex(h.tri, 0), mesh_.vertex(h.tri, 1), mesh_.vertex(h.tri, 2), cfg_);
+        const double tol =
+            t_tolerance(r, h.t, mesh_.vertex(h.tri, 0), mesh_.vertex(h.tri, 1), mesh_.vertex(h.tri, 2), cfg_);
         return std::fabs(double(h.t) - double(r.tmax)) <= tol || std::fabs(double(h.t) - double(r.tmin)) <= tol;
     }
     bool share_vertex(int32_t s, int32_t t) const {
@@ -68,8 +69,8 @@ public:
     }
     /// True when two t values of `ray` on triangle `tri` agree within float error.
     bool same_t(float ta, float tb, const Ray& r, int32_t tri) const {
-        const double tol = t_tolerance(r, std::max(ta, tb), mesh_.vertex(tri, 0), mesh_.vertex(tri, 1),
-                                       mesh_.vertex(tri, 2), cfg_);
+        const double tol =
+            t_tolerance(r, std::max(ta, tb), mesh_.vertex(tri, 0), mesh_.vertex(tri, 1), mesh_.vertex(tri, 2), cfg_);
         return std::fabs(double(ta) - double(tb)) <= tol;
     }
     /// Both triangles hit by the ray in double precision, at t values within float error.
@@ -77,7 +78,8 @@ public:
         double ts, tt, u, v;
         if (!intersect_reference(r, mesh_.vertex(s, 0), mesh_.vertex(s, 1), mesh_.vertex(s, 2), ts, u, v)) return false;
         if (!intersect_reference(r, mesh_.vertex(t, 0), mesh_.vertex(t, 1), mesh_.vertex(t, 2), tt, u, v)) return false;
-        return std::fabs(ts - tt) <= t_tolerance(r, float(ts), mesh_.vertex(s, 0), mesh_.vertex(s, 1), mesh_.vertex(s, 2), cfg_);
+        return std::fabs(ts - tt) <=
+               t_tolerance(r, float(ts), mesh_.vertex(s, 0), mesh_.vertex(s, 1), mesh_.vertex(s, 2), cfg_);
     }
     /// Tie kind for the hit that the other side did not report, or -1 for a real mismatch.
     int tie_for(const Hit& h, const Ray& r) const {
@@ -103,10 +105,9 @@ double t_tolerance(const Ray& r, float t, Vec3 a, Vec3 b, Vec3 c, const CompareC
 }
 
 CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
-                           const std::vector<Hit>& ours, const std::vector<Hit>& oracle,
-                           const ClosestLookup& lookup, const CompareConfig& cfg) {
-    BVHLAB_CHECK(ours.size() == rays.size() && oracle.size() == rays.size(),
-                 "hit sets and ray set differ in size");
+                           const std::vector<Hit>& ours, const std::vector<Hit>& oracle, const ClosestLookup& lookup,
+                           const CompareConfig& cfg) {
+    BVHLAB_CHECK(ours.size() == rays.size() && oracle.size() == rays.size(), "hit sets and ray set differ in size");
     BVHLAB_CHECK(query == Query::kClosest || lookup, "any-hit comparison needs a closest-hit lookup");
     const Classifier cls(mesh, cfg);
     CompareReport rep;
@@ -150,8 +151,8 @@ CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ra
                 Hit h = a.is_hit() ? a : lookup(r);
                 if (h.is_hit()) {
                     kind = cls.tie_for(h, r);
-                    d.reason = std::string(a.is_hit() ? "only ours" : "only the oracle") +
-                               " hit: triangle " + std::to_string(h.tri) + " at t=" + std::to_string(h.t);
+                    d.reason = std::string(a.is_hit() ? "only ours" : "only the oracle") + " hit: triangle " +
+                               std::to_string(h.tri) + " at t=" + std::to_string(h.t);
                 } else {
                     d.reason = "oracle reports occlusion but its closest-hit query finds nothing";
                 }

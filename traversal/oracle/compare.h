@@ -57,9 +57,9 @@ struct CompareReport {
     size_t ties = 0;
     size_t mismatches = 0;
     std::array<size_t, kTieKinds> ties_by_kind{};  ///< indexed by TieKind
-    double max_rel_dt = 0.0;                    ///< over agreeing hits on the same triangle
-    std::vector<Disagreement> first_mismatches;  ///< at most 16
-    std::vector<Disagreement> first_ties;        ///< at most 4
+    double max_rel_dt = 0.0;                       ///< over agreeing hits on the same triangle
+    std::vector<Disagreement> first_mismatches;    ///< at most 16
+    std::vector<Disagreement> first_ties;          ///< at most 4
 };
 
 /// For any-hit rays, where the oracle only says "occluded": the oracle's closest hit of the
@@ -69,7 +69,7 @@ using ClosestLookup = std::function<Hit(const Ray&)>;
 /// Compares `ours` and `oracle` ray by ray. For closest-hit queries the triangle and t must
 /// agree; for any-hit queries only hit/miss. `lookup` is needed for any-hit queries.
 CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
-                           const std::vector<Hit>& ours, const std::vector<Hit>& oracle,
-                           const ClosestLookup& lookup, const CompareConfig& cfg = {});
+                           const std::vector<Hit>& ours, const std::vector<Hit>& oracle, const ClosestLookup& lookup,
+                           const CompareConfig& cfg = {});
 
 }  // namespace bvhlab::trav

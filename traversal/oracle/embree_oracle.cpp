@@ -56,10 +56,10 @@ EmbreeOracle::EmbreeOracle(const accel::TriangleMesh& mesh) : impl_(std::make_un
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     const size_t nv = mesh.vertices.size(), nt = mesh.triangle_count();
     // Embree reads vertex buffers with 16-byte loads, so pad the last vertex.
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                         RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv + 1));
-    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
-                                                              RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
+    auto* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv + 1));
+    auto* idx = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
     if (v && idx) {
         std::memcpy(v, mesh.vertices.data(), nv * sizeof(Vec3));
         std::memcpy(idx, mesh.indices.data(), nt * 3 * sizeof(unsigned));
@@ -171,8 +171,10 @@ public:
     }
     double run() override {
         const auto t0 = std::chrono::steady_clock::now();
-        if (packets16_) oracle_.trace16(rays_, query_, hits_);
-        else oracle_.trace(rays_, query_, hits_);
+        if (packets16_)
+            oracle_.trace16(rays_, query_, hits_);
+        else
+            oracle_.trace(rays_, query_, hits_);
         return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     }
     void hits(std::vector<Hit>& out) const override { out = hits_; }

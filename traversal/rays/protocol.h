@@ -23,11 +23,11 @@ Query ray_type_query(RayType type);
 struct ProtocolConfig {
     Camera camera;
     PrimaryConfig primary;
-    uint32_t ao_rays = 8;        ///< per primary hit
-    uint32_t diffuse_rays = 4;   ///< per primary hit
-    float ao_length = 0.0f;      ///< 0: 5% of the scene diagonal
-    float offset_rel = 1e-4f;    ///< origin offset as a fraction of the diagonal
-    float light_raise = 0.25f;   ///< point light: the eye raised along `up` by this x diagonal
+    uint32_t ao_rays = 8;       ///< per primary hit
+    uint32_t diffuse_rays = 4;  ///< per primary hit
+    float ao_length = 0.0f;     ///< 0: 5% of the scene diagonal
+    float offset_rel = 1e-4f;   ///< origin offset as a fraction of the diagonal
+    float light_raise = 0.25f;  ///< point light: the eye raised along `up` by this x diagonal
     uint64_t seed = 1;
 };
 

@@ -4,8 +4,8 @@
 #include "traversal/rays/ray_file.h"
 
 #include <cerrno>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -154,8 +154,9 @@ HitSet read_hit_file(const std::string& path) {
     s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s.query, s.writer, s.version);
     for (size_t i = 0; i < s.hits.size(); ++i) {
         const Hit& h = s.hits[i];
-        if (h.tri < -1) throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has triangle id " +
-                                    std::to_string(h.tri));
+        if (h.tri < -1)
+            throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has triangle id " +
+                        std::to_string(h.tri));
         if (h.tri >= 0 && !(std::isfinite(h.t) && std::isfinite(h.u) && std::isfinite(h.v)))
             throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has a non-finite t, u or v");
     }

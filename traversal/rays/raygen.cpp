@@ -5,9 +5,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <cmath>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
-#include <cmath>
 
 #include "accel/core/check.h"
 #include "accel/core/random.h"
@@ -117,8 +117,8 @@ std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg) {
                     const uint32_t ty = y / tile, tx = x / tile;
                     const uint32_t th = std::min(tile, cfg.height - ty * tile);
                     const uint32_t tw = std::min(tile, cfg.width - tx * tile);
-                    slot = size_t(ty) * tile * cfg.width + size_t(tx) * tile * th +
-                           size_t(y - ty * tile) * tw + (x - tx * tile);
+                    slot = size_t(ty) * tile * cfg.width + size_t(tx) * tile * th + size_t(y - ty * tile) * tw +
+                           (x - tx * tile);
                 }
                 for (uint32_t s = 0; s < cfg.samples; ++s) {
                     const float sx = (float(s % grid) + 0.5f) / float(grid);

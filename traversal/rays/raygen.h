@@ -56,7 +56,6 @@ std::vector<Ray> generate_shadow(const accel::TriangleMesh& mesh, const std::vec
                                  const std::vector<Hit>& hits, Vec3 light, float offset);
 
 /// Hit point and the unit geometric normal turned towards the ray's origin side.
-void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point,
-               Vec3& normal);
+void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point, Vec3& normal);
 
 }  // namespace bvhlab::trav

@@ -10,7 +10,9 @@
 namespace bvhlab::trav {
 namespace {
 
-glm::vec3 vec3_of(const nlohmann::json& j) { return {j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()}; }
+glm::vec3 vec3_of(const nlohmann::json& j) {
+    return {j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()};
+}
 
 }  // namespace
 

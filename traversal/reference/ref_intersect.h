@@ -13,8 +13,7 @@ namespace bvhlab::trav {
 
 /// Double-precision t and barycentrics (Embree's convention) of the point where `ray`'s line
 /// meets the plane of (v0, v1, v2), inside the triangle or not. Returns false for parallel rays.
-inline bool plane_hit_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u,
-                                double& v) {
+inline bool plane_hit_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u, double& v) {
     double o[3] = {ray.org.x, ray.org.y, ray.org.z}, d[3] = {ray.dir.x, ray.dir.y, ray.dir.z};
     double e1[3], e2[3], s[3];
     for (int k = 0; k < 3; ++k) {
@@ -34,10 +33,9 @@ inline bool plane_hit_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, doubl
 }
 
 /// Double-precision hit of `ray` with (v0, v1, v2) for t in (tmin, tmax).
-inline bool intersect_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u,
-                                double& v) {
-    return plane_hit_reference(ray, v0, v1, v2, t, u, v) && u >= 0.0 && v >= 0.0 && u + v <= 1.0 &&
-           t > ray.tmin && t < ray.tmax;
+inline bool intersect_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, double& t, double& u, double& v) {
+    return plane_hit_reference(ray, v0, v1, v2, t, u, v) && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > ray.tmin &&
+           t < ray.tmax;
 }
 
 /// Closest hit over every triangle of `mesh`, in double precision. O(triangles) per ray.
@@ -46,8 +44,7 @@ inline Hit trace_brute_force(const accel::TriangleMesh& mesh, const Ray& ray) {
     double best_t = INFINITY;
     for (size_t i = 0; i < mesh.triangle_count(); ++i) {
         double t, u, v;
-        if (intersect_reference(ray, mesh.vertex(i, 0), mesh.vertex(i, 1), mesh.vertex(i, 2), t, u, v) &&
-            t < best_t) {
+        if (intersect_reference(ray, mesh.vertex(i, 0), mesh.vertex(i, 1), mesh.vertex(i, 2), t, u, v) && t < best_t) {
             best_t = t;
             best = {int32_t(i), float(t), float(u), float(v)};
         }
