@@ -78,7 +78,8 @@ using LineRanges = std::vector<std::pair<size_t, size_t>>;
 /// (0-based) indices of vertices with a NaN or infinite coordinate: tinyobjloader reads those
 /// as 0, which would silently move the vertex instead of dropping its triangles. Faces too
 /// large for ear clipping go to `huge_faces`.
-std::vector<size_t> scan_obj(const std::string& path, const std::string& text, LineRanges& huge_faces) {
+std::vector<size_t> scan_obj(const std::string& path, const std::string& text, LineRanges& huge_faces,
+                             std::vector<std::string>& mtllibs) {
     std::vector<size_t> non_finite;
     size_t line_no = 0, nv = 0, pos = 0;
     long max_index = 0;
@@ -123,6 +124,8 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, L
                 if (!finite) non_finite.push_back(nv);
                 ++nv;
             }
+        } else if (key == "mtllib") {
+            for (int i = 1; i < nt; ++i) mtllibs.emplace_back(toks[i][0], toks[i][1]);
         } else if (key == "f") {
             if (nt < 4) fail(line_no, "malformed 'f' line: a face needs at least 3 vertices");
             // Every reference, however many (toks holds only the first 31).
@@ -181,17 +184,22 @@ std::string fan_huge_faces(const std::string& text, const LineRanges& huge) {
 
 }  // namespace
 
-TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings) {
+TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings,
+                      std::vector<std::string>* mtl_files) {
     std::string text = read_file(path);
     LineRanges huge_faces;
-    const std::vector<size_t> non_finite = scan_obj(path, text, huge_faces);
+    std::vector<std::string> mtllibs;
+    const std::vector<size_t> non_finite = scan_obj(path, text, huge_faces, mtllibs);
     if (!huge_faces.empty()) text = fan_huge_faces(text, huge_faces);
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;
     std::string warn, err;
     const size_t slash = path.find_last_of('/');
-    tinyobj::MaterialFileReader mtl_reader(slash == std::string::npos ? "./" : path.substr(0, slash + 1));
+    const std::string base_dir = slash == std::string::npos ? "./" : path.substr(0, slash + 1);
+    tinyobj::MaterialFileReader mtl_reader(base_dir);
+    if (mtl_files)
+        for (const std::string& m : mtllibs) mtl_files->push_back(base_dir + m);
     std::istringstream stream(text);
     const bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &stream, &mtl_reader,
                                      /*triangulate=*/true, /*default_vcols_fallback=*/false);

@@ -3,6 +3,7 @@
 // otherwise accept silently. The only file pair that includes tinyobjloader.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -14,8 +15,15 @@ namespace bvhlab::accel {
 /// Triangles with non-finite vertices or zero area are dropped and counted in mesh.dropped.
 /// Throws bvhlab::Error with a one-line message on a missing or unreadable file, a malformed
 /// v/vt/vn/f line, a face index out of range, or a mesh with no usable triangle.
-/// Non-fatal loader messages (a missing .mtl, say) are appended to `warnings`.
-TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings = nullptr);
+/// Non-fatal loader messages (a missing .mtl, say) are appended to `warnings`, and the material
+/// files that the OBJ names (`mtllib`, resolved against its folder, whether or not they exist)
+/// to `mtl_files`.
+TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings = nullptr,
+                      std::vector<std::string>* mtl_files = nullptr);
+
+/// The loader's version: part of every scene-cache key, bumped whenever the same OBJ would load
+/// differently (scene_cache.h).
+constexpr uint32_t kObjLoaderVersion = 1;
 
 /// Writes `mesh` as OBJ (v and f lines, usemtl per material run). Throws on I/O errors.
 void write_obj(const TriangleMesh& mesh, const std::string& path);

@@ -7,6 +7,7 @@ bin=$1
 data=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+export BVHLAB_CACHE_DIR=$tmp/scene-cache  # never the user's cache
 pass=0
 fail=0
 

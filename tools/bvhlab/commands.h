@@ -24,5 +24,6 @@ void register_gen(CLI::App& app, Globals& g);
 void register_run(CLI::App& app, Globals& g);
 void register_quality(CLI::App& app, Globals& g);
 void register_kernels(CLI::App& app, Globals& g);
+void register_cache(CLI::App& app, Globals& g);
 
 }  // namespace bvhlab::cli

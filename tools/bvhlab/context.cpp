@@ -17,6 +17,7 @@
 #include "accel/core/check.h"
 #include "accel/io/obj_loader.h"
 #include "accel/io/procedural.h"
+#include "accel/io/scene_cache.h"
 #include "traversal/rays/scene_catalogue.h"
 
 namespace fs = std::filesystem;
@@ -159,6 +160,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         Stage st(g, "generating " + spec);
         s.mesh = accel::make_procedural(accel::parse_procedural_kind(parts[1]), n, seed);
         s.name = spec;
+        s.load_ms = 1000.0 * st.seconds();
     } else {
         for (const auto& c : cats) {
             for (const auto& e : c.entries)
@@ -187,11 +189,19 @@ Scene load_scene(const std::string& spec, const Globals& g) {
                     }
         }
         s.source = file.string();  // what a catalogue name resolved to
+        const std::string cache_dir = g.no_scene_cache ? "" : accel::default_scene_cache_dir();
         Stage st(g, "loading " + file.string());
-        std::vector<std::string> warnings;
-        s.mesh = accel::load_obj(file.string(), &warnings);
-        if (!g.quiet)
-            for (const auto& w : warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
+        accel::SceneLoad load = accel::load_obj_cached(file.string(), cache_dir, git_commit());
+        s.mesh = std::move(load.mesh);
+        s.hash = load.scene_hash;
+        s.load_ms = 1000.0 * st.seconds();
+        s.scene_cache = cache_dir.empty() ? "off" : load.from_cache ? "hit" : "miss";
+        if (!g.quiet) {
+            if (load.from_cache)
+                std::fprintf(stderr, "[bvhlab] served by the scene cache (%s)\n", load.cache_file.c_str());
+            for (const auto& w : load.warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
+            if (!load.cache_warning.empty()) std::fprintf(stderr, "[bvhlab] warning: %s\n", load.cache_warning.c_str());
+        }
     }
     // Surface areas (SAH, EPO, the builders' costs) are floats: a box whose area overflows
     // would give NaN figures and arbitrary trees without a word.
@@ -207,7 +217,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
     if (entry) apply_entry(s, *entry);
     if (!s.camera_from_catalogue) s.camera = trav::framing_camera(s.mesh);
     if (s.ao_length <= 0.0f) s.ao_length = 0.05f * s.mesh.diagonal();
-    s.hash = accel::scene_hash(s.mesh);
+    if (s.hash.empty()) s.hash = accel::scene_hash(s.mesh);  // the cache gives it with the mesh
     if (!g.quiet) {
         std::fprintf(stderr, "[bvhlab] %s: %zu triangles, dropped %llu (%llu non-finite, %llu zero-area)\n",
                      s.name.c_str(), s.mesh.triangle_count(), (unsigned long long)s.mesh.dropped.total(),
@@ -417,8 +427,9 @@ std::string machine_description() {
 }
 
 nlohmann::json base_record(const char* kind, const Scene& scene) {
-    return {{"record", kind},      {"commit", git_commit()},   {"build_type", build_type()},
-            {"scene", scene.name}, {"scene_hash", scene.hash}, {"triangles", scene.mesh.triangle_count()}};
+    return {{"record", kind},           {"commit", git_commit()},          {"build_type", build_type()},
+            {"scene", scene.name},      {"scene_hash", scene.hash},        {"triangles", scene.mesh.triangle_count()},
+            {"load_ms", scene.load_ms}, {"scene_cache", scene.scene_cache}};
 }
 
 void emit(const nlohmann::json& record) {

@@ -27,6 +27,7 @@ namespace cli {
 struct Globals {
     bool json = false;
     bool quiet = false;
+    bool no_scene_cache = false;  ///< --no-scene-cache: parse the OBJ, neither read nor write the cache
 };
 
 /// Stage lines on stderr: "[bvhlab] loading X ..." then "... done (1.23 s)".
@@ -66,6 +67,8 @@ struct Scene {
     bool camera_from_catalogue = false;
     float ao_length = 0.0f;
     std::string hash;
+    double load_ms = 0.0;             ///< loading (or generating) the mesh
+    std::string scene_cache = "off";  ///< hit (the cache served the load), miss (parsed, then cached) or off
 };
 
 /// Resolves SPEC: an OBJ path, a scene name from $BVHLAB_SCENES/scenes.json or data/scenes.json,

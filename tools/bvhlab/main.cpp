@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
     Globals g;
     app.add_flag("--json", g.json, "print one JSON object per line on stdout");
     app.add_flag("-q,--quiet", g.quiet, "no progress on stderr");
+    app.add_flag("--no-scene-cache", g.no_scene_cache,
+                 "parse OBJ files, neither reading nor writing the scene cache ($BVHLAB_CACHE_DIR)");
     app.set_version_flag("--version", std::string(bvhlab::git_commit()));
     register_build(app, g);
     register_rays(app, g);
@@ -30,15 +32,18 @@ int main(int argc, char** argv) {
     register_run(app, g);
     register_quality(app, g);
     register_kernels(app, g);
+    register_cache(app, g);
     // Global flags are also accepted after the subcommand name.
     for (CLI::App* sub : app.get_subcommands({})) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
         sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
+        if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen")
+            sub->add_flag("--no-scene-cache", g.no_scene_cache, "parse OBJ files, bypassing the scene cache");
     }
     // An unknown first word is named (CLI11 would only say that a subcommand is required).
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--json" || a == "-q" || a == "--quiet") continue;
+        if (a == "--json" || a == "-q" || a == "--quiet" || a == "--no-scene-cache") continue;
         if (a.empty() || a[0] == '-') break;
         std::string known;
         bool found = false;

@@ -1,0 +1,377 @@
+// SPDX-License-Identifier: MIT
+// Scene cache entries: a fixed header, the dependencies (the OBJ's and each material file's
+// content hash), the mesh, and a checksum of everything before it. Little-endian.
+#include "accel/io/scene_cache.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <tbb/parallel_for.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "accel/core/check.h"
+#include "accel/core/checksum.h"
+#include "accel/io/atomic_file.h"
+#include "accel/io/obj_loader.h"
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "scene cache files need a little-endian host");
+
+namespace bvhlab::accel {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr char kMagic[9] = "BVHLSCNE";
+constexpr const char* kExtension = ".bvhscene";
+
+/// The fixed part of an entry.
+struct Header {
+    char magic[8];
+    uint32_t version;         // kSceneCacheVersion
+    uint32_t loader_version;  // kObjLoaderVersion
+    uint64_t obj_hash;        // hash_file of the OBJ
+    uint64_t scene_hash;      // scene_hash(mesh) as a number
+    uint64_t vertices, triangles, materials;
+    uint64_t dropped_non_finite, dropped_zero_area;
+    uint32_t dependencies;  // material files
+    uint32_t warnings;
+    char writer[24];
+};
+static_assert(sizeof(Header) == 104, "scene cache header is 104 bytes");
+
+/// Why an entry cannot be used: turned into a warning, never an error.
+struct Unusable {
+    std::string why;
+};
+
+class Out {
+public:
+    template <typename T>
+    void pod(const T& v) {
+        bytes_.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    void str(const std::string& s) {
+        pod(uint32_t(s.size()));
+        bytes_.append(s);
+    }
+    template <typename T>
+    void array(const std::vector<T>& v) {
+        if (!v.empty()) bytes_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    }
+    std::string& bytes() { return bytes_; }
+
+private:
+    std::string bytes_;
+};
+
+class In {
+public:
+    In(const char* p, size_t n) : p_(p), n_(n) {}
+    template <typename T>
+    T pod() {
+        T v;
+        take(&v, sizeof v);
+        return v;
+    }
+    std::string str() {
+        const auto len = pod<uint32_t>();
+        if (len > n_ - at_) throw Unusable{"a string runs past the end"};
+        std::string s(p_ + at_, len);
+        at_ += len;
+        return s;
+    }
+    /// `count` records of T, checked against what is left before anything is allocated.
+    template <typename T>
+    void array(std::vector<T>& v, uint64_t count, const char* what) {
+        if (count > (n_ - at_) / sizeof(T)) throw Unusable{std::string("its ") + what + " count runs past the end"};
+        v.resize(count);
+        take(v.data(), count * sizeof(T));
+    }
+    bool at_end() const { return at_ == n_; }
+
+private:
+    void take(void* dst, size_t bytes) {
+        if (bytes > n_ - at_) throw Unusable{"it is truncated"};
+        if (bytes) std::memcpy(dst, p_ + at_, bytes);
+        at_ += bytes;
+    }
+    const char* p_;
+    size_t n_, at_ = 0;
+};
+
+struct Dependency {
+    std::string path;
+    bool exists;
+    uint64_t hash;
+};
+
+uint64_t hex_to_u64(const std::string& hex) { return std::strtoull(hex.c_str(), nullptr, 16); }
+
+std::string u64_to_hex(uint64_t v) {
+    char b[17];
+    std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+    return b;
+}
+
+/// The entry of `obj` in `dir`: its stem, and a hash of its absolute path and the loader version.
+std::string entry_path(const std::string& dir, const std::string& obj) {
+    std::error_code ec;
+    fs::path abs = fs::weakly_canonical(fs::absolute(obj), ec);
+    if (ec) abs = fs::absolute(obj);
+    const std::string key = abs.string() + '\0' + std::to_string(kObjLoaderVersion);
+    return (fs::path(dir) / (abs.stem().string() + "-" + u64_to_hex(fnv1a(key.data(), key.size())) + kExtension))
+        .string();
+}
+
+std::string read_whole(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) throw Unusable{std::string("it cannot be opened: ") + std::strerror(errno)};
+    const auto size = static_cast<std::streamoff>(in.tellg());
+    std::string data(size_t(size), '\0');
+    in.seekg(0);
+    if (!in.read(data.data(), size)) throw Unusable{"it cannot be read"};
+    return data;
+}
+
+/// The parts of an entry, checked whole: the checksum, then every count and index.
+struct Entry {
+    Header h{};
+    std::string source;
+    std::vector<Dependency> deps;
+    std::vector<std::string> warnings;
+    TriangleMesh mesh;
+};
+
+Entry parse_entry(const std::string& data) {
+    if (data.size() < sizeof(Header) + 8) throw Unusable{"it is shorter than its header"};
+    Entry e;
+    std::memcpy(&e.h, data.data(), sizeof e.h);
+    if (std::memcmp(e.h.magic, kMagic, 8) != 0) throw Unusable{"it is not a bvhlab scene cache file"};
+    if (e.h.version != kSceneCacheVersion)
+        throw Unusable{"it has format version " + std::to_string(e.h.version) + ", this build writes " +
+                       std::to_string(kSceneCacheVersion)};
+    uint64_t stored;
+    std::memcpy(&stored, data.data() + data.size() - 8, 8);
+    if (fnv1a_words(data.data(), data.size() - 8) != stored) throw Unusable{"it is damaged (checksum mismatch)"};
+    In in(data.data() + sizeof(Header), data.size() - sizeof(Header) - 8);
+    e.source = in.str();
+    for (uint32_t i = 0; i < e.h.dependencies; ++i) {
+        Dependency d;
+        d.path = in.str();
+        d.exists = in.pod<uint8_t>() != 0;
+        d.hash = in.pod<uint64_t>();
+        e.deps.push_back(std::move(d));
+    }
+    for (uint32_t i = 0; i < e.h.warnings; ++i) e.warnings.push_back(in.str());
+    if (e.h.materials > (1u << 20)) throw Unusable{"its material count is implausible"};
+    for (uint64_t i = 0; i < e.h.materials; ++i) {
+        Material m;
+        m.name = in.str();
+        m.diffuse = in.pod<Vec3>();
+        m.emission = in.pod<Vec3>();
+        e.mesh.materials.push_back(std::move(m));
+    }
+    in.array(e.mesh.vertices, e.h.vertices, "vertex");
+    if (e.h.triangles > (uint64_t(1) << 40)) throw Unusable{"its triangle count is implausible"};
+    in.array(e.mesh.indices, 3 * e.h.triangles, "index");
+    in.array(e.mesh.material_ids, e.h.triangles, "material id");
+    if (!in.at_end()) throw Unusable{"it has trailing bytes"};
+    for (uint32_t i : e.mesh.indices)
+        if (i >= e.mesh.vertices.size()) throw Unusable{"an index is out of range"};
+    for (int32_t m : e.mesh.material_ids)
+        if (m < -1 || (m >= 0 && uint64_t(m) >= e.h.materials)) throw Unusable{"a material id is out of range"};
+    e.mesh.dropped = {e.h.dropped_non_finite, e.h.dropped_zero_area};
+    return e;
+}
+
+/// Whether every dependency still has the bytes it had (or is still missing).
+bool dependencies_unchanged(const std::vector<Dependency>& deps) {
+    for (const Dependency& d : deps) {
+        bool exists = false;
+        const uint64_t h = hash_file(d.path, &exists);
+        if (exists != d.exists || (exists && h != d.hash)) return false;
+    }
+    return true;
+}
+
+void write_entry(const std::string& path, const std::string& obj, uint64_t obj_hash, const std::vector<Dependency>& deps,
+                 const SceneLoad& load, const std::string& writer) {
+    Out out;
+    Header h{};
+    std::memcpy(h.magic, kMagic, 8);
+    h.version = kSceneCacheVersion;
+    h.loader_version = kObjLoaderVersion;
+    h.obj_hash = obj_hash;
+    h.scene_hash = hex_to_u64(load.scene_hash);
+    h.vertices = load.mesh.vertices.size();
+    h.triangles = load.mesh.triangle_count();
+    h.materials = load.mesh.materials.size();
+    h.dropped_non_finite = load.mesh.dropped.non_finite;
+    h.dropped_zero_area = load.mesh.dropped.zero_area;
+    h.dependencies = uint32_t(deps.size());
+    h.warnings = uint32_t(load.warnings.size());
+    std::memcpy(h.writer, writer.data(), std::min(writer.size(), sizeof h.writer));
+    out.pod(h);
+    out.str(fs::absolute(obj).string());
+    for (const Dependency& d : deps) {
+        out.str(d.path);
+        out.pod(uint8_t(d.exists));
+        out.pod(d.hash);
+    }
+    for (const std::string& w : load.warnings) out.str(w);
+    for (const Material& m : load.mesh.materials) {
+        out.str(m.name);
+        out.pod(m.diffuse);
+        out.pod(m.emission);
+    }
+    out.array(load.mesh.vertices);
+    out.array(load.mesh.indices);
+    out.array(load.mesh.material_ids);
+    const uint64_t sum = fnv1a_words(out.bytes().data(), out.bytes().size());
+    out.pod(sum);
+    std::error_code ec;
+    fs::create_directories(path.substr(0, path.find_last_of('/')), ec);
+    write_file_atomically(path, [&](std::FILE* f) { std::fwrite(out.bytes().data(), 1, out.bytes().size(), f); });
+}
+
+}  // namespace
+
+std::string default_scene_cache_dir() {
+    auto env = [](const char* name) -> std::string {
+        const char* v = std::getenv(name);
+        return v && *v ? v : "";
+    };
+    if (const std::string d = env("BVHLAB_CACHE_DIR"); !d.empty()) return d;
+    if (const std::string d = env("XDG_CACHE_HOME"); !d.empty()) return d + "/bvhlab";
+    if (const std::string d = env("HOME"); !d.empty()) return d + "/.cache/bvhlab";
+    return "";
+}
+
+uint64_t hash_file(const std::string& path, bool* exists) {
+    if (exists) *exists = true;
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT && exists) {
+            *exists = false;
+            return 0;
+        }
+        throw Error("cannot open '" + path + "': " + std::strerror(errno));
+    }
+    struct stat st{};
+    if (::fstat(fd, &st) != 0 || S_ISDIR(st.st_mode)) {
+        ::close(fd);
+        throw Error("cannot read '" + path + "'" + (S_ISDIR(st.st_mode) ? ": it is a directory" : ""));
+    }
+    const size_t size = size_t(st.st_size);
+    if (size == 0) {
+        ::close(fd);
+        return fnv1a_words(nullptr, 0);
+    }
+    void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    ::close(fd);
+    if (map == MAP_FAILED) throw Error("cannot read '" + path + "': " + std::strerror(errno));
+    constexpr size_t kChunk = size_t(4) << 20;
+    const size_t chunks = (size + kChunk - 1) / kChunk;
+    std::vector<uint64_t> part(chunks);
+    const auto* base = static_cast<const char*>(map);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        const size_t b = c * kChunk;
+        part[c] = fnv1a_words(base + b, std::min(kChunk, size - b));
+    });
+    ::munmap(map, size);
+    uint64_t h = fnv1a_words(&size, sizeof size);
+    return fnv1a_words(part.data(), part.size() * sizeof(uint64_t), h);
+}
+
+SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer) {
+    SceneLoad r;
+    if (cache_dir.empty()) {
+        r.mesh = load_obj(obj_path, &r.warnings);
+        r.scene_hash = scene_hash(r.mesh);
+        return r;
+    }
+    bool exists = false;
+    const uint64_t obj_hash = hash_file(obj_path, &exists);
+    if (!exists) throw Error("cannot open '" + obj_path + "': " + std::strerror(ENOENT));
+    r.cache_file = entry_path(cache_dir, obj_path);
+    if (fs::exists(r.cache_file)) {
+        try {
+            Entry e = parse_entry(read_whole(r.cache_file));
+            if (e.h.loader_version == kObjLoaderVersion && e.h.obj_hash == obj_hash && dependencies_unchanged(e.deps)) {
+                r.mesh = std::move(e.mesh);
+                r.warnings = std::move(e.warnings);
+                r.scene_hash = u64_to_hex(e.h.scene_hash);
+                r.from_cache = true;
+                return r;
+            }
+        } catch (const Unusable& u) {
+            r.cache_warning = "scene cache entry '" + r.cache_file + "' ignored and rebuilt: " + u.why;
+        }
+    }
+    std::vector<std::string> mtl_files;
+    r.mesh = load_obj(obj_path, &r.warnings, &mtl_files);
+    r.scene_hash = scene_hash(r.mesh);
+    std::vector<Dependency> deps;
+    for (const std::string& m : mtl_files) {
+        Dependency d{m, false, 0};
+        d.hash = hash_file(m, &d.exists);
+        deps.push_back(std::move(d));
+    }
+    try {
+        write_entry(r.cache_file, obj_path, obj_hash, deps, r, writer);
+    } catch (const Error& e) {
+        r.cache_warning = std::string("scene cache not written: ") + e.what();
+    }
+    return r;
+}
+
+std::vector<SceneCacheEntry> list_scene_cache(const std::string& dir) {
+    std::vector<SceneCacheEntry> out;
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) return out;
+    for (const auto& de : fs::directory_iterator(dir, ec)) {
+        if (de.path().extension() != kExtension || de.path().filename().string()[0] == '.') continue;
+        SceneCacheEntry s;
+        s.file = de.path().string();
+        s.bytes = de.file_size(ec);
+        try {
+            const Entry e = parse_entry(read_whole(s.file));
+            s.source = e.source;
+            s.triangles = e.h.triangles;
+            s.writer = std::string(e.h.writer, strnlen(e.h.writer, sizeof e.h.writer));
+        } catch (const Unusable& u) {
+            s.problem = u.why;
+        }
+        out.push_back(std::move(s));
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.file < b.file; });
+    return out;
+}
+
+size_t clear_scene_cache(const std::string& dir, uint64_t* bytes) {
+    size_t n = 0;
+    uint64_t total = 0;
+    std::error_code ec;
+    if (fs::is_directory(dir, ec)) {
+        for (const auto& de : fs::directory_iterator(dir, ec)) {
+            const std::string name = de.path().filename().string();
+            const bool entry = de.path().extension() == kExtension && name[0] != '.';
+            const bool temporary = name[0] == '.' && name.find(kExtension + std::string(".tmp-")) != std::string::npos;
+            if (!entry && !temporary) continue;  // never anything but the cache's own files
+            const uint64_t size = de.file_size(ec);
+            if (fs::remove(de.path(), ec)) {
+                ++n;
+                total += size;
+            }
+        }
+    }
+    if (bytes) *bytes = total;
+    return n;
+}
+
+}  // namespace bvhlab::accel
