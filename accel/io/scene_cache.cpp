@@ -6,8 +6,8 @@
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
-#include <unistd.h>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
@@ -199,8 +199,8 @@ bool dependencies_unchanged(const std::vector<Dependency>& deps) {
     return true;
 }
 
-void write_entry(const std::string& path, const std::string& obj, uint64_t obj_hash, const std::vector<Dependency>& deps,
-                 const SceneLoad& load, const std::string& writer) {
+void write_entry(const std::string& path, const std::string& obj, uint64_t obj_hash,
+                 const std::vector<Dependency>& deps, const SceneLoad& load, const std::string& writer) {
     Out out;
     Header h{};
     std::memcpy(h.magic, kMagic, 8);
@@ -262,7 +262,7 @@ uint64_t hash_file(const std::string& path, bool* exists) {
         }
         throw Error("cannot open '" + path + "': " + std::strerror(errno));
     }
-    struct stat st{};
+    struct stat st {};
     if (::fstat(fd, &st) != 0 || S_ISDIR(st.st_mode)) {
         ::close(fd);
         throw Error("cannot read '" + path + "'" + (S_ISDIR(st.st_mode) ? ": it is a directory" : ""));

@@ -11,8 +11,9 @@ namespace bvhlab::cli {
 void register_cache(CLI::App& app, Globals& g) {
     auto action = std::make_shared<std::string>();
     CLI::App* sub = app.add_subcommand(
-        "cache", "show (info) or empty (clear) the scene cache: $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab or "
-                 "~/.cache/bvhlab");
+        "cache",
+        "show (info) or empty (clear) the scene cache: $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab or "
+        "~/.cache/bvhlab");
     sub->add_option("action", *action, "info or clear")->required()->check(CLI::IsMember({"info", "clear"}));
     sub->callback([&g, action] {
         const std::string dir = accel::default_scene_cache_dir();
@@ -43,7 +44,8 @@ void register_cache(CLI::App& app, Globals& g) {
                 std::printf("%-60s %10.1f MB  %10llu triangles  from %s (written by %s)\n", e.file.c_str(),
                             double(e.bytes) / 1e6, (unsigned long long)e.triangles, e.source.c_str(), e.writer.c_str());
             } else {
-                std::printf("%-60s %10.1f MB  unusable: %s\n", e.file.c_str(), double(e.bytes) / 1e6, e.problem.c_str());
+                std::printf("%-60s %10.1f MB  unusable: %s\n", e.file.c_str(), double(e.bytes) / 1e6,
+                            e.problem.c_str());
             }
         }
         if (g.json)
