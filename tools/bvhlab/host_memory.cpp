@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The replaceable global allocation functions ([new.delete]) for the bvhlab tool: malloc and
-// free as libstdc++'s own, except that a failure throws OutOfHostMemory with its size. The
-// nothrow and array forms of the standard library call these.
+// free as libstdc++'s own, except that a failure throws OutOfHostMemory with its size.
 #include "tools/bvhlab/host_memory.h"
 
 #include <cstdio>
@@ -18,19 +17,51 @@ std::string describe_bytes(size_t bytes) {
 
 }  // namespace bvhlab::cli
 
-void* operator new(std::size_t n) {
+// Every form is replaced, not just the throwing scalar one: a sanitizer runtime (ASan) supplies
+// its own for the forms left out, and memory from its operator new[] freed by ours would be an
+// alloc-dealloc mismatch.
+namespace {
+
+void* allocate(std::size_t n) {
     if (void* p = std::malloc(n ? n : 1)) return p;
     throw bvhlab::cli::OutOfHostMemory(n);
 }
 
-void* operator new(std::size_t n, std::align_val_t a) {
+void* allocate_aligned(std::size_t n, std::align_val_t a) {
     const auto align = static_cast<std::size_t>(a);
     // aligned_alloc wants a size that is a multiple of the alignment.
     if (void* p = std::aligned_alloc(align, ((n ? n : 1) + align - 1) / align * align)) return p;
     throw bvhlab::cli::OutOfHostMemory(n);
 }
 
+}  // namespace
+
+void* operator new(std::size_t n) { return allocate(n); }
+void* operator new[](std::size_t n) { return allocate(n); }
+void* operator new(std::size_t n, std::align_val_t a) { return allocate_aligned(n, a); }
+void* operator new[](std::size_t n, std::align_val_t a) { return allocate_aligned(n, a); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return std::malloc(n ? n : 1); }
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return std::malloc(n ? n : 1); }
+void* operator new(std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+    try {
+        return allocate_aligned(n, a);
+    } catch (...) {
+        return nullptr;
+    }
+}
+void* operator new[](std::size_t n, std::align_val_t a, const std::nothrow_t& t) noexcept {
+    return operator new(n, a, t);
+}
+
 void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
