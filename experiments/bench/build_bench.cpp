@@ -2,8 +2,13 @@
 // BM_Build/<builder>/<scene>: build time (Mtris/s) with SAH, EPO, nodes, references and bytes
 // as counters, so speed and quality land in one JSON. Builders run with their defaults (SBVH
 // includes its 3 reinsertion passes); "sbvh-r0" is the SBVH without them and "sweep-r3" the
-// sweep with them, so the optimiser's share can be read off.
+// sweep with them, so the optimiser's share can be read off. BM_Build/embree-medium is Embree's
+// own build of the same triangles, in the same run (issue 21).
 #include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
+
+#include <chrono>
+#include <cstring>
 
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
@@ -67,6 +72,40 @@ void bm_build_kd(benchmark::State& state, std::shared_ptr<accel::TriangleMesh> m
     state.counters["duplication"] = double(s.references) / double(mesh->triangle_count());
 }
 
+/// Embree's own scene build on the same triangles (issue 21's yardstick): rtcCommitScene of one
+/// triangle geometry at RTC_BUILD_QUALITY_MEDIUM on every core, timed alone (the buffers are
+/// shared, set up outside the timed region).
+void bm_build_embree(benchmark::State& state, RTCBuildQuality quality, std::shared_ptr<accel::TriangleMesh> mesh) {
+    RTCDevice device = rtcNewDevice(nullptr);
+    if (!device) {
+        state.SkipWithError("rtcNewDevice failed");
+        return;
+    }
+    // Embree reads vertex buffers with 16-byte loads: one float of padding after the last vertex.
+    std::vector<float> vertices(3 * mesh->vertices.size() + 4);
+    std::memcpy(vertices.data(), mesh->vertices.data(), mesh->vertices.size() * sizeof(Vec3));
+    for (auto _ : state) {
+        RTCScene scene = rtcNewScene(device);
+        rtcSetSceneBuildQuality(scene, quality);
+        RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        rtcSetGeometryBuildQuality(geom, quality);
+        rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices.data(), 0,
+                                   3 * sizeof(float), mesh->vertices.size());
+        rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh->indices.data(), 0,
+                                   3 * sizeof(uint32_t), mesh->triangle_count());
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(scene, geom);
+        rtcReleaseGeometry(geom);
+        const auto t0 = std::chrono::steady_clock::now();
+        rtcCommitScene(scene);
+        state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        rtcReleaseScene(scene);
+    }
+    rtcReleaseDevice(device);
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(mesh->triangle_count()));
+    state.counters["triangles"] = double(mesh->triangle_count());
+}
+
 }  // namespace
 }  // namespace bvhlab::bench
 
@@ -95,6 +134,16 @@ int main(int argc, char** argv) {
                 ->Repetitions(3)
                 ->ReportAggregatesOnly(true);
         }
+        benchmark::RegisterBenchmark(("BM_Build/embree-medium/" + scene.name).c_str(),
+                                     [holder, load](benchmark::State& st) {
+                                         if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+                                         bench::bm_build_embree(st, RTC_BUILD_QUALITY_MEDIUM, *holder);
+                                     })
+            ->Unit(benchmark::kMillisecond)
+            ->MinWarmUpTime(0.2)
+            ->UseManualTime()
+            ->Repetitions(3)
+            ->ReportAggregatesOnly(true);
         // The same protocol as the BVH builders (a warm-up, then 3 repetitions), so that the
         // kd build / binned build ratio compares like with like.
         benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(),
