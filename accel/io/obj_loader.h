@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,8 +19,11 @@ namespace bvhlab::accel {
 /// Non-fatal loader messages (a missing .mtl, say) are appended to `warnings`, and the material
 /// files that the OBJ names (`mtllib`, resolved against its folder, whether or not they exist)
 /// to `mtl_files`.
+/// `progress`, when given, is called on the calling thread with the bytes parsed so far and the
+/// total, every 8 MiB and at the end.
+using LoadProgress = std::function<void(size_t done, size_t total)>;
 TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings = nullptr,
-                      std::vector<std::string>* mtl_files = nullptr);
+                      std::vector<std::string>* mtl_files = nullptr, const LoadProgress& progress = {});
 
 /// The loader's version: part of every scene-cache key, bumped whenever the same OBJ would load
 /// differently (scene_cache.h).

@@ -288,10 +288,11 @@ uint64_t hash_file(const std::string& path, bool* exists) {
     return fnv1a_words(part.data(), part.size() * sizeof(uint64_t), h);
 }
 
-SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer) {
+SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
+                          const LoadProgress& progress) {
     SceneLoad r;
     if (cache_dir.empty()) {
-        r.mesh = load_obj(obj_path, &r.warnings);
+        r.mesh = load_obj(obj_path, &r.warnings, nullptr, progress);
         r.scene_hash = scene_hash(r.mesh);
         return r;
     }
@@ -314,7 +315,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
         }
     }
     std::vector<std::string> mtl_files;
-    r.mesh = load_obj(obj_path, &r.warnings, &mtl_files);
+    r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
     r.scene_hash = scene_hash(r.mesh);
     std::vector<Dependency> deps;
     for (const std::string& m : mtl_files) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "accel/core/mesh.h"
+#include "accel/io/obj_loader.h"
 
 namespace bvhlab::accel {
 
@@ -41,7 +42,9 @@ struct SceneLoad {
 /// the OBJ itself throw as load_obj's do; a damaged, foreign or unreadable cache entry is never
 /// trusted and never fatal: the OBJ is parsed and the entry written again. `writer` (a commit)
 /// is stored in entries written.
-SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer);
+/// `progress` reports a parse as load_obj's does (a hit is not reported).
+SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
+                          const LoadProgress& progress = {});
 
 /// One entry of a cache folder, as `bvhlab cache info` shows it.
 struct SceneCacheEntry {

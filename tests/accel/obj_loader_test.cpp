@@ -107,6 +107,19 @@ TEST(ObjLoader, LargePolygonsAreFannedInPlaceAndFullyChecked) {
     expect_load_error("far_range.obj", far + "\n", "face index 99 out of range");
 }
 
+TEST(ObjLoader, ProgressReportsBytesUpToTheWholeFile) {
+    // A 20 MB OBJ: progress in 8 MiB steps, never backwards, ending at the file's size.
+    std::string text = kTri;
+    while (text.size() < (size_t(20) << 20)) text += "v 0.123456 0.654321 0.5\n# padding padding padding\nf 1 2 3\n";
+    TempFile f("progress.obj", text);
+    std::vector<std::pair<size_t, size_t>> calls;
+    accel::load_obj(f.path(), nullptr, nullptr, [&](size_t done, size_t total) { calls.push_back({done, total}); });
+    ASSERT_GE(calls.size(), 3u);
+    for (size_t i = 1; i < calls.size(); ++i) EXPECT_GE(calls[i].first, calls[i - 1].first);
+    EXPECT_EQ(calls.back().first, text.size());
+    EXPECT_EQ(calls.back().second, text.size());
+}
+
 TEST(ObjLoader, CornellBoxKeepsMaterialsAndEmission) {
     accel::TriangleMesh m = accel::load_obj(test::data_dir() + "/cornell_box.obj");
     EXPECT_EQ(m.triangle_count(), 32u);

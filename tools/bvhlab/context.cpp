@@ -73,6 +73,16 @@ CLI::Validator Finite() { return FiniteRange(-3.0e38, 3.0e38); }
 
 double Stage::seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
 
+void Stage::progress_bytes(size_t done, size_t total) const {
+    const double t = seconds();
+    if (g_.quiet || t < 1.0 || total == 0 || !isatty(fileno(stderr))) return;
+    const double f = double(done) / double(total);
+    char left[48] = "";
+    if (done > 0 && done < total) std::snprintf(left, sizeof left, ", about %.1f s left", t * (1.0 - f) / f);
+    std::fprintf(stderr, "\r[bvhlab] %s: %3d%% (%.0f of %.0f MB%s)   %s", what_.c_str(), int(100.0 * f),
+                 double(done) / 1e6, double(total) / 1e6, left, done >= total ? "\n" : "");
+}
+
 void Stage::progress(size_t done, size_t total) const {
     if (g_.quiet || !isatty(fileno(stderr))) return;
     std::fprintf(stderr, "\r[bvhlab] %s: %3d%%%s", what_.c_str(), int(100.0 * double(done) / double(total)),
@@ -191,7 +201,9 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         s.source = file.string();  // what a catalogue name resolved to
         const std::string cache_dir = g.no_scene_cache ? "" : accel::default_scene_cache_dir();
         Stage st(g, "loading " + file.string());
-        accel::SceneLoad load = accel::load_obj_cached(file.string(), cache_dir, git_commit());
+        accel::SceneLoad load =
+            accel::load_obj_cached(file.string(), cache_dir, git_commit(),
+                                   [&st](size_t done, size_t total) { st.progress_bytes(done, total); });
         s.mesh = std::move(load.mesh);
         s.hash = load.scene_hash;
         s.load_ms = 1000.0 * st.seconds();
