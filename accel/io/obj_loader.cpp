@@ -58,8 +58,14 @@ bool fast_int(const char*& p, const char* e, long& v) {
     if (neg) ++p;
     long x = 0;
     int digits = 0;
-    for (; p < e && *p >= '0' && *p <= '9'; ++p, ++digits) x = x * 10 + (*p - '0');
-    if (digits == 0 || digits > 10) {
+    for (; p < e && *p >= '0' && *p <= '9'; ++p) {
+        if (++digits > 10) {  // stop before the product can overflow (found by the OBJ fuzz target)
+            p = s;
+            return false;
+        }
+        x = x * 10 + (*p - '0');
+    }
+    if (digits == 0) {
         p = s;
         return false;
     }

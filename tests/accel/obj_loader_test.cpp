@@ -47,6 +47,9 @@ TEST(ObjLoader, MalformedLines) {
     expect_load_error("bad_f.obj", std::string(kTri) + "f 1 2 x\n", "bad vertex reference");
     expect_load_error("zero_f.obj", std::string(kTri) + "f 0 1 2\n", "line 4");
     expect_load_error("two_f.obj", std::string(kTri) + "f 1 2\n", "at least 3 vertices");
+    // 23 digits: beyond int, refused (the in-place reader once overflowed a long on it).
+    expect_load_error("long_ref.obj", std::string(kTri) + "f 1/1 11111111111111111111111 2\n", "bad vertex reference");
+    expect_load_error("long_ref2.obj", std::string(kTri) + "f 1 2 3/99999999999\n", "bad vertex reference");
 }
 
 TEST(ObjLoader, FaceIndexOutOfRange) {
