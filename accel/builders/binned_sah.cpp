@@ -82,35 +82,41 @@ public:
         }
     }
 
-    /// Exact SAH sweep for a small node: sort by centroid on each axis, sweep, recurse.
+    /// Exact SAH sweep for a small node: sort by centroid on each axis, sweep, recurse. Each
+    /// axis sorts 12-byte keys (centroid, id, position), not the 28-byte references; the
+    /// references are permuted once, into the order of the axis chosen (or of the last axis
+    /// sorted, as a sort of the references themselves left them), so the tree is the same.
     void build_small(uint32_t slot, uint32_t b, uint32_t e, const AABB& bounds, const AABB& cbounds, uint32_t depth) {
         const uint32_t count = e - b;
         float best_weight = std::numeric_limits<float>::infinity();
         int best_axis = -1;
         uint32_t best_pos = 0;  // size of the left side
         int sorted_axis = -1;
-        auto by_axis = [this, b, e, &sorted_axis](int a) {
-            sorted_axis = a;
-            std::sort(refs_.begin() + b, refs_.begin() + e, [a](const PrimRef& x, const PrimRef& y) {
-                const float cx = x.centroid()[a], cy = y.centroid()[a];
-                return cx < cy || (cx == cy && x.prim_id < y.prim_id);
-            });
+        struct Key {
+            float c;
+            uint32_t prim_id, pos;
         };
+        Key keys[3][64];
         if (count > c_.min_leaf_size) {
             float right_area[64];
             for (int a = 0; a < 3; ++a) {
                 if (cbounds.extent()[a] <= 0.0f) continue;
-                by_axis(a);
+                sorted_axis = a;
+                Key* k = keys[a];
+                for (uint32_t i = 0; i < count; ++i) k[i] = {refs_[b + i].centroid()[a], refs_[b + i].prim_id, i};
+                std::sort(k, k + count, [](const Key& x, const Key& y) {
+                    return x.c < y.c || (x.c == y.c && x.prim_id < y.prim_id);
+                });
                 AABB acc = AABB::empty();
                 for (uint32_t i = count - 1; i > 0; --i) {
-                    acc.extend(refs_[b + i].bounds);
+                    acc.extend(refs_[b + k[i].pos].bounds);
                     right_area[i] = acc.half_area();
                 }
                 acc = AABB::empty();
                 for (uint32_t i = 1; i < count; ++i) {
-                    acc.extend(refs_[b + i - 1].bounds);
+                    acc.extend(refs_[b + k[i - 1].pos].bounds);
                     // No split between equal centroids: a plane could not reproduce it.
-                    if (refs_[b + i - 1].centroid()[a] == refs_[b + i].centroid()[a]) continue;
+                    if (k[i - 1].c == k[i].c) continue;
                     const float w = acc.half_area() * float(i) + right_area[i] * float(count - i);
                     if (w < best_weight) {
                         best_weight = w;
@@ -120,19 +126,27 @@ public:
                 }
             }
         }
+        auto permute = [&](int a) {
+            PrimRef tmp[64];
+            for (uint32_t i = 0; i < count; ++i) tmp[i] = refs_[b + keys[a][i].pos];
+            std::copy(tmp, tmp + count, refs_.begin() + b);
+        };
         float cost = std::numeric_limits<float>::infinity();
         if (best_axis >= 0) {
             const float pa = bounds.half_area();
             cost = c_.traversal_cost + c_.intersection_cost * (pa > 0.0f ? best_weight / pa : 0.0f);
         }
         const SplitDecision d = decide_split(c_, count, depth, cost);
+        if (d == SplitDecision::kSplit)
+            permute(best_axis);
+        else if (sorted_axis >= 0)
+            permute(sorted_axis);
         if (d == SplitDecision::kLeaf) {
             tree_.set_leaf(slot, b, e, bounds);
             return;
         }
         uint32_t m;
         if (d == SplitDecision::kSplit) {
-            if (best_axis != sorted_axis) by_axis(best_axis);
             m = b + best_pos;
         } else {
             m = median(b, e, cbounds);
