@@ -116,20 +116,31 @@ bool parse_face_token_slow(const char* b, const char* e, long& vi) {
     return *end == '\0';
 }
 
+/// The next blank-separated token of [p, e) as [s, p), or false at the end of the line or a
+/// comment ('#' runs to the end of the line). Every pass over OBJ lines tokenises with this.
+bool next_token(const char*& p, const char* e, const char*& s) {
+    while (p < e && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
+    if (p >= e || *p == '#') return false;
+    s = p;
+    while (p < e && *p != ' ' && *p != '\t' && *p != '\r' && *p != '#') ++p;
+    return true;
+}
+
 /// Faces with more vertex references than this are triangulated by bvhlab as a fan, in place,
 /// before tinyobjloader sees them: its ear clipping is quadratic or worse in the references (a
 /// face of 50k took 22 s, of 2M minutes). Smaller polygons keep tinyobjloader's ear clipping,
 /// which handles concave ones; 64^2 steps per face bound its cost.
 constexpr size_t kEarClipMaxRefs = 64;
 
-/// Byte ranges [begin, end) of the face lines (their text after the "f") that scan_obj found
+/// Byte ranges [begin, end) of the face lines (their references) that find_huge_faces found
 /// with more than kEarClipMaxRefs references.
 using LineRanges = std::vector<std::pair<size_t, size_t>>;
 
 /// Throws on the first malformed v/vt/vn/f line or face index out of range. Returns the
 /// (0-based) indices of vertices with a NaN or infinite coordinate: tinyobjloader reads those
-/// as 0, which would silently move the vertex instead of dropping its triangles. Faces too
-/// Runs beside tinyobjloader's parse (load_obj), on the text as written.
+/// as 0, which would silently move the vertex instead of dropping its triangles. The material
+/// files named by `mtllib` go to `mtllibs`. Runs beside tinyobjloader's parse (load_obj), on the
+/// text as written.
 std::vector<size_t> scan_obj(const std::string& path, const std::string& text, std::vector<std::string>& mtllibs) {
     std::vector<size_t> non_finite;
     size_t line_no = 0, nv = 0, pos = 0;
@@ -148,15 +159,7 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, s
         // Tokenise on blanks; comments run to the end of the line.
         const char* toks[32][2];
         int nt = 0;
-        for (const char* p = b; p < e && nt < 32;) {
-            while (p < e && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
-            if (p >= e || *p == '#') break;
-            const char* s = p;
-            while (p < e && *p != ' ' && *p != '\t' && *p != '\r' && *p != '#') ++p;
-            toks[nt][0] = s;
-            toks[nt][1] = p;
-            ++nt;
-        }
+        for (const char* p = b; nt < 32 && next_token(p, e, toks[nt][0]); ++nt) toks[nt][1] = p;
         if (nt == 0) continue;
         const std::string_view key(toks[0][0], size_t(toks[0][1] - toks[0][0]));
         if (key == "v" || key == "vn" || key == "vt") {
@@ -180,11 +183,8 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, s
         } else if (key == "f") {
             if (nt < 4) fail(line_no, "malformed 'f' line: a face needs at least 3 vertices");
             // Every reference, however many (toks holds only the first 31).
-            for (const char* p = toks[1][0]; p < e;) {
-                while (p < e && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
-                if (p >= e || *p == '#') break;
-                const char* s = p;
-                while (p < e && *p != ' ' && *p != '\t' && *p != '\r' && *p != '#') ++p;
+            const char* s = nullptr;
+            for (const char* p = toks[1][0]; next_token(p, e, s);) {
                 long vi = 0;
                 if (!parse_face_token(s, p, vi))
                     fail(line_no, "malformed 'f' line: bad vertex reference '" + std::string(s, p) + "'");
@@ -219,12 +219,8 @@ LineRanges find_huge_faces(const std::string& text) {
                 const char* first = p + 1;
                 while (first < e && (*first == ' ' || *first == '\t')) ++first;
                 size_t refs = 0;
-                for (const char* q = first; q < e;) {
-                    while (q < e && (*q == ' ' || *q == '\t' || *q == '\r')) ++q;
-                    if (q >= e || *q == '#') break;
-                    while (q < e && *q != ' ' && *q != '\t' && *q != '\r' && *q != '#') ++q;
-                    ++refs;
-                }
+                const char* s = nullptr;
+                for (const char* q = first; next_token(q, e, s);) ++refs;
                 if (refs > kEarClipMaxRefs) out.push_back({size_t(first - begin), size_t(e - begin)});
             }
         }
@@ -243,13 +239,8 @@ std::string fan_huge_faces(const std::string& text, const LineRanges& huge) {
     for (const auto& [b, e] : huge) {
         out.append(text, copied, b - copied);  // up to and including "f "
         std::vector<std::string_view> refs;
-        for (size_t p = b; p < e;) {
-            while (p < e && (text[p] == ' ' || text[p] == '\t' || text[p] == '\r')) ++p;
-            if (p >= e || text[p] == '#') break;
-            const size_t s = p;
-            while (p < e && text[p] != ' ' && text[p] != '\t' && text[p] != '\r' && text[p] != '#') ++p;
-            refs.emplace_back(text.data() + s, p - s);
-        }
+        const char* s = nullptr;
+        for (const char* p = text.data() + b; next_token(p, text.data() + e, s);) refs.emplace_back(s, size_t(p - s));
         for (size_t i = 1; i + 1 < refs.size(); ++i) {
             if (i > 1) out += "\nf ";
             out.append(refs[0]).append(" ").append(refs[i]).append(" ").append(refs[i + 1]);
