@@ -4,7 +4,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <string>
 
 namespace bvhlab::accel {
 
@@ -30,5 +33,13 @@ inline uint64_t fnv1a_words(const void* data, size_t n, uint64_t h = kFnvOffset)
     }
     return fnv1a(p + i, n - i, h);
 }
+
+/// A hash as 16 hex digits (the scene hash's printed form), and back (0 for text that is not hex).
+inline std::string hash_hex(uint64_t h) {
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return buf;
+}
+inline uint64_t hash_from_hex(const std::string& hex) { return std::strtoull(hex.c_str(), nullptr, 16); }
 
 }  // namespace bvhlab::accel

@@ -73,9 +73,7 @@ std::string scene_hash(const TriangleMesh& mesh) {
             h = fnv1a(&v, 12, h);
         }
     }
-    char buf[17];
-    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-    return buf;
+    return hash_hex(h);
 }
 
 }  // namespace bvhlab::accel

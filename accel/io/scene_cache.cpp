@@ -110,21 +110,13 @@ struct Dependency {
     uint64_t hash;
 };
 
-uint64_t hex_to_u64(const std::string& hex) { return std::strtoull(hex.c_str(), nullptr, 16); }
-
-std::string u64_to_hex(uint64_t v) {
-    char b[17];
-    std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
-    return b;
-}
-
 /// The entry of `obj` in `dir`: its stem, and a hash of its absolute path and the loader version.
 std::string entry_path(const std::string& dir, const std::string& obj) {
     std::error_code ec;
     fs::path abs = fs::weakly_canonical(fs::absolute(obj), ec);
     if (ec) abs = fs::absolute(obj);
     const std::string key = abs.string() + '\0' + std::to_string(kObjLoaderVersion);
-    return (fs::path(dir) / (abs.stem().string() + "-" + u64_to_hex(fnv1a(key.data(), key.size())) + kExtension))
+    return (fs::path(dir) / (abs.stem().string() + "-" + hash_hex(fnv1a(key.data(), key.size())) + kExtension))
         .string();
 }
 
@@ -207,7 +199,7 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
     h.version = kSceneCacheVersion;
     h.loader_version = kObjLoaderVersion;
     h.obj_hash = obj_hash;
-    h.scene_hash = hex_to_u64(load.scene_hash);
+    h.scene_hash = hash_from_hex(load.scene_hash);
     h.vertices = load.mesh.vertices.size();
     h.triangles = load.mesh.triangle_count();
     h.materials = load.mesh.materials.size();
@@ -235,7 +227,7 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
     const uint64_t sum = fnv1a_words(out.bytes().data(), out.bytes().size());
     out.pod(sum);
     std::error_code ec;
-    fs::create_directories(path.substr(0, path.find_last_of('/')), ec);
+    fs::create_directories(fs::path(path).parent_path(), ec);
     write_file_atomically(path, [&](std::FILE* f) { std::fwrite(out.bytes().data(), 1, out.bytes().size(), f); });
 }
 
@@ -306,7 +298,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
             if (e.h.loader_version == kObjLoaderVersion && e.h.obj_hash == obj_hash && dependencies_unchanged(e.deps)) {
                 r.mesh = std::move(e.mesh);
                 r.warnings = std::move(e.warnings);
-                r.scene_hash = u64_to_hex(e.h.scene_hash);
+                r.scene_hash = hash_hex(e.h.scene_hash);
                 r.from_cache = true;
                 return r;
             }

@@ -61,7 +61,7 @@ void write_file(const std::string& path, Header h, const std::vector<Node>& node
 Header provenance(const TreeFileMeta& meta) {
     Header h{};
     h.triangles = meta.triangles;
-    h.scene_hash = std::strtoull(meta.scene_hash.c_str(), nullptr, 16);
+    h.scene_hash = hash_from_hex(meta.scene_hash);
     return h;
 }
 
@@ -166,9 +166,7 @@ TreeFile read_tree_file(const std::string& path) {
     }
     f.meta.builder = BuilderKind(h.builder);
     f.meta.triangles = h.triangles;
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h.scene_hash));
-    f.meta.scene_hash = hex;
+    f.meta.scene_hash = hash_hex(h.scene_hash);
     BuilderOptions& o = f.meta.options;
     o.num_bins = int(h.num_bins);
     o.config.min_leaf_size = h.min_leaf;

@@ -27,10 +27,14 @@ void* allocate(std::size_t n) {
     throw bvhlab::cli::OutOfHostMemory(n);
 }
 
-void* allocate_aligned(std::size_t n, std::align_val_t a) {
+/// Null on failure. aligned_alloc wants a size that is a multiple of the alignment.
+void* try_allocate_aligned(std::size_t n, std::align_val_t a) noexcept {
     const auto align = static_cast<std::size_t>(a);
-    // aligned_alloc wants a size that is a multiple of the alignment.
-    if (void* p = std::aligned_alloc(align, ((n ? n : 1) + align - 1) / align * align)) return p;
+    return std::aligned_alloc(align, ((n ? n : 1) + align - 1) / align * align);
+}
+
+void* allocate_aligned(std::size_t n, std::align_val_t a) {
+    if (void* p = try_allocate_aligned(n, a)) return p;
     throw bvhlab::cli::OutOfHostMemory(n);
 }
 
@@ -43,14 +47,10 @@ void* operator new[](std::size_t n, std::align_val_t a) { return allocate_aligne
 void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return std::malloc(n ? n : 1); }
 void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return std::malloc(n ? n : 1); }
 void* operator new(std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
-    try {
-        return allocate_aligned(n, a);
-    } catch (...) {
-        return nullptr;
-    }
+    return try_allocate_aligned(n, a);
 }
-void* operator new[](std::size_t n, std::align_val_t a, const std::nothrow_t& t) noexcept {
-    return operator new(n, a, t);
+void* operator new[](std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+    return try_allocate_aligned(n, a);
 }
 
 void operator delete(void* p) noexcept { std::free(p); }
