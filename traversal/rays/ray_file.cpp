@@ -47,6 +47,12 @@ File open(const std::string& path, const char* mode) {
     return File(f, &std::fclose);
 }
 
+/// The checksum of a version 2 file: its header, then its records.
+template <typename T>
+uint64_t content_checksum(const HeaderV2& h, const std::vector<T>& records) {
+    return accel::fnv1a_words(records.data(), records.size() * sizeof(T), accel::fnv1a_words(&h, sizeof h));
+}
+
 template <typename T>
 void write_records(const std::string& path, const char* magic, uint32_t version, Query query,
                    const std::vector<T>& records, const std::string& writer) {
@@ -57,8 +63,7 @@ void write_records(const std::string& path, const char* magic, uint32_t version,
     h.base.count = records.size();
     const std::string w = writer.empty() ? "unknown" : writer.substr(0, kFileWriterBytes);
     std::memcpy(h.writer, w.data(), w.size());
-    uint64_t sum = accel::fnv1a_words(&h, sizeof h);
-    sum = accel::fnv1a_words(records.data(), records.size() * sizeof(T), sum);
+    const uint64_t sum = content_checksum(h, records);
     accel::write_file_atomically(path, [&](std::FILE* f) {
         std::fwrite(&h, sizeof h, 1, f);
         if (!records.empty()) std::fwrite(records.data(), sizeof(T), records.size(), f);
@@ -66,9 +71,9 @@ void write_records(const std::string& path, const char* magic, uint32_t version,
     });
 }
 
-template <typename T>
-std::vector<T> read_records(const std::string& path, const char* magic, uint32_t version, const char* what,
-                            Query& query, std::string& writer, uint32_t& file_version) {
+/// Reads the records of a ray or hit file and sets `set`'s query, writer and version.
+template <typename T, typename Set>
+std::vector<T> read_records(const std::string& path, const char* magic, uint32_t version, const char* what, Set& set) {
     File f = open(path, "rb");
     HeaderV2 h{};
     if (std::fread(&h.base, sizeof h.base, 1, f.get()) != 1)
@@ -81,12 +86,12 @@ std::vector<T> read_records(const std::string& path, const char* magic, uint32_t
                     "; this build reads versions 1 and " + std::to_string(version));
     if (h.base.flags & ~kFlagAnyHit)
         throw Error("'" + path + "' sets unknown flag bits 0x" + std::to_string(h.base.flags & ~kFlagAnyHit));
-    query = (h.base.flags & kFlagAnyHit) ? Query::kAny : Query::kClosest;
-    file_version = h.base.version;
+    set.query = (h.base.flags & kFlagAnyHit) ? Query::kAny : Query::kClosest;
+    set.version = h.base.version;
     const size_t header = v1 ? sizeof(Header) : sizeof(HeaderV2), trailer = v1 ? 0 : sizeof(uint64_t);
     if (!v1 && std::fread(h.writer, sizeof h.writer, 1, f.get()) != 1)
         throw Error("'" + path + "' is truncated: shorter than the 48-byte " + std::string(what) + " header");
-    writer = v1 ? std::string() : std::string(h.writer, strnlen(h.writer, sizeof h.writer));
+    set.writer = v1 ? std::string() : std::string(h.writer, strnlen(h.writer, sizeof h.writer));
     std::fseek(f.get(), 0, SEEK_END);
     const long size = std::ftell(f.get());
     if (size < 0) throw Error("cannot read '" + path + "': " + std::strerror(errno));
@@ -103,13 +108,9 @@ std::vector<T> read_records(const std::string& path, const char* magic, uint32_t
     if ((h.base.count && std::fread(out.data(), sizeof(T), out.size(), f.get()) != out.size()) ||
         (!v1 && std::fread(&stored, sizeof stored, 1, f.get()) != 1))
         throw Error("cannot read '" + path + "': " + std::strerror(errno));
-    if (!v1) {
-        uint64_t sum = accel::fnv1a_words(&h, sizeof h);
-        sum = accel::fnv1a_words(out.data(), out.size() * sizeof(T), sum);
-        if (sum != stored)
-            throw Error("'" + path + "' is damaged: its checksum does not match its contents (" + what + ", " +
-                        std::to_string(h.base.count) + " records)");
-    }
+    if (!v1 && content_checksum(h, out) != stored)
+        throw Error("'" + path + "' is damaged: its checksum does not match its contents (" + what + ", " +
+                    std::to_string(h.base.count) + " records)");
     return out;
 }
 
@@ -137,7 +138,7 @@ std::string invalid_ray(const Ray& r) {
 
 RaySet read_ray_file(const std::string& path) {
     RaySet s;
-    s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s.query, s.writer, s.version);
+    s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s);
     for (size_t i = 0; i < s.rays.size(); ++i) {
         const std::string why = invalid_ray(s.rays[i]);
         if (!why.empty()) throw Error("ray file '" + path + "': ray " + std::to_string(i) + " has " + why);
@@ -151,7 +152,7 @@ void write_hit_file(const std::string& path, const HitSet& set) {
 
 HitSet read_hit_file(const std::string& path) {
     HitSet s;
-    s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s.query, s.writer, s.version);
+    s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s);
     for (size_t i = 0; i < s.hits.size(); ++i) {
         const Hit& h = s.hits[i];
         if (h.tri < -1)
