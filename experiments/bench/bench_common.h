@@ -30,6 +30,7 @@ struct BenchScene {
     trav::Camera camera;
     bool has_camera = false;
     float ao_length = 0.0f;
+    std::string file;  ///< the OBJ of a catalogue scene ("" for procedural ones)
 };
 
 /// soup-1M and structured-1M, then every catalogue scene of $BVHLAB_SCENES.
@@ -50,6 +51,7 @@ inline std::vector<BenchScene> bench_scenes(bool with_procedural = true) {
         BenchScene s;
         s.name = e.name;
         s.load = [file = e.file] { return accel::load_obj(file); };
+        s.file = e.file;
         s.has_camera = e.camera.has_value();
         if (e.camera) s.camera = *e.camera;
         s.ao_length = e.ao_length;

@@ -9,15 +9,8 @@
 
 #include <filesystem>
 
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
 #include "accel/io/scene_cache.h"
-#include "traversal/rays/scene_catalogue.h"
-
-namespace bvhlab {
-const char* git_commit();
-const char* build_type();
-}  // namespace bvhlab
+#include "experiments/bench/bench_common.h"
 
 namespace {
 namespace fs = std::filesystem;
@@ -56,8 +49,8 @@ int main(int argc, char** argv) {
     const std::string soup = (tmp / "soup-1M.obj").string();
     bvhlab::accel::write_obj(bvhlab::accel::make_procedural(bvhlab::accel::ProceduralKind::kSoup, 1000000, 1), soup);
     scenes.push_back({"soup-1M", soup});
-    if (const char* dir = std::getenv("BVHLAB_SCENES"); dir && *dir)
-        for (const auto& e : bvhlab::trav::read_catalogue(dir)) scenes.push_back({e.name, e.file});
+    for (const auto& scene : bvhlab::bench::bench_scenes(/*with_procedural=*/false))
+        scenes.push_back({scene.name, scene.file});
     const std::string cache = (tmp / "cache").string();
     for (const auto& [name, file] : scenes) {
         benchmark::RegisterBenchmark(("tinyobj_parse/" + name).c_str(), tinyobj_parse, file)
