@@ -114,7 +114,15 @@ int main(int argc, char** argv) {
     return bench::bench_main(argc, argv, [](const bench::BenchScene& scene) {
         // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
         auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
-        auto load = scene.load;
+        auto mesh = [holder, load = scene.load] {
+            if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+            return *holder;
+        };
+        // Every build the same protocol (a warm-up, then 3 repetitions), so that the ratios
+        // between builders (kd / binned, binned / Embree) compare like with like.
+        auto protocol = [](benchmark::internal::Benchmark* b) {
+            return b->Unit(benchmark::kMillisecond)->MinWarmUpTime(0.2)->Repetitions(3)->ReportAggregatesOnly(true);
+        };
         const std::pair<accel::BuilderKind, int> variants[] = {{accel::BuilderKind::kBinned, -1},
                                                                {accel::BuilderKind::kSweep, -1},
                                                                {accel::BuilderKind::kSweep, 3},
@@ -123,38 +131,17 @@ int main(int argc, char** argv) {
         for (const auto& [kind, reinsertion] : variants) {
             const std::string suffix = reinsertion < 0 ? "" : "-r" + std::to_string(reinsertion);
             const std::string name = std::string("BM_Build/") + accel::builder_name(kind) + suffix + "/" + scene.name;
-            benchmark::RegisterBenchmark(name.c_str(),
-                                         [holder, load, kind = kind, reinsertion = reinsertion](benchmark::State& st) {
-                                             if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
-                                             bench::bm_build(st, kind, reinsertion, *holder);
-                                         })
-                ->Unit(benchmark::kMillisecond)
-                ->MinWarmUpTime(0.2)
-                ->UseRealTime()
-                ->Repetitions(3)
-                ->ReportAggregatesOnly(true);
+            protocol(benchmark::RegisterBenchmark(name.c_str(), [mesh, kind = kind,
+                                                                 reinsertion = reinsertion](benchmark::State& st) {
+                bench::bm_build(st, kind, reinsertion, mesh());
+            }))->UseRealTime();
         }
-        benchmark::RegisterBenchmark(("BM_Build/embree-medium/" + scene.name).c_str(),
-                                     [holder, load](benchmark::State& st) {
-                                         if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
-                                         bench::bm_build_embree(st, RTC_BUILD_QUALITY_MEDIUM, *holder);
-                                     })
-            ->Unit(benchmark::kMillisecond)
-            ->MinWarmUpTime(0.2)
-            ->UseManualTime()
-            ->Repetitions(3)
-            ->ReportAggregatesOnly(true);
-        // The same protocol as the BVH builders (a warm-up, then 3 repetitions), so that the
-        // kd build / binned build ratio compares like with like.
-        benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(),
-                                     [holder, load](benchmark::State& st) {
-                                         if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
-                                         bench::bm_build_kd(st, *holder);
-                                     })
-            ->Unit(benchmark::kMillisecond)
-            ->MinWarmUpTime(0.2)
-            ->UseRealTime()
-            ->Repetitions(3)
-            ->ReportAggregatesOnly(true);
+        protocol(benchmark::RegisterBenchmark(
+                     ("BM_Build/embree-medium/" + scene.name).c_str(),
+                     [mesh](benchmark::State& st) { bench::bm_build_embree(st, RTC_BUILD_QUALITY_MEDIUM, mesh()); }))
+            ->UseManualTime();
+        protocol(benchmark::RegisterBenchmark(("BM_Build/kdtree/" + scene.name).c_str(), [mesh](benchmark::State& st) {
+            bench::bm_build_kd(st, mesh());
+        }))->UseRealTime();
     });
 }
