@@ -105,6 +105,9 @@ expect_error bad-device "device" bench "$data/cornell_box.obj" --device tpu
 expect_error embree-no-layout "--layout does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --layout cwbvh
 expect_error collapse-needs-cwbvh "--collapse applies to --layout cwbvh" build "$data/cornell_box.obj" --collapse greedy
 expect_error cw-tris-needs-cwbvh "--cw-tris applies to --layout cwbvh" build "$data/cornell_box.obj" --cw-tris vertices
+expect_error cw-tris-bad-value "--cw-tris: nope not in" build "$data/cornell_box.obj" --layout cwbvh --cw-tris nope
+expect_error cache-bad-action "action: frob not in" cache frob
+expect_error cache-no-scene-cache "not expected: --no-scene-cache" cache info --no-scene-cache
 expect_error cw-tris-embree "--cw-tris does not apply to --device embree" bench "$data/cornell_box.obj" --device embree --cw-tris vertices
 expect_error layout-not-for-kd "--layout applies to BVHs" build "$data/cornell_box.obj" --structure kdtree --layout cwbvh
 expect_error layout-bad-value "layout" build "$data/cornell_box.obj" --layout wide
