@@ -1,18 +1,19 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # Installs bvhlab's build dependencies from Debian 12's packages. Idempotent: installs only
-# what is missing. Usage: tools/install_deps.sh [--with-oiio] [--with-fuzz]
+# what is missing. Usage: tools/install_deps.sh [--with-fuzz]
+# (OpenImageIO is a default dependency since the renderer; --with-oiio is still accepted.)
 # (--with-fuzz: clang-14 and libFuzzer, for tools/fuzz.sh)
 set -euo pipefail
 
 pkgs=(build-essential cmake git python3 libembree-dev libtinyobjloader-dev libglm-dev libtbb-dev
-      libcli11-dev nlohmann-json3-dev libbenchmark-dev libgtest-dev clang-format-14)
+      libcli11-dev nlohmann-json3-dev libbenchmark-dev libgtest-dev clang-format-14 libopenimageio-dev pkg-config)
 for arg in "$@"; do
     case "$arg" in
-        --with-oiio) pkgs+=(libopenimageio-dev) ;;
+        --with-oiio) ;;  # installed by default
         --with-fuzz) pkgs+=(clang-14 libclang-rt-14-dev) ;;
-        -h|--help) echo "usage: $0 [--with-oiio] [--with-fuzz]"; exit 0 ;;
-        *) echo "install_deps.sh: unknown option '$arg' (expected --with-oiio or --with-fuzz)" >&2; exit 2 ;;
+        -h|--help) echo "usage: $0 [--with-fuzz]"; exit 0 ;;
+        *) echo "install_deps.sh: unknown option '$arg' (expected --with-fuzz)" >&2; exit 2 ;;
     esac
 done
 

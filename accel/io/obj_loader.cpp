@@ -309,6 +309,13 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
         mat.name = m.name;
         mat.diffuse = {m.diffuse[0], m.diffuse[1], m.diffuse[2]};
         mat.emission = {m.emission[0], m.emission[1], m.emission[2]};
+        mat.specular = {m.specular[0], m.specular[1], m.specular[2]};
+        mat.ambient = {m.ambient[0], m.ambient[1], m.ambient[2]};
+        mat.shininess = m.shininess;
+        mat.ior = m.ior;
+        mat.dissolve = m.dissolve;
+        mat.illum = m.illum;
+        mat.diffuse_texture = m.diffuse_texname;
         mesh.materials.push_back(mat);
     }
     const size_t nv = attrib.vertices.size() / 3;

@@ -166,6 +166,13 @@ Entry parse_entry(const std::string& data) {
         m.name = in.str();
         m.diffuse = in.pod<Vec3>();
         m.emission = in.pod<Vec3>();
+        m.specular = in.pod<Vec3>();
+        m.ambient = in.pod<Vec3>();
+        m.shininess = in.pod<float>();
+        m.ior = in.pod<float>();
+        m.dissolve = in.pod<float>();
+        m.illum = in.pod<int32_t>();
+        m.diffuse_texture = in.str();
         e.mesh.materials.push_back(std::move(m));
     }
     in.array(e.mesh.vertices, e.h.vertices, "vertex");
@@ -220,6 +227,13 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
         out.str(m.name);
         out.pod(m.diffuse);
         out.pod(m.emission);
+        out.pod(m.specular);
+        out.pod(m.ambient);
+        out.pod(m.shininess);
+        out.pod(m.ior);
+        out.pod(m.dissolve);
+        out.pod(m.illum);
+        out.str(m.diffuse_texture);
     }
     out.array(load.mesh.vertices);
     out.array(load.mesh.indices);

@@ -16,7 +16,7 @@
 
 namespace bvhlab::accel {
 
-constexpr uint32_t kSceneCacheVersion = 1;
+constexpr uint32_t kSceneCacheVersion = 2;  // 2: the renderer's material parameters
 
 /// $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab, else $HOME/.cache/bvhlab ("" when none is set).
 std::string default_scene_cache_dir();

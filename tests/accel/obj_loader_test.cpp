@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <cmath>
 
 #include "accel/core/check.h"
@@ -135,6 +137,25 @@ TEST(ObjLoader, CornellBoxKeepsMaterialsAndEmission) {
     int light_tris = 0;
     for (int32_t id : m.material_ids) light_tris += id == light;
     EXPECT_EQ(light_tris, 2);
+}
+
+// The MTL parameters the renderer maps: Ks, Ka, Ns, Ni, d, illum and map_Kd as written.
+TEST(ObjLoader, KeepsTheRenderersMaterialParameters) {
+    test::TempFile mtl("params.mtl",
+                       "newmtl m\nKd 0.5 0.5 0.5\nKs 0.25 0.5 0.75\nKa 20 20 20\nNs 250\nNi 1.33\nd 0.5\nillum 7\n"
+                       "map_Kd textures\\wood.png\n");
+    test::TempFile obj("params.obj", "mtllib " + std::filesystem::path(mtl.path()).filename().string() +
+                                         "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
+    const accel::TriangleMesh m = accel::load_obj(obj.path());
+    ASSERT_EQ(m.materials.size(), 1u);
+    const accel::Material& x = m.materials[0];
+    EXPECT_EQ(x.specular.z, 0.75f);
+    EXPECT_EQ(x.ambient.x, 20.0f);
+    EXPECT_EQ(x.shininess, 250.0f);
+    EXPECT_EQ(x.ior, 1.33f);
+    EXPECT_EQ(x.dissolve, 0.5f);
+    EXPECT_EQ(x.illum, 7);
+    EXPECT_EQ(x.diffuse_texture, "textures\\wood.png");
 }
 
 TEST(ObjLoader, WriteThenLoadIsExact) {

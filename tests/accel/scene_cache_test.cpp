@@ -30,7 +30,9 @@ struct Fixture {
         obj = dir / "scene.obj";
         mtl = dir / "scene.mtl";
         cache = dir / "cache";
-        write(mtl, "newmtl red\nKd 0.9 0.1 0.1\nKe 1 2 3\n");
+        write(mtl,
+              "newmtl red\nKd 0.9 0.1 0.1\nKe 1 2 3\nKs 0.5 0.4 0.3\nKa 0.1 0.2 0.3\nNs 250\nNi 1.33\nd 0.75\n"
+              "illum 7\nmap_Kd tex\\red.png\n");
         write(obj,
               "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 2\nv nan 0 0\n"
               "usemtl red\nf 1 2 3\nf 2 4 3\nf 1 5 6\nf 1 2 2\n");
@@ -54,7 +56,16 @@ void expect_same(const SceneLoad& a, const SceneLoad& b) {
     ASSERT_EQ(a.mesh.materials.size(), b.mesh.materials.size());
     for (size_t i = 0; i < a.mesh.materials.size(); ++i) {
         EXPECT_EQ(a.mesh.materials[i].name, b.mesh.materials[i].name);
-        EXPECT_EQ(a.mesh.materials[i].emission.z, b.mesh.materials[i].emission.z);
+        const Material &x = a.mesh.materials[i], &y = b.mesh.materials[i];
+        EXPECT_EQ(x.emission.z, y.emission.z);
+        EXPECT_EQ(x.diffuse.x, y.diffuse.x);
+        EXPECT_EQ(x.specular.y, y.specular.y);
+        EXPECT_EQ(x.ambient.z, y.ambient.z);
+        EXPECT_EQ(x.shininess, y.shininess);
+        EXPECT_EQ(x.ior, y.ior);
+        EXPECT_EQ(x.dissolve, y.dissolve);
+        EXPECT_EQ(x.illum, y.illum);
+        EXPECT_EQ(x.diffuse_texture, y.diffuse_texture);
     }
     EXPECT_EQ(a.mesh.dropped.non_finite, b.mesh.dropped.non_finite);
     EXPECT_EQ(a.mesh.dropped.zero_area, b.mesh.dropped.zero_area);

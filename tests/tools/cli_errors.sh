@@ -258,6 +258,19 @@ for l in lines:
         fail=$((fail + 1)); echo "FAIL JSON schema of $name"
     fi
 }
+# render: bad options and outputs
+expect_error render-no-out "out.*required|--out" render "$data/cornell_box.obj"
+expect_error render-bad-ext "cannot write .*\\.xyz" render "$data/cornell_box.obj" -o "$tmp/img.xyz"
+expect_error render-gpu-missing "GPU wavefront integrator is not built yet" render "$data/cornell_box.obj" --device gpu -o "$tmp/x.pfm"
+expect_error render-kernel-cpu "--kernel applies to --device gpu" render "$data/cornell_box.obj" --kernel plain -o "$tmp/x.pfm"
+expect_error render-spp-zero "spp" render "$data/cornell_box.obj" --spp 0 -o "$tmp/x.pfm"
+expect_error render-sky-nan "sky" render "$data/cornell_box.obj" --sky 1 nan 1 -o "$tmp/x.pfm"
+expect_error render-shutter-still "--shutter applies to a moving camera" render "$data/cornell_box.obj" --shutter 0 0.5 -o "$tmp/x.pfm"
+expect_error render-degenerate-camera "degenerate camera" render "$data/cornell_box.obj" --eye 1 2 3 --target 1 2 3 -o "$tmp/x.pfm"
+expect_error render-empty "no usable triangles" render "$tmp/empty.obj" -o "$tmp/x.pfm"
+expect_error render-out-is-input "unknown image extension .\.obj" render "$data/cornell_box.obj" -o "$data/cornell_box.obj"
+expect_error render-bad-strategy "strategy" render "$data/cornell_box.obj" --strategy none -o "$tmp/x.pfm"
+expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh
 check_schema rays rays "$data/cornell_box.obj" --type ao --width 8 --height 8 -o "$tmp/schema.rays"
@@ -267,6 +280,7 @@ check_schema bench bench "$data/cornell_box.obj" --types primary --width 8 --hei
 check_schema verify verify "$data/cornell_box.obj" --width 8 --height 8
 check_schema quality quality "$data/cornell_box.obj" --types primary --width 8 --height 8
 check_schema run run "$data/cornell_box.obj" --runs 1 --width 8 --height 8
+check_schema render render "$data/cornell_box.obj" --width 8 --height 8 --spp 2 -o "$tmp/schema.pfm"
 # A build without CUDA has no kernels to list.
 if "$bin" -q kernels --json | grep -q .; then check_schema kernels kernels; fi
 

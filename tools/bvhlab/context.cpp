@@ -83,10 +83,10 @@ void Stage::progress_bytes(size_t done, size_t total) const {
                  double(done) / 1e6, double(total) / 1e6, left, done >= total ? "\n" : "");
 }
 
-void Stage::progress(size_t done, size_t total) const {
+void Stage::progress(size_t done, size_t total, const std::string& detail) const {
     if (g_.quiet || !isatty(fileno(stderr))) return;
-    std::fprintf(stderr, "\r[bvhlab] %s: %3d%%%s", what_.c_str(), int(100.0 * double(done) / double(total)),
-                 done >= total ? "\n" : "");
+    std::fprintf(stderr, "\r[bvhlab] %s: %3d%%%s%s%s   %s", what_.c_str(), int(100.0 * double(done) / double(total)),
+                 detail.empty() ? "" : " (", detail.c_str(), detail.empty() ? "" : ")", done >= total ? "\n" : "");
 }
 
 namespace {

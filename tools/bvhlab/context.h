@@ -44,8 +44,8 @@ public:
     Stage(const Globals& g, std::string what);
     ~Stage();
     double seconds() const;
-    /// Percent updates for long loops (only on a terminal).
-    void progress(size_t done, size_t total) const;
+    /// Percent updates for long loops (only on a terminal), with an optional detail in brackets.
+    void progress(size_t done, size_t total, const std::string& detail = "") const;
     /// "45% (67 of 149 MB, about 1.2 s left)" for work measured in bytes, once the stage has run
     /// for a second (only on a terminal).
     void progress_bytes(size_t done, size_t total) const;

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
     register_quality(app, g);
     register_kernels(app, g);
     register_cache(app, g);
+    register_render(app, g);
     // Global flags are also accepted after the subcommand name.
     for (CLI::App* sub : app.get_subcommands({})) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");

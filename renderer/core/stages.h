@@ -1,0 +1,204 @@
+// SPDX-License-Identifier: MIT
+// The wavefront integrator's per-path stages (Laine, Karras & Aila 2013, "Megakernels
+// considered harmful"), written once for both devices: the CPU driver calls them in a TBB loop,
+// the GPU driver from one small kernel each. Path state is structure-of-arrays; a stage reads
+// and writes only entry i, and the pixel's radiance, which within one sample pass belongs to
+// exactly one path. Tracing and compaction are the drivers' own (Embree or a registry kernel;
+// a serial pack or CUB).
+#pragma once
+
+#include <cstdint>
+
+#include "renderer/core/bsdf.h"
+#include "renderer/core/camera.h"
+#include "renderer/core/lights.h"
+
+namespace bvhlab::render {
+
+/// How emitters are reached. kMis is the renderer; the other two exist so that tests can check
+/// that both strategies alone converge to the same image as their combination.
+enum class Strategy : uint32_t { kMis = 0, kBsdfOnly = 1, kLightOnly = 2 };
+
+/// Deliberate bugs for the tests that prove the CPU/GPU comparison can fail. Never set by the CLI.
+/// kNoCosine: light samples lose the cosine; kBsdfWeightOne: emitters found by BSDF sampling
+/// keep weight 1 under MIS, so direct light is counted twice.
+enum class PlantedBug : uint32_t { kNone = 0, kNoCosine = 1, kBsdfWeightOne = 2 };
+
+struct SceneView {
+    const Vec3* vertices;
+    const uint32_t* indices;
+    const int32_t* material_ids;      ///< per triangle, -1 for none
+    const RenderMaterial* materials;  ///< [0] is the default material, then the mesh's
+    LightView lights;
+    float offset;  ///< spawned rays start this far off the surface
+};
+
+struct PathParams {
+    uint32_t max_depth;  ///< most segments per path (1: camera rays only)
+    uint32_t rr_depth;   ///< Russian roulette from this bounce on
+    uint32_t seed;
+    uint32_t sample;  ///< the sample pass
+    Strategy strategy;
+    PlantedBug bug;
+};
+
+/// Path state, one entry per live path.
+struct PathView {
+    trav::Ray* ray;
+    trav::Hit* hit;
+    Vec3* throughput;
+    uint32_t* pixel;
+    float* prev_pdf;  ///< the BSDF density that chose ray; 0 for the camera and delta lobes
+};
+
+/// What shade leaves at entry i: a continuation (if alive) and a shadow ray (if shadow).
+struct ShadeOut {
+    trav::Ray* next_ray;
+    Vec3* next_throughput;
+    float* next_pdf;
+    uint8_t* alive;
+    trav::Ray* shadow_ray;
+    Vec3* shadow_radiance;  ///< added to the pixel when the shadow ray is unoccluded
+    uint8_t* shadow;
+};
+
+BVHLAB_HD inline const RenderMaterial& material_of(const SceneView& s, uint32_t tri) {
+    return s.materials[s.material_ids[tri] + 1];
+}
+
+/// Stage "generate": path i of the pass is pixel i's camera ray.
+BVHLAB_HD inline void generate_path(uint32_t i, const CameraData& cam, const PathParams& p, PathView paths) {
+    paths.ray[i] = camera_ray(cam, i, p.sample, p.seed);
+    paths.throughput[i] = splat(1.0f);
+    paths.pixel[i] = i;
+    paths.prev_pdf[i] = 0.0f;
+}
+
+/// A point off the surface of geometric normal ng, on the side that direction d leaves towards.
+BVHLAB_HD inline Vec3 offset_point(Vec3 p, Vec3 ng, Vec3 d, float offset) {
+    return p + ng * (dot(ng, d) >= 0.0f ? offset : -offset);
+}
+
+/// Stage "shade" for path i at bounce `bounce` (0: the camera ray's hit): adds what it sees to
+/// radiance[pixel], and leaves a shadow ray for next-event estimation and the continuation.
+BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths,
+                                 ShadeOut out, Vec3* radiance) {
+    out.alive[i] = 0;
+    out.shadow[i] = 0;
+    const trav::Ray ray = paths.ray[i];
+    const trav::Hit hit = paths.hit[i];
+    Vec3 beta = paths.throughput[i];
+    const uint32_t px = paths.pixel[i];
+    const float prev_pdf = paths.prev_pdf[i];
+    const bool bsdf_counts = p.strategy != Strategy::kLightOnly || prev_pdf == 0.0f;
+    const bool mis = p.strategy == Strategy::kMis && prev_pdf > 0.0f;
+    if (!hit.is_hit()) {
+        if (bsdf_counts && max3(s.lights.sky) > 0.0f) {
+            const float w = mis ? power_heuristic(prev_pdf, sky_direction_pdf(s.lights)) : 1.0f;
+            radiance[px] = radiance[px] + beta * s.lights.sky * w;
+        }
+        return;
+    }
+    const uint32_t tri = uint32_t(hit.tri);
+    const Vec3 v0 = s.vertices[s.indices[3 * tri]], v1 = s.vertices[s.indices[3 * tri + 1]],
+               v2 = s.vertices[s.indices[3 * tri + 2]];
+    const Vec3 cr = cross(v1 - v0, v2 - v0);
+    const float area2 = length(cr);
+    const Vec3 ng = cr * (1.0f / area2);
+    const Vec3 pos = ray.org + ray.dir * hit.t;
+    const RenderMaterial& m = material_of(s, tri);
+    Vec3 add = splat(0.0f);
+    if (bsdf_counts && max3(m.emission) > 0.0f) {
+        float w = 1.0f;
+        if (mis && s.lights.pick_pdf[tri] > 0.0f && p.bug != PlantedBug::kBsdfWeightOne) {
+            const float cos_l = fabsf(dot(ng, ray.dir));
+            w = power_heuristic(prev_pdf, triangle_light_pdf(s.lights, tri, 0.5f * area2, hit.t, cos_l));
+        }
+        add = beta * m.emission * w;
+    }
+    radiance[px] = radiance[px] + add;
+    if (bounce + 1 >= p.max_depth) return;
+
+    const Vec3 wo = ray.dir * -1.0f;
+    const bool opaque = m.type != BsdfType::kGlass;
+    const Vec3 n = opaque && dot(ng, wo) < 0.0f ? ng * -1.0f : ng;
+    const Frame frame = Frame::around(n);
+    const Vec3 wo_l = frame.to_local(wo);
+    const Vec3 base = m.base;
+    auto rnd = [&](uint32_t d) { return rand01(px, p.sample, bounce_dim(bounce, d), p.seed); };
+
+    // Next-event estimation, for every lobe that is not a delta.
+    const bool smooth = m.type == BsdfType::kMirror || m.type == BsdfType::kGlass;
+    const bool has_lights = s.lights.count > 0 || s.lights.sky_pick > 0.0f;
+    if (!smooth && has_lights && p.strategy != Strategy::kBsdfOnly) {
+        const float u = rnd(kDimLightPick);
+        Vec3 dir, le;
+        float dist, pdf_l;
+        if (u < s.lights.sky_pick) {
+            dir = sample_uniform_sphere(rnd(kDimLight0), rnd(kDimLight1));
+            dist = INFINITY;
+            pdf_l = sky_direction_pdf(s.lights);
+            le = s.lights.sky;
+        } else {
+            const float ul = (u - s.lights.sky_pick) / (1.0f - s.lights.sky_pick);
+            const uint32_t lt = s.lights.tris[alias_pick(s.lights.table, s.lights.count, min_f(ul, 0.99999994f))];
+            const Vec3 a = s.vertices[s.indices[3 * lt]], b = s.vertices[s.indices[3 * lt + 1]],
+                       c = s.vertices[s.indices[3 * lt + 2]];
+            float b1, b2;
+            sample_triangle(rnd(kDimLight0), rnd(kDimLight1), b1, b2);
+            const Vec3 q = a * (1.0f - b1 - b2) + b * b1 + c * b2;
+            const Vec3 lc = cross(b - a, c - a);
+            const float larea2 = length(lc);
+            dir = q - pos;
+            dist = length(dir);
+            dir = dir * (1.0f / dist);
+            const float cos_l = fabsf(dot(lc, dir)) / larea2;
+            pdf_l = cos_l > 0.0f ? triangle_light_pdf(s.lights, lt, 0.5f * larea2, dist, cos_l) : 0.0f;
+            le = material_of(s, lt).emission;
+        }
+        float pdf_b;
+        const Vec3 wi_l = frame.to_local(dir);
+        Vec3 fcos = eval_bsdf(m, base, wo_l, wi_l, pdf_b);
+        if (p.bug == PlantedBug::kNoCosine && wi_l.z > 0.0f) fcos = fcos * (1.0f / wi_l.z);
+        if (pdf_l > 0.0f && max3(fcos) > 0.0f) {
+            const float w = p.strategy == Strategy::kMis ? power_heuristic(pdf_l, pdf_b) : 1.0f;
+            const Vec3 org = offset_point(pos, ng, dir, s.offset);
+            // Stop short of the light's own triangle: 1e-4 of the distance.
+            out.shadow_ray[i] = {org, 0.0f, dir, dist < INFINITY ? dist * (1.0f - 1e-4f) : INFINITY};
+            out.shadow_radiance[i] = beta * fcos * le * (w / pdf_l);
+            out.shadow[i] = 1;
+        }
+    }
+
+    // The continuation, by BSDF sampling.
+    BsdfSample bs;
+    if (!sample_bsdf(m, base, wo_l, rnd(kDimBsdfLobe), rnd(kDimBsdf0), rnd(kDimBsdf1), bs)) return;
+    beta = beta * bs.weight;
+    if (bounce + 1 >= p.rr_depth) {
+        const float q = min_f(0.95f, max3(beta));
+        if (!(rnd(kDimRoulette) < q)) return;
+        beta = beta * (1.0f / q);
+    }
+    const Vec3 dir = normalize(frame.to_world(bs.wi));
+    out.next_ray[i] = {offset_point(pos, ng, dir, s.offset), 0.0f, dir, INFINITY};
+    out.next_throughput[i] = beta;
+    out.next_pdf[i] = bs.delta ? 0.0f : bs.pdf;
+    out.alive[i] = 1;
+}
+
+/// Stage "shadow": adds an unoccluded shadow ray's radiance to its pixel.
+BVHLAB_HD inline void resolve_shadow(uint32_t i, const trav::Hit* occlusion, const uint32_t* pixel,
+                                     const Vec3* shadow_radiance, Vec3* radiance) {
+    if (!occlusion[i].is_hit()) radiance[pixel[i]] = radiance[pixel[i]] + shadow_radiance[i];
+}
+
+/// Stage "accumulate": folds pass radiance into the per-pixel sum and sum of squares (for the
+/// variance the image comparisons use), then clears it for the next pass.
+BVHLAB_HD inline void accumulate_pixel(uint32_t px, Vec3* radiance, Vec3* sum, Vec3* sum_sq) {
+    const Vec3 l = radiance[px];
+    sum[px] = sum[px] + l;
+    sum_sq[px] = sum_sq[px] + l * l;
+    radiance[px] = splat(0.0f);
+}
+
+}  // namespace bvhlab::render

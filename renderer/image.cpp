@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: MIT
+#include "renderer/image.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "accel/core/check.h"
+#include "accel/io/atomic_file.h"
+
+#if defined(BVHLAB_HAVE_OIIO)
+#include <OpenImageIO/imageio.h>
+#endif
+
+namespace bvhlab::render {
+namespace fs = std::filesystem;
+namespace {
+
+std::string extension_of(const std::string& path) {
+    std::string e = fs::path(path).extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return e;
+}
+
+bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
+
+void write_pfm(const Image& img, const std::string& path) {
+    accel::write_file_atomically(path, [&](std::FILE* f) {
+        // Negative scale: little-endian. PFM stores the bottom row first.
+        std::fprintf(f, "PF\n%u %u\n-1.0\n", img.width, img.height);
+        for (uint32_t y = img.height; y-- > 0;)
+            std::fwrite(&img.pixels[size_t(y) * img.width], sizeof(Vec3), img.width, f);
+    });
+}
+
+#if defined(BVHLAB_HAVE_OIIO)
+void write_oiio(const Image& img, const std::string& path, const std::string& ext) {
+    // OpenImageIO picks the format by the name, so the temporary keeps the extension.
+    const fs::path final_path(path);
+    const fs::path tmp =
+        final_path.parent_path() / ("." + final_path.stem().string() + ".tmp" + std::to_string(getpid()) + ext);
+    auto out = OIIO::ImageOutput::create(tmp.string());
+    if (!out) throw Error("cannot write " + path + ": OpenImageIO has no writer for '" + ext + "'");
+    const bool fl = is_float_format(ext);
+    OIIO::ImageSpec spec(int(img.width), int(img.height), 3, fl ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    std::vector<uint8_t> bytes;
+    const void* data = img.pixels.data();
+    if (!fl) {
+        bytes.resize(img.pixels.size() * 3);
+        for (size_t i = 0; i < img.pixels.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                bytes[3 * i + size_t(c)] = uint8_t(std::lround(255.0f * srgb_encode(img.pixels[i][c])));
+        data = bytes.data();
+    }
+    bool ok = out->open(tmp.string(), spec) &&
+              out->write_image(fl ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8, data) && out->close();
+    std::error_code ec;
+    if (ok) fs::rename(tmp, final_path, ec);
+    if (!ok || ec) {
+        const std::string why = !ok ? out->geterror() : ec.message();
+        fs::remove(tmp, ec);
+        throw Error("cannot write " + path + ": " + why);
+    }
+}
+#endif
+
+}  // namespace
+
+float srgb_encode(float x) {
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= 1.0f) return 1.0f;
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+
+bool can_write_image(const std::string& path, std::string* why) {
+    const std::string ext = extension_of(path);
+    if (ext == ".pfm") return true;
+#if defined(BVHLAB_HAVE_OIIO)
+    if (OIIO::is_imageio_format_name(ext.size() > 1 ? ext.substr(1) : ext) || ext == ".png" || ext == ".exr" ||
+        ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".hdr")
+        return true;
+    if (why) *why = "unknown image extension '" + ext + "' (use .exr, .png or .pfm)";
+    return false;
+#else
+    if (why)
+        *why = ext.empty() ? "the file name has no extension (use .pfm)"
+                           : "this build has no OpenImageIO, so it writes .pfm only (asked for '" + ext + "')";
+    return false;
+#endif
+}
+
+void write_image(const Image& img, const std::string& path) {
+    std::string why;
+    if (!can_write_image(path, &why)) throw Error("cannot write " + path + ": " + why);
+    const std::string ext = extension_of(path);
+    if (ext == ".pfm") return write_pfm(img, path);
+#if defined(BVHLAB_HAVE_OIIO)
+    write_oiio(img, path, ext);
+#endif
+}
+
+Image read_pfm(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open " + path + ": " + std::strerror(errno));
+    std::string magic;
+    long long w = 0, h = 0;
+    double scale = 0.0;
+    in >> magic >> w >> h >> scale;
+    if (!in || (magic != "PF" && magic != "Pf") || w <= 0 || h <= 0 || w > 65536 || h > 65536 || scale == 0.0)
+        throw Error(path + " is not a PFM file (bad header)");
+    in.get();  // the single whitespace after the scale
+    const int channels = magic == "PF" ? 3 : 1;
+    std::vector<float> data(size_t(w) * size_t(h) * size_t(channels));
+    in.read(reinterpret_cast<char*>(data.data()), std::streamsize(data.size() * sizeof(float)));
+    if (size_t(in.gcount()) != data.size() * sizeof(float))
+        throw Error(path + " is truncated: fewer pixels than its header says");
+    if (scale > 0.0)  // big-endian data
+        for (float& f : data) {
+            uint32_t u;
+            std::memcpy(&u, &f, 4);
+            u = __builtin_bswap32(u);
+            std::memcpy(&f, &u, 4);
+        }
+    Image img{uint32_t(w), uint32_t(h)};
+    for (uint32_t y = 0; y < img.height; ++y)
+        for (uint32_t x = 0; x < img.width; ++x) {
+            const float* p = &data[(size_t(img.height - 1 - y) * img.width + x) * size_t(channels)];
+            img.at(x, y) = channels == 3 ? Vec3{p[0], p[1], p[2]} : Vec3{p[0], p[0], p[0]};
+        }
+    return img;
+}
+
+}  // namespace bvhlab::render

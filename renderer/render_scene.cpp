@@ -1,0 +1,164 @@
+// SPDX-License-Identifier: MIT
+#include "renderer/render_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "accel/core/check.h"
+
+namespace bvhlab::render {
+
+RenderMaterial default_material() {
+    RenderMaterial m{};
+    m.type = BsdfType::kLambert;
+    m.base = accel::Material{}.diffuse;
+    m.alpha = 1.0f;
+    m.ior = 1.5f;
+    m.texture = -1;
+    return m;
+}
+
+float roughness_from_shininess(float ns) {
+    return std::clamp(std::sqrt(2.0f / (std::max(ns, 0.0f) + 2.0f)), 0.001f, 1.0f);
+}
+
+RenderMaterial map_material(const accel::Material& in, int32_t texture) {
+    RenderMaterial m = default_material();
+    m.base = in.diffuse;
+    m.specular = in.specular;
+    m.emission = in.emission;
+    // Ka above 1 is no reflectance; files such as tinyobjloader's Cornell box use it for the
+    // light's emission. Read that way only when Ke is black.
+    if (max3(in.emission) <= 0.0f && max3(in.ambient) > 1.0f) m.emission = in.ambient;
+    m.alpha = roughness_from_shininess(in.shininess);
+    m.ior = in.ior > 1.0f ? in.ior : 1.5f;
+    m.texture = texture;
+    const bool black_ks = max3(in.specular) <= 0.0f;
+    if (in.dissolve < 1.0f || in.illum == 4 || in.illum == 6 || in.illum == 7 || in.illum == 9) {
+        m.type = BsdfType::kGlass;
+    } else if (in.illum == 3 || in.illum == 5) {
+        m.type = in.shininess >= 1000.0f ? BsdfType::kMirror : BsdfType::kConductor;
+        if (black_ks) m.specular = in.diffuse;
+    } else if (in.illum == 2 && !black_ks) {
+        m.type = BsdfType::kPlastic;
+    } else {
+        m.type = BsdfType::kLambert;
+    }
+    return m;
+}
+
+std::vector<AliasEntry> build_alias_table(const std::vector<double>& weights) {
+    const size_t n = weights.size();
+    BVHLAB_CHECK(n > 0 && n < (size_t(1) << 32), "an alias table needs 1 to 2^32 - 1 entries");
+    const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+    BVHLAB_CHECK(total > 0.0 && std::isfinite(total), "an alias table needs a positive, finite total weight");
+    std::vector<AliasEntry> table(n);
+    std::vector<double> scaled(n);
+    std::vector<uint32_t> small, large;
+    for (size_t i = 0; i < n; ++i) {
+        scaled[i] = weights[i] * double(n) / total;
+        (scaled[i] < 1.0 ? small : large).push_back(uint32_t(i));
+    }
+    while (!small.empty() && !large.empty()) {
+        const uint32_t s = small.back(), l = large.back();
+        small.pop_back();
+        table[s] = {float(scaled[s]), l};
+        scaled[l] -= 1.0 - scaled[s];
+        if (scaled[l] < 1.0) {
+            large.pop_back();
+            small.push_back(l);
+        }
+    }
+    // What is left is 1 up to rounding.
+    for (uint32_t i : large) table[i] = {1.0f, i};
+    for (uint32_t i : small) table[i] = {1.0f, i};
+    return table;
+}
+
+RenderScene::RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky) : mesh_(mesh) {
+    BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot render a scene with no triangles");
+    materials_.push_back(default_material());
+    for (const accel::Material& m : mesh.materials) materials_.push_back(map_material(m, -1));
+    material_ids_ = mesh.material_ids;
+    if (material_ids_.size() != mesh.triangle_count()) material_ids_.assign(mesh.triangle_count(), -1);
+    std::vector<double> power;
+    pick_pdf_.assign(mesh.triangle_count(), 0.0f);
+    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const RenderMaterial& m = materials_[size_t(material_ids_[t] + 1)];
+        if (max3(m.emission) <= 0.0f) continue;
+        const Vec3 a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+        const double area = 0.5 * double(length(cross(b - a, c - a)));
+        if (!(area > 0.0)) continue;
+        light_tris_.push_back(uint32_t(t));
+        power.push_back(area * double(luminance(m.emission)));
+    }
+    if (!light_tris_.empty()) {
+        alias_ = build_alias_table(power);
+        const double total = std::accumulate(power.begin(), power.end(), 0.0);
+        for (size_t i = 0; i < light_tris_.size(); ++i) pick_pdf_[light_tris_[i]] = float(power[i] / total);
+    }
+    const size_t n = light_tris_.size();
+    if (sky.given) {
+        sky_ = sky.radiance;
+        lighting_ = std::to_string(n) + " emissive triangles, sky (" + std::to_string(sky_.x) + ", " +
+                    std::to_string(sky_.y) + ", " + std::to_string(sky_.z) + ") as given";
+    } else if (n == 0) {
+        sky_ = splat(1.0f);
+        lighting_ = "no emitters and no sky given: lit by a white sky of radiance 1";
+    } else {
+        lighting_ = std::to_string(n) + " emissive triangles, black sky (none given)";
+    }
+    const bool sky_on = max3(sky_) > 0.0f;
+    sky_pick_ = !sky_on ? 0.0f : (n == 0 ? 1.0f : 0.5f);
+    offset_ = 1e-5f * std::max(mesh.diagonal(), 1e-6f);
+}
+
+SceneView RenderScene::view() const {
+    SceneView v;
+    v.vertices = mesh_.vertices.data();
+    v.indices = mesh_.indices.data();
+    v.material_ids = material_ids_.data();
+    v.materials = materials_.data();
+    v.lights.tris = light_tris_.data();
+    v.lights.table = alias_.data();
+    v.lights.pick_pdf = pick_pdf_.data();
+    v.lights.count = uint32_t(light_tris_.size());
+    v.lights.sky = sky_;
+    v.lights.sky_pick = sky_pick_;
+    v.offset = offset_;
+    return v;
+}
+
+CameraData make_camera(const trav::Camera& cam, uint32_t width, uint32_t height, const LensOptions& lens) {
+    BVHLAB_CHECK(width > 0 && height > 0, "the image size must be at least 1 x 1");
+    const Vec3 eye{cam.eye.x, cam.eye.y, cam.eye.z}, target{cam.target.x, cam.target.y, cam.target.z},
+        up{cam.up.x, cam.up.y, cam.up.z};
+    const Vec3 view = target - eye;
+    const float dist = length(view);
+    const Vec3 right_raw = cross(view, up);
+    BVHLAB_CHECK(dist > 0.0f && std::isfinite(dist) && length(right_raw) > 0.0f,
+                 "degenerate camera: eye and target coincide or up is parallel to the view");
+    BVHLAB_CHECK(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f, "the field of view must be in (0, 180) degrees");
+    BVHLAB_CHECK(lens.aperture_radius >= 0.0f && lens.focus_distance >= 0.0f,
+                 "aperture and focus distance must not be negative");
+    BVHLAB_CHECK(lens.shutter_open >= 0.0f && lens.shutter_open <= lens.shutter_close && lens.shutter_close <= 1.0f,
+                 "the shutter interval must satisfy 0 <= open <= close <= 1");
+    CameraData c;
+    c.back = normalize(view * -1.0f);
+    c.right = normalize(right_raw);
+    c.up = cross(c.back, c.right);
+    c.eye0 = eye;
+    c.eye1 = lens.moving ? lens.eye_end : eye;
+    c.tan_half_fov_y = std::tan(0.5f * cam.fov_y_deg * kPi / 180.0f);
+    c.aspect = float(width) / float(height);
+    c.lens_radius = lens.aperture_radius;
+    c.focus_distance = lens.focus_distance > 0.0f ? lens.focus_distance : dist;
+    c.shutter_open = lens.shutter_open;
+    c.shutter_close = lens.shutter_close;
+    c.width = width;
+    c.height = height;
+    return c;
+}
+
+}  // namespace bvhlab::render

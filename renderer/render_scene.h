@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: MIT
+// The host side of a render: the mesh's materials mapped to BSDFs, the light table, the sky
+// rule and the camera, in the flat arrays both integrators read.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "accel/core/mesh.h"
+#include "renderer/core/stages.h"
+#include "traversal/rays/raygen.h"
+
+namespace bvhlab::render {
+
+/// The sky, as the user asked for it.
+struct SkyOption {
+    bool given = false;  ///< false: the default rule (white 1 without emitters, black with)
+    Vec3 radiance{0.0f, 0.0f, 0.0f};
+};
+
+class RenderScene {
+public:
+    /// Maps the materials and builds the light table. Throws bvhlab::Error for an empty mesh.
+    RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky);
+
+    /// Views into this object's arrays (host memory); valid while it lives.
+    SceneView view() const;
+
+    const accel::TriangleMesh& mesh() const { return mesh_; }
+    const std::vector<RenderMaterial>& materials() const { return materials_; }
+    const std::vector<uint32_t>& light_tris() const { return light_tris_; }
+    const std::vector<AliasEntry>& alias_table() const { return alias_; }
+    const std::vector<float>& pick_pdf() const { return pick_pdf_; }
+    const std::vector<int32_t>& material_ids() const { return material_ids_; }
+    Vec3 sky() const { return sky_; }
+    float sky_pick() const { return sky_pick_; }
+    float offset() const { return offset_; }
+    /// One line on how the scene is lit, for the summary ("12 emissive triangles, black sky").
+    const std::string& lighting() const { return lighting_; }
+
+private:
+    const accel::TriangleMesh& mesh_;
+    std::vector<RenderMaterial> materials_;  // [0] default
+    std::vector<int32_t> material_ids_;
+    std::vector<uint32_t> light_tris_;
+    std::vector<AliasEntry> alias_;
+    std::vector<float> pick_pdf_;
+    Vec3 sky_{0.0f, 0.0f, 0.0f};
+    float sky_pick_ = 0.0f;
+    float offset_ = 0.0f;
+    std::string lighting_;
+};
+
+/// Vose's alias table for non-negative `weights` with a positive sum.
+std::vector<AliasEntry> build_alias_table(const std::vector<double>& weights);
+
+/// Camera settings beyond the pinhole of the ray protocol.
+struct LensOptions {
+    float aperture_radius = 0.0f;  ///< 0: pinhole
+    float focus_distance = 0.0f;   ///< 0: the distance from the eye to the target
+    Vec3 eye_end{0.0f, 0.0f, 0.0f};
+    bool moving = false;  ///< eye_end is where the eye is at shutter time 1
+    float shutter_open = 0.0f, shutter_close = 1.0f;
+};
+
+/// CameraData for `cam` (the catalogue's or the framing camera) and an image size. Throws
+/// bvhlab::Error for a degenerate camera or a zero size.
+CameraData make_camera(const trav::Camera& cam, uint32_t width, uint32_t height, const LensOptions& lens);
+
+}  // namespace bvhlab::render

@@ -1,0 +1,184 @@
+// SPDX-License-Identifier: MIT
+#include "renderer/wavefront.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <filesystem>
+
+#include "accel/core/check.h"
+#include "traversal/rays/ray_file.h"
+
+namespace bvhlab::render {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+template <typename F>
+void parallel(size_t n, F f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) f(uint32_t(i));
+    });
+}
+
+/// Path state of one pass, structure-of-arrays, sized for every pixel.
+struct HostPaths {
+    std::vector<trav::Ray> ray, next_ray, shadow_ray;
+    std::vector<trav::Hit> hit, occlusion;
+    std::vector<Vec3> throughput, next_throughput, shadow_radiance;
+    std::vector<uint32_t> pixel, shadow_pixel;
+    std::vector<float> prev_pdf, next_pdf;
+    std::vector<uint8_t> alive, shadow;
+
+    explicit HostPaths(size_t n)
+        : ray(n),
+          next_ray(n),
+          shadow_ray(n),
+          throughput(n),
+          next_throughput(n),
+          shadow_radiance(n),
+          pixel(n),
+          shadow_pixel(n),
+          prev_pdf(n),
+          next_pdf(n),
+          alive(n),
+          shadow(n) {}
+    PathView view() { return {ray.data(), hit.data(), throughput.data(), pixel.data(), prev_pdf.data()}; }
+    ShadeOut out() {
+        return {next_ray.data(),   next_throughput.data(), next_pdf.data(), alive.data(),
+                shadow_ray.data(), shadow_radiance.data(), shadow.data()};
+    }
+};
+
+void dump(const RenderSettings& s, const char* kind, uint32_t bounce, const std::vector<trav::Ray>& rays,
+          trav::Query q) {
+    if (s.dump_rays_dir.empty() || rays.empty()) return;
+    trav::RaySet set;
+    set.rays = rays;
+    set.query = q;
+    set.writer = s.writer;
+    const std::string name = std::string(kind) + "-bounce" + std::to_string(bounce) + ".rays";
+    trav::write_ray_file((std::filesystem::path(s.dump_rays_dir) / name).string(), set);
+}
+
+}  // namespace
+
+uint64_t RenderResult::rays() const {
+    uint64_t n = 0;
+    for (const BounceStats& b : bounces) n += b.extension_rays + b.shadow_rays;
+    return n;
+}
+
+RenderResult render_host(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
+                         trav::Tracer& extend, trav::Tracer& shadow, const RenderProgress& progress) {
+    BVHLAB_CHECK(settings.spp >= 1, "--spp must be at least 1");
+    BVHLAB_CHECK(settings.max_depth >= 1 && settings.max_depth <= 1024, "--max-depth must be in [1, 1024]");
+    if (!settings.dump_rays_dir.empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(settings.dump_rays_dir, ec);
+        if (ec) throw Error("cannot create --dump-rays folder " + settings.dump_rays_dir + ": " + ec.message());
+    }
+    const auto t_start = Clock::now();
+    const uint32_t npix = camera.width * camera.height;
+    const SceneView sv = scene.view();
+    HostPaths paths(npix);
+    std::vector<Vec3> radiance(npix, splat(0.0f)), sum(npix, splat(0.0f)), sum_sq(npix, splat(0.0f));
+    RenderResult res;
+    res.bounces.resize(settings.max_depth);
+    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, settings.strategy, settings.bug};
+    for (uint32_t pass = 0; pass < settings.spp; ++pass) {
+        pp.sample = pass;
+        auto t0 = Clock::now();
+        paths.ray.resize(npix);
+        paths.throughput.resize(npix);
+        paths.pixel.resize(npix);
+        paths.prev_pdf.resize(npix);
+        PathView pv = paths.view();
+        parallel(npix, [&](uint32_t i) { generate_path(i, camera, pp, pv); });
+        res.ms_generate += ms_since(t0);
+        for (uint32_t bounce = 0; bounce < settings.max_depth && !paths.ray.empty(); ++bounce) {
+            const size_t n = paths.ray.size();
+            res.bounces[bounce].extension_rays += n;
+            if (pass == 0) dump(settings, "extension", bounce, paths.ray, trav::Query::kClosest);
+            t0 = Clock::now();
+            extend.set_rays(paths.ray, trav::Query::kClosest);
+            extend.run();
+            extend.hits(paths.hit);
+            res.ms_extend += ms_since(t0);
+
+            t0 = Clock::now();
+            pv = paths.view();
+            const ShadeOut so = paths.out();
+            Vec3* rad = radiance.data();
+            parallel(n, [&](uint32_t i) { shade_path(i, bounce, sv, pp, pv, so, rad); });
+            res.ms_shade += ms_since(t0);
+
+            // Compact the shadow rays, trace them, add the unoccluded ones.
+            t0 = Clock::now();
+            std::vector<trav::Ray> shadow_rays;
+            size_t ns = 0;
+            for (size_t i = 0; i < n; ++i)
+                if (paths.shadow[i]) {
+                    shadow_rays.push_back(paths.shadow_ray[i]);
+                    paths.shadow_pixel[ns] = paths.pixel[i];
+                    paths.shadow_radiance[ns++] = paths.shadow_radiance[i];
+                }
+            res.ms_compact += ms_since(t0);
+            if (ns) {
+                res.bounces[bounce].shadow_rays += ns;
+                if (pass == 0) dump(settings, "shadow", bounce, shadow_rays, trav::Query::kAny);
+                t0 = Clock::now();
+                shadow.set_rays(shadow_rays, trav::Query::kAny);
+                shadow.run();
+                shadow.hits(paths.occlusion);
+                const trav::Hit* occ = paths.occlusion.data();
+                const uint32_t* spx = paths.shadow_pixel.data();
+                const Vec3* srad = paths.shadow_radiance.data();
+                parallel(ns, [&](uint32_t i) { resolve_shadow(i, occ, spx, srad, rad); });
+                res.ms_shadow += ms_since(t0);
+            }
+
+            // Compact the live paths into the next bounce's arrays (order kept).
+            t0 = Clock::now();
+            size_t live = 0;
+            for (size_t i = 0; i < n; ++i)
+                if (paths.alive[i]) {
+                    paths.ray[live] = paths.next_ray[i];
+                    paths.throughput[live] = paths.next_throughput[i];
+                    paths.pixel[live] = paths.pixel[i];
+                    paths.prev_pdf[live] = paths.next_pdf[i];
+                    ++live;
+                }
+            paths.ray.resize(live);
+            paths.throughput.resize(live);
+            paths.pixel.resize(live);
+            paths.prev_pdf.resize(live);
+            res.ms_compact += ms_since(t0);
+        }
+        t0 = Clock::now();
+        Vec3 *rad = radiance.data(), *s1 = sum.data(), *s2 = sum_sq.data();
+        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, rad, s1, s2); });
+        res.ms_accumulate += ms_since(t0);
+        res.spp = pass + 1;
+        if (progress) progress(res.spp, settings.spp, res);
+        if (settings.time_limit_s > 0.0 && ms_since(t_start) >= 1000.0 * settings.time_limit_s) break;
+    }
+    res.mean = Image(camera.width, camera.height);
+    res.variance_of_mean = Image(camera.width, camera.height);
+    const float k = float(res.spp);
+    for (uint32_t px = 0; px < npix; ++px) {
+        const Vec3 m = sum[px] * (1.0f / k);
+        res.mean.pixels[px] = m;
+        if (res.spp > 1) {
+            // Unbiased sample variance, then of the mean.
+            const Vec3 var = (sum_sq[px] - m * m * k) * (1.0f / (k - 1.0f));
+            res.variance_of_mean.pixels[px] = vmax(var, splat(0.0f)) * (1.0f / k);
+        }
+    }
+    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
+    res.ms_total = ms_since(t_start);
+    return res;
+}
+
+}  // namespace bvhlab::render

@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: MIT
+// The wavefront render loop: per sample pass, generate -> (extend -> shade -> shadow ->
+// compact)* -> accumulate. This is the host driver (bvhlab render --device cpu): the stages of
+// renderer/core/stages.h in TBB loops, any Tracer for the two trace stages (Embree for the
+// reference integrator).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "renderer/image.h"
+#include "renderer/render_scene.h"
+#include "traversal/tracer.h"
+
+namespace bvhlab::render {
+
+struct RenderSettings {
+    uint32_t spp = 16;
+    uint32_t max_depth = 8;  ///< most segments per path
+    uint32_t rr_depth = 3;   ///< Russian roulette from this bounce on
+    uint32_t seed = 1;
+    double time_limit_s = 0.0;  ///< > 0: stop after the pass that crosses it (at least one pass)
+    Strategy strategy = Strategy::kMis;
+    PlantedBug bug = PlantedBug::kNone;
+    std::string dump_rays_dir;  ///< non-empty: each bounce's rays of pass 0 as ray files here
+    std::string writer;         ///< the commit recorded in dumped ray files
+};
+
+/// Per bounce: rays traced and paths alive, summed over the passes.
+struct BounceStats {
+    uint64_t extension_rays = 0;
+    uint64_t shadow_rays = 0;
+};
+
+struct RenderResult {
+    Image mean;              ///< radiance per pixel, averaged over the passes
+    Image variance_of_mean;  ///< per channel: sample variance / passes (0 with one pass)
+    uint32_t spp = 0;        ///< passes done
+    std::vector<BounceStats> bounces;
+    double ms_generate = 0, ms_extend = 0, ms_shade = 0, ms_shadow = 0, ms_compact = 0, ms_accumulate = 0;
+    double ms_total = 0;
+    uint64_t rays() const;
+};
+
+/// Progress after each pass: passes done, passes asked for.
+using RenderProgress = std::function<void(uint32_t done, uint32_t total, const RenderResult& so_far)>;
+
+/// Renders on the host. `extend` answers closest-hit rays, `shadow` any-hit rays (they may be
+/// the same tracer). Throws bvhlab::Error for bad settings.
+RenderResult render_host(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
+                         trav::Tracer& extend, trav::Tracer& shadow, const RenderProgress& progress = {});
+
+}  // namespace bvhlab::render

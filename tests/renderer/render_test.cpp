@@ -1,0 +1,327 @@
+// SPDX-License-Identifier: MIT
+// The integrator end to end on the CPU (Embree tracing): furnace tests, the two estimators
+// against their MIS combination, planted bugs that the comparison must catch, determinism,
+// dumped rays, images and the camera.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+#include "accel/core/check.h"
+#include "accel/io/obj_loader.h"
+#include "renderer/compare.h"
+#include "renderer/image.h"
+#include "renderer/wavefront.h"
+#include "tests/support/test_support.h"
+#include "traversal/oracle/embree_oracle.h"
+#include "traversal/rays/ray_file.h"
+#include "traversal/rays/scene_catalogue.h"
+
+#if defined(BVHLAB_HAVE_OIIO)
+#include <OpenImageIO/imageio.h>
+#endif
+
+namespace bvhlab::render {
+namespace {
+
+/// A closed icosphere of radius 1 at the origin, subdivided `levels` times, one material.
+accel::TriangleMesh icosphere(int levels, const accel::Material& material) {
+    accel::TriangleMesh m;
+    const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+    std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                           {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<uint32_t> f = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+                               4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+                               6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
+    for (Vec3& p : v) p = normalize(p);
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+        auto midpoint = [&](uint32_t a, uint32_t b) {
+            auto key = std::minmax(a, b);
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            v.push_back(normalize((v[a] + v[b]) * 0.5f));
+            return mid[key] = uint32_t(v.size() - 1);
+        };
+        std::vector<uint32_t> g;
+        for (size_t i = 0; i < f.size(); i += 3) {
+            const uint32_t a = f[i], b = f[i + 1], c = f[i + 2];
+            const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+            g.insert(g.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+        }
+        f.swap(g);
+    }
+    m.vertices = v;
+    m.indices = f;
+    m.material_ids.assign(f.size() / 3, 0);
+    m.materials.push_back(material);
+    return m;
+}
+
+struct SceneSetup {
+    accel::TriangleMesh mesh;
+    trav::Camera cam;
+};
+
+RenderResult render(const accel::TriangleMesh& mesh, const trav::Camera& cam, uint32_t size, RenderSettings rs,
+                    SkyOption sky = {}) {
+    RenderScene scene(mesh, sky);
+    trav::EmbreeOracle oracle(mesh);
+    auto tracer = trav::make_embree_tracer(oracle, false);
+    return render_host(scene, make_camera(cam, size, size, {}), rs, *tracer, *tracer);
+}
+
+trav::Camera sphere_camera() {
+    trav::Camera c;
+    c.eye = {0.3f, 0.4f, 4.0f};
+    c.target = {0.0f, 0.0f, 0.0f};
+    c.fov_y_deg = 35.0f;
+    return c;
+}
+
+/// Every pixel's mean within 5 sigma of [lowest, expected] (a BSDF that loses energy by design
+/// may return less), and the image mean within 1% of `expected` times `mean_factor`.
+void expect_furnace(const RenderResult& r, float expected, const char* what, float lowest = -1.0f,
+                    float mean_factor = 1.0f) {
+    if (lowest < 0.0f) lowest = expected;
+    double sum = 0.0;
+    size_t bad = 0;
+    for (size_t i = 0; i < r.mean.pixels.size(); ++i) {
+        const float m = r.mean.pixels[i].x, sd = std::sqrt(r.variance_of_mean.pixels[i].x);
+        sum += m;
+        if (m > expected + 5.0f * sd + 1e-5f || m < lowest - 5.0f * sd - 1e-5f) {
+            ++bad;
+            ADD_FAILURE() << what << ": pixel " << i << " mean " << m << " sd " << sd;
+        }
+    }
+    EXPECT_EQ(bad, 0u) << what << ": pixels beyond 5 sigma of " << expected;
+    EXPECT_NEAR(sum / double(r.mean.pixels.size()), expected * mean_factor, 0.01 * expected) << what;
+}
+
+// A closed sphere that absorbs nothing, under a uniform sky, looks exactly like the sky.
+TEST(Furnace, DiffuseGlassAndSmoothConductorReturnTheSky) {
+    SkyOption sky{true, splat(0.5f)};
+    RenderSettings rs;
+    rs.spp = 64;
+    rs.max_depth = 64;
+    accel::Material white;
+    white.diffuse = splat(1.0f);
+    expect_furnace(render(icosphere(3, white), sphere_camera(), 32, rs, sky), 0.5f, "lambertian");
+    accel::Material glass = white;
+    glass.illum = 7;
+    glass.ior = 1.5f;
+    expect_furnace(render(icosphere(3, glass), sphere_camera(), 32, rs, sky), 0.5f, "glass");
+    accel::Material metal;
+    metal.illum = 3;
+    metal.specular = splat(1.0f);
+    metal.shininess = 400.0f;  // alpha 0.07
+    // Single-scattering GGX loses energy: 0.5% at normal incidence for alpha 0.07, ~10% at
+    // grazing angles on the silhouette; 0.4% over this image (4096 spp: 0.4972 of 0.5).
+    rs.spp = 256;
+    expect_furnace(render(icosphere(3, metal), sphere_camera(), 32, rs, sky), 0.5f, "conductor", 0.45f, 0.996f);
+}
+
+// The furnace catches a light-transport bug: without the cosine the sphere is too bright.
+TEST(Furnace, CatchesAMissingCosine) {
+    SkyOption sky{true, splat(0.5f)};
+    RenderSettings rs;
+    rs.spp = 32;
+    rs.bug = PlantedBug::kNoCosine;
+    accel::Material white;
+    white.diffuse = splat(1.0f);
+    const RenderResult r = render(icosphere(3, white), sphere_camera(), 32, rs, sky);
+    double sum = 0.0;
+    for (const Vec3& p : r.mean.pixels) sum += p.x;
+    EXPECT_GT(sum / double(r.mean.pixels.size()), 0.52);
+}
+
+SceneSetup cornell() {
+    SceneSetup s;
+    s.mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    for (const auto& e : trav::read_catalogue(test::data_dir()))
+        if (e.name == "cornell-box" && e.camera) s.cam = *e.camera;
+    return s;
+}
+
+// BSDF sampling alone, light sampling alone and their MIS combination estimate one integral:
+// their Cornell box images agree within noise. A planted bug in either weight or in the
+// cosine must make them disagree, which shows the comparison can fail.
+TEST(Estimators, BsdfLightAndMisAgreeAndPlantedBugsDiffer) {
+    const SceneSetup s = cornell();
+    ASSERT_GT(s.mesh.triangle_count(), 0u);
+    RenderSettings rs;
+    rs.spp = 256;
+    rs.max_depth = 4;
+    const RenderResult mis = render(s.mesh, s.cam, 24, rs);
+    rs.strategy = Strategy::kLightOnly;
+    const RenderResult light = render(s.mesh, s.cam, 24, rs);
+    rs.strategy = Strategy::kBsdfOnly;
+    rs.spp = 1024;
+    const RenderResult bsdf = render(s.mesh, s.cam, 24, rs);
+    const Comparison ml = compare_renders(mis, light);
+    // BSDF sampling alone finds the small light by chance: its per-pixel variance estimates
+    // are poor (heavy tails), so only the region test, and a loose outlier bound, apply.
+    CompareConfig loose;
+    loose.pixel_outliers = 0.1;
+    const Comparison mb = compare_renders(mis, bsdf, loose);
+    EXPECT_TRUE(ml.agree) << "mis vs light: " << ml.summary();
+    EXPECT_TRUE(mb.agree) << "mis vs bsdf: " << mb.summary();
+
+    rs.strategy = Strategy::kMis;
+    rs.spp = 256;
+    rs.bug = PlantedBug::kBsdfWeightOne;
+    const Comparison wrong_weight = compare_renders(mis, render(s.mesh, s.cam, 24, rs));
+    EXPECT_FALSE(wrong_weight.agree) << "an emitter hit weighted 1 under MIS: " << wrong_weight.summary();
+    rs.bug = PlantedBug::kNoCosine;
+    const Comparison no_cosine = compare_renders(mis, render(s.mesh, s.cam, 24, rs));
+    EXPECT_FALSE(no_cosine.agree) << "no cosine: " << no_cosine.summary();
+}
+
+TEST(Render, SameSeedSameImageOtherSeedOtherImage) {
+    const SceneSetup s = cornell();
+    RenderSettings rs;
+    rs.spp = 2;
+    const RenderResult a = render(s.mesh, s.cam, 16, rs), b = render(s.mesh, s.cam, 16, rs);
+    ASSERT_EQ(a.mean.pixels.size(), b.mean.pixels.size());
+    for (size_t i = 0; i < a.mean.pixels.size(); ++i) ASSERT_EQ(a.mean.pixels[i].y, b.mean.pixels[i].y) << i;
+    rs.seed = 2;
+    const RenderResult c = render(s.mesh, s.cam, 16, rs);
+    size_t differ = 0;
+    for (size_t i = 0; i < a.mean.pixels.size(); ++i) differ += a.mean.pixels[i].y != c.mean.pixels[i].y;
+    EXPECT_GT(differ, a.mean.pixels.size() / 2);
+    EXPECT_EQ(a.spp, 2u);
+    EXPECT_EQ(a.bounces[0].extension_rays, 2u * 16 * 16);
+}
+
+// A sky-lit scene with no emitters gets the white sky; one with emitters a black sky.
+TEST(Render, DefaultSkyRule) {
+    accel::Material grey;
+    const RenderScene plain(icosphere(0, grey), {});
+    EXPECT_EQ(plain.sky().x, 1.0f);
+    EXPECT_NE(plain.lighting().find("white sky"), std::string::npos);
+    const SceneSetup s = cornell();
+    const RenderScene lit(s.mesh, {});
+    EXPECT_EQ(lit.sky().x, 0.0f);
+    EXPECT_EQ(lit.light_tris().size(), 2u);
+    EXPECT_NE(lit.lighting().find("black sky"), std::string::npos);
+    accel::TriangleMesh empty;
+    EXPECT_THROW(RenderScene(empty, {}), Error);
+}
+
+// --dump-rays: every bounce's rays of the first pass, readable, as many as were traced.
+TEST(Render, DumpedRaysAreTheTracedRays) {
+    const SceneSetup s = cornell();
+    test::TempFile dir("dump_dir");
+    RenderSettings rs;
+    rs.spp = 1;
+    rs.max_depth = 3;
+    rs.dump_rays_dir = dir.path();
+    rs.writer = "test";
+    const RenderResult r = render(s.mesh, s.cam, 16, rs);
+    ASSERT_EQ(r.bounces.size(), 3u);
+    for (uint32_t b = 0; b < 3; ++b) {
+        const trav::RaySet ext = trav::read_ray_file(dir.path() + "/extension-bounce" + std::to_string(b) + ".rays");
+        EXPECT_EQ(ext.rays.size(), r.bounces[b].extension_rays);
+        EXPECT_EQ(ext.query, trav::Query::kClosest);
+        EXPECT_EQ(ext.writer, "test");
+        if (r.bounces[b].shadow_rays) {
+            const trav::RaySet sh = trav::read_ray_file(dir.path() + "/shadow-bounce" + std::to_string(b) + ".rays");
+            EXPECT_EQ(sh.rays.size(), r.bounces[b].shadow_rays);
+            EXPECT_EQ(sh.query, trav::Query::kAny);
+        }
+    }
+    std::filesystem::remove_all(dir.path());
+}
+
+TEST(Image, PfmRoundTripAndErrors) {
+    Image img(3, 2);
+    for (uint32_t y = 0; y < 2; ++y)
+        for (uint32_t x = 0; x < 3; ++x) img.at(x, y) = {float(x), float(y), 0.5f + float(x * y)};
+    test::TempFile f("img.pfm");
+    write_image(img, f.path());
+    const Image back = read_pfm(f.path());
+    ASSERT_EQ(back.width, 3u);
+    ASSERT_EQ(back.height, 2u);
+    for (size_t i = 0; i < img.pixels.size(); ++i) EXPECT_EQ(back.pixels[i].z, img.pixels[i].z);
+    EXPECT_THROW(write_image(img, "/tmp/bvhlab_no_such_ext.xyz123"), Error);
+    test::TempFile junk("junk.pfm", "PF\n3 2\n-1.0\nshort");
+    EXPECT_THROW(read_pfm(junk.path()), Error);
+    test::TempFile text("text.pfm", "hello world");
+    EXPECT_THROW(read_pfm(text.path()), Error);
+    EXPECT_EQ(srgb_encode(0.0f), 0.0f);
+    EXPECT_EQ(srgb_encode(2.0f), 1.0f);
+    EXPECT_NEAR(srgb_encode(0.5f), 0.7354f, 1e-3f);
+}
+
+#if defined(BVHLAB_HAVE_OIIO)
+// EXR keeps the floats; PNG clamps and sRGB-encodes them; both read back through OpenImageIO.
+TEST(Image, ExrAndPngThroughOpenImageIO) {
+    Image img(4, 3);
+    for (uint32_t y = 0; y < 3; ++y)
+        for (uint32_t x = 0; x < 4; ++x) img.at(x, y) = {0.25f * float(x), 2.0f, float(y) / 3.0f};
+    auto read = [](const std::string& path, std::vector<float>& px) {
+        auto in = OIIO::ImageInput::open(path);
+        ASSERT_TRUE(in) << OIIO::geterror();
+        const OIIO::ImageSpec& spec = in->spec();
+        ASSERT_EQ(spec.width, 4);
+        ASSERT_EQ(spec.height, 3);
+        ASSERT_EQ(spec.nchannels, 3);
+        px.resize(4 * 3 * 3);
+        ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, px.data()));
+    };
+    test::TempFile exr("img.exr"), png("img.png");
+    write_image(img, exr.path());
+    write_image(img, png.path());
+    std::vector<float> px;
+    read(exr.path(), px);
+    ASSERT_EQ(px.size(), 36u);
+    EXPECT_EQ(px[(1 * 4 + 3) * 3 + 0], 0.75f);  // pixel (3, 1), red
+    EXPECT_EQ(px[(1 * 4 + 3) * 3 + 1], 2.0f);   // above 1 kept
+    read(png.path(), px);
+    ASSERT_EQ(px.size(), 36u);
+    EXPECT_NEAR(px[(1 * 4 + 2) * 3 + 0], srgb_encode(0.5f), 1.0f / 255.0f);
+    EXPECT_EQ(px[(1 * 4 + 2) * 3 + 1], 1.0f);  // clamped
+    EXPECT_TRUE(can_write_image("a.exr"));
+    EXPECT_FALSE(can_write_image("a.nosuchformat"));
+}
+#endif
+
+TEST(Camera, CentreRayLooksAtTheTargetAndTheLensFocuses) {
+    trav::Camera c;
+    c.eye = {0, 0, 5};
+    c.target = {0, 0, 0};
+    c.fov_y_deg = 40.0f;
+    CameraData cd = make_camera(c, 101, 101, {});
+    // Pixel (50, 50)'s rays pass within half a pixel of the view axis.
+    const trav::Ray r = camera_ray(cd, 50 * 101 + 50, 0, 1);
+    EXPECT_NEAR(r.dir.z, -1.0f, 1e-3f);
+    LensOptions lens;
+    lens.aperture_radius = 0.5f;
+    cd = make_camera(c, 101, 101, lens);
+    // Every lens sample of the centre pixel passes near the target: the focus plane is at 5.
+    for (uint32_t s = 0; s < 32; ++s) {
+        const trav::Ray q = camera_ray(cd, 50 * 101 + 50, s, 1);
+        const float t = -q.org.z / q.dir.z;
+        const Vec3 p = q.org + q.dir * t;
+        EXPECT_NEAR(p.x, 0.0f, 0.05f);
+        EXPECT_NEAR(p.y, 0.0f, 0.05f);
+    }
+    LensOptions moving;
+    moving.moving = true;
+    moving.eye_end = {1, 0, 5};
+    cd = make_camera(c, 8, 8, moving);
+    float lo = 1.0f, hi = 0.0f;
+    for (uint32_t s = 0; s < 64; ++s) {
+        const float x = camera_ray(cd, 0, s, 1).org.x;
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
+    }
+    EXPECT_LT(lo, 0.1f);
+    EXPECT_GT(hi, 0.9f);
+    c.target = c.eye;
+    EXPECT_THROW(make_camera(c, 8, 8, {}), Error);
+}
+
+}  // namespace
+}  // namespace bvhlab::render

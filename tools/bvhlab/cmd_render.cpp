@@ -1,0 +1,179 @@
+// SPDX-License-Identifier: MIT
+// `bvhlab render`: the wavefront path tracer (issue 19). --device cpu is the reference
+// integrator: the shared stages on the host with Embree tracing every ray.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "accel/core/check.h"
+#include "accel/io/atomic_file.h"
+#include "renderer/image.h"
+#include "renderer/wavefront.h"
+#include "tools/bvhlab/commands.h"
+#include "traversal/oracle/embree_oracle.h"
+
+namespace bvhlab::cli {
+namespace {
+
+struct RenderOpts {
+    std::string scene, out, device = "cpu", kernel, dump_rays, strategy = "mis";
+    uint32_t width = 640, height = 480;
+    render::RenderSettings rs;
+    std::vector<float> eye, target, up, sky, eye_end, shutter;
+    float fov = 0.0f, aperture = 0.0f, focus = 0.0f;
+};
+
+Vec3 vec3_of(const std::vector<float>& v) { return {v[0], v[1], v[2]}; }
+
+nlohmann::json vec_json(Vec3 v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+void register_render(CLI::App& app, Globals& g) {
+    auto o = std::make_shared<RenderOpts>();
+    CLI::App* sub = app.add_subcommand("render", "render an image with the wavefront path tracer");
+    sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
+    sub->add_option("-o,--out", o->out, "image to write: .exr or .hdr (float), .png (sRGB, 8 bits), .pfm")->required();
+    sub->add_option("--width", o->width, "image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
+    sub->add_option("--height", o->height, "image height in pixels")
+        ->check(CLI::Range(1, 16384))
+        ->capture_default_str();
+    sub->add_option("--spp", o->rs.spp, "samples per pixel")->check(CLI::Range(1, 1 << 20))->capture_default_str();
+    sub->add_option("--time-limit", o->rs.time_limit_s,
+                    "seconds: stop after the sample pass that crosses it (at least one pass)")
+        ->check(FiniteRange(0.0, 1e7));
+    sub->add_option("--max-depth", o->rs.max_depth, "most segments per path (1: direct view of emitters only)")
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
+    sub->add_option("--rr-depth", o->rs.rr_depth, "Russian roulette from this bounce on")
+        ->check(CLI::Range(0, 1024))
+        ->capture_default_str();
+    sub->add_option("--seed", o->rs.seed, "seed of every random number")->capture_default_str();
+    sub->add_option("--device", o->device, "cpu (the reference integrator, Embree) or gpu")
+        ->check(CLI::IsMember({"cpu", "gpu"}))
+        ->capture_default_str();
+    auto* kernel = sub->add_option("--kernel", o->kernel, "traversal kernel for the extend and shadow stages (gpu)");
+    sub->add_option("--sky", o->sky,
+                    "constant sky radiance R G B (default: white 1 when the scene has no emitters, else black)")
+        ->expected(3)
+        ->check(FiniteRange(0.0, 1e30));
+    sub->add_option("--eye", o->eye, "camera position x y z (default: the scene's camera)")
+        ->expected(3)
+        ->check(Finite());
+    sub->add_option("--target", o->target, "camera target x y z")->expected(3)->check(Finite());
+    sub->add_option("--up", o->up, "camera up vector x y z")->expected(3)->check(Finite());
+    sub->add_option("--fov", o->fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0));
+    sub->add_option("--aperture", o->aperture, "thin-lens aperture radius (0: pinhole)")->check(FiniteRange(0.0, 1e30));
+    sub->add_option("--focus", o->focus, "focus distance (default: eye to target)")->check(FiniteRange(0.0, 1e30));
+    sub->add_option("--eye-end", o->eye_end, "eye position at the end of the camera's motion (motion blur)")
+        ->expected(3)
+        ->check(Finite());
+    sub->add_option("--shutter", o->shutter, "shutter open and close times in [0, 1] of the motion")
+        ->expected(2)
+        ->check(FiniteRange(0.0, 1.0));
+    sub->add_option("--dump-rays", o->dump_rays,
+                    "folder: write the first sample pass's extension and shadow rays of every bounce as ray files");
+    sub->add_option("--strategy", o->strategy,
+                    "how emitters are reached: mis (default), bsdf or light alone (for checking the estimators)")
+        ->check(CLI::IsMember({"mis", "bsdf", "light"}))
+        ->capture_default_str();
+    sub->callback([o, &g, kernel] {
+        if (o->device == "gpu")
+            throw Error(
+                "render --device gpu: the GPU wavefront integrator is not built yet (issue 19 in progress); use "
+                "--device cpu");
+        if (kernel->count())
+            throw Error("--kernel applies to --device gpu; --device cpu traces with Embree (the reference)");
+        std::string why;
+        if (!render::can_write_image(o->out, &why)) throw Error("cannot write " + o->out + ": " + why);
+        accel::refuse_overwriting_input(o->out, o->scene, "--out");
+        const std::filesystem::path folder = std::filesystem::path(o->out).parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder))
+            throw Error("cannot write " + o->out + ": its folder " + folder.string() + " does not exist");
+        Scene s = load_scene(o->scene, g);
+        accel::refuse_overwriting_input(o->out, s.source, "--out");
+        if (s.mesh.triangle_count() == 0) throw Error("cannot render " + o->scene + ": it has no triangles");
+
+        trav::Camera cam = s.camera;
+        if (o->eye.size() == 3) cam.eye = {o->eye[0], o->eye[1], o->eye[2]};
+        if (o->target.size() == 3) cam.target = {o->target[0], o->target[1], o->target[2]};
+        if (o->up.size() == 3) cam.up = {o->up[0], o->up[1], o->up[2]};
+        if (o->fov > 0.0f) cam.fov_y_deg = o->fov;
+        render::LensOptions lens;
+        lens.aperture_radius = o->aperture;
+        lens.focus_distance = o->focus;
+        if (o->eye_end.size() == 3) {
+            lens.moving = true;
+            lens.eye_end = vec3_of(o->eye_end);
+        }
+        if (o->shutter.size() == 2) {
+            if (!lens.moving) throw Error("--shutter applies to a moving camera: give --eye-end too");
+            lens.shutter_open = o->shutter[0];
+            lens.shutter_close = o->shutter[1];
+        }
+        const render::CameraData cd = render::make_camera(cam, o->width, o->height, lens);
+        render::SkyOption sky;
+        if (o->sky.size() == 3) {
+            sky.given = true;
+            sky.radiance = vec3_of(o->sky);
+        }
+        render::RenderScene rscene(s.mesh, sky);
+        if (!g.quiet) std::fprintf(stderr, "[bvhlab] lighting: %s\n", rscene.lighting().c_str());
+        o->rs.strategy = o->strategy == "mis"    ? render::Strategy::kMis
+                         : o->strategy == "bsdf" ? render::Strategy::kBsdfOnly
+                                                 : render::Strategy::kLightOnly;
+        o->rs.dump_rays_dir = o->dump_rays;
+        o->rs.writer = git_commit();
+
+        trav::EmbreeOracle oracle(s.mesh);
+        std::unique_ptr<trav::Tracer> tracer = trav::make_embree_tracer(oracle, false);
+        render::RenderResult res;
+        {
+            Stage st(g, "rendering " + std::to_string(o->width) + "x" + std::to_string(o->height) + " at " +
+                            std::to_string(o->rs.spp) + " spp on the cpu");
+            res = render::render_host(rscene, cd, o->rs, *tracer, *tracer,
+                                      [&](uint32_t done, uint32_t total, const render::RenderResult& r) {
+                                          const double s = st.seconds();
+                                          char detail[96];
+                                          std::snprintf(detail, sizeof detail, "%u of %u spp, %.1f spp/s, %.1f Mrays/s",
+                                                        done, total, double(done) / s, double(r.rays()) / (s * 1e6));
+                                          st.progress(done, total, detail);
+                                      });
+        }
+        render::write_image(res.mean, o->out);
+
+        nlohmann::json bounces = nlohmann::json::array();
+        for (const render::BounceStats& b : res.bounces)
+            bounces.push_back({{"extension_rays", b.extension_rays}, {"shadow_rays", b.shadow_rays}});
+        nlohmann::json j = base_record("render", s);
+        j["device"] = "cpu";
+        j["tracer"] = tracer->name();
+        j["width"] = o->width;
+        j["height"] = o->height;
+        j["spp"] = res.spp;
+        j["spp_asked"] = o->rs.spp;
+        j["max_depth"] = o->rs.max_depth;
+        j["rr_depth"] = o->rs.rr_depth;
+        j["seed"] = o->rs.seed;
+        j["strategy"] = o->strategy;
+        j["lighting"] = rscene.lighting();
+        j["sky"] = vec_json(rscene.sky());
+        j["emissive_triangles"] = rscene.light_tris().size();
+        j["out"] = o->out;
+        j["rays"] = res.rays();
+        j["ms"] = {{"total", res.ms_total},          {"generate", res.ms_generate}, {"extend", res.ms_extend},
+                   {"shade", res.ms_shade},          {"shadow", res.ms_shadow},     {"compact", res.ms_compact},
+                   {"accumulate", res.ms_accumulate}};
+        j["mrays_per_s"] = res.ms_total > 0.0 ? double(res.rays()) / (res.ms_total * 1e3) : 0.0;
+        j["bounces"] = bounces;
+        if (g.json)
+            emit(j);
+        else
+            std::printf("%s: %ux%u, %u spp, %llu rays in %.2f s (%.1f Mrays/s), written to %s\n", s.name.c_str(),
+                        o->width, o->height, res.spp, (unsigned long long)res.rays(), res.ms_total / 1e3,
+                        j["mrays_per_s"].get<double>(), o->out.c_str());
+    });
+}
+
+}  // namespace bvhlab::cli
