@@ -64,6 +64,23 @@ void dump(const RenderSettings& s, const char* kind, uint32_t bounce, const std:
 
 }  // namespace
 
+void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::vector<Vec3>& sum_sq, uint32_t width,
+                   uint32_t height) {
+    res.mean = Image(width, height);
+    res.variance_of_mean = Image(width, height);
+    const float k = float(res.spp);
+    for (size_t px = 0; px < res.mean.pixels.size(); ++px) {
+        const Vec3 m = sum[px] * (1.0f / k);
+        res.mean.pixels[px] = m;
+        if (res.spp > 1) {
+            // Unbiased sample variance, then that of the mean.
+            const Vec3 var = (sum_sq[px] - m * m * k) * (1.0f / (k - 1.0f));
+            res.variance_of_mean.pixels[px] = vmax(var, splat(0.0f)) * (1.0f / k);
+        }
+    }
+    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
+}
+
 uint64_t RenderResult::rays() const {
     uint64_t n = 0;
     for (const BounceStats& b : bounces) n += b.extension_rays + b.shadow_rays;
@@ -164,19 +181,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
         if (progress) progress(res.spp, settings.spp, res);
         if (settings.time_limit_s > 0.0 && ms_since(t_start) >= 1000.0 * settings.time_limit_s) break;
     }
-    res.mean = Image(camera.width, camera.height);
-    res.variance_of_mean = Image(camera.width, camera.height);
-    const float k = float(res.spp);
-    for (uint32_t px = 0; px < npix; ++px) {
-        const Vec3 m = sum[px] * (1.0f / k);
-        res.mean.pixels[px] = m;
-        if (res.spp > 1) {
-            // Unbiased sample variance, then of the mean.
-            const Vec3 var = (sum_sq[px] - m * m * k) * (1.0f / (k - 1.0f));
-            res.variance_of_mean.pixels[px] = vmax(var, splat(0.0f)) * (1.0f / k);
-        }
-    }
-    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
+    finish_result(res, sum, sum_sq, camera.width, camera.height);
     res.ms_total = ms_since(t_start);
     return res;
 }

@@ -44,6 +44,11 @@ struct RenderResult {
     uint64_t rays() const;
 };
 
+/// Fills res.mean and res.variance_of_mean from per-pixel sums over res.spp passes, and drops
+/// trailing bounces that traced nothing. Shared by the host and GPU drivers.
+void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::vector<Vec3>& sum_sq, uint32_t width,
+                   uint32_t height);
+
 /// Progress after each pass: passes done, passes asked for.
 using RenderProgress = std::function<void(uint32_t done, uint32_t total, const RenderResult& so_far)>;
 

@@ -17,6 +17,11 @@
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
+#   render    the GPU path tracer on data/'s Cornell box and glass-and-mirror scene and the named
+#             scenes (640x480, RENDER_SPP, max depth 8; render.jsonl, images in renders.tar.xz),
+#             then the dumped rays of every bounce through `bvhlab bench` with the same kernel
+#             (render_bench.jsonl): the render's Mrays/s against the extend kernel's own; and
+#             compute-sanitizer memcheck of one small render
 # GPU_TESTS: a gtest filter for the tests phase (default: all). BENCH_KERNELS: the kernels of
 # bvhbench and cwbench (default: all).
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
@@ -156,6 +161,30 @@ if has sanitize; then
         done
     done
     grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$out/sanitizer.log" | tee -a "$out/summary.txt"
+fi
+
+if has render; then
+    kernel=${RENDER_KERNEL:-dynamic-speculative-fma}
+    mkdir -p /tmp/renders
+    for s in "$BVHLAB_DATA/cornell_box.obj" "$BVHLAB_DATA/glass_mirror.obj" "${names[@]}"; do
+        n=$(basename "$s" .obj)
+        log "render $n"
+        d=$rays/render-$n
+        rm -rf "$d"
+        "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 \
+            --spp "${RENDER_SPP:-64}" --max-depth 8 --dump-rays "$d" -o "/tmp/renders/$n.pfm" --json \
+            >>"$out/render.jsonl" 2>>"$out/render.err" || status=1
+        for f in "$d"/*.rays; do
+            # Each record names its ray file (ray_file): the bounce and extension or shadow.
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel "$kernel" --runs 5 --json \
+                >>"$out/render_bench.jsonl" || status=1
+        done
+    done
+    tar cJf "$out/renders.tar.xz" -C /tmp/renders . || status=1
+    log "render compute-sanitizer memcheck"
+    compute-sanitizer --tool memcheck --error-exitcode 3 "$bin/bvhlab" -q render "$BVHLAB_DATA/glass_mirror.obj" \
+        --device gpu --width 64 --height 48 --spp 4 -o /tmp/renders/sanitized.pfm >>"$out/render.err" 2>&1 || status=1
+    grep -E "ERROR SUMMARY" "$out/render.err" | tee -a "$out/summary.txt"
 fi
 
 log "status $status"

@@ -261,8 +261,13 @@ for l in lines:
 # render: bad options and outputs
 expect_error render-no-out "out.*required|--out" render "$data/cornell_box.obj"
 expect_error render-bad-ext "cannot write .*\\.xyz" render "$data/cornell_box.obj" -o "$tmp/img.xyz"
-expect_error render-gpu-missing "GPU wavefront integrator is not built yet" render "$data/cornell_box.obj" --device gpu -o "$tmp/x.pfm"
-expect_error render-kernel-cpu "--kernel applies to --device gpu" render "$data/cornell_box.obj" --kernel plain -o "$tmp/x.pfm"
+if "$bin" -q kernels --json | grep -q .; then
+    expect_error render-kernel-all "not all" render "$data/cornell_box.obj" --device gpu --kernel all -o "$tmp/x.pfm"
+    expect_error render-kernel-unknown "no-such-kernel" render "$data/cornell_box.obj" --device gpu --kernel no-such-kernel -o "$tmp/x.pfm"
+else
+    expect_error render-gpu-missing "--device gpu|CUDA" render "$data/cornell_box.obj" --device gpu -o "$tmp/x.pfm"
+fi
+expect_error render-kernel-cpu "kernel" render "$data/cornell_box.obj" --kernel dynamic-speculative-fma -o "$tmp/x.pfm"
 expect_error render-spp-zero "spp" render "$data/cornell_box.obj" --spp 0 -o "$tmp/x.pfm"
 expect_error render-sky-nan "sky" render "$data/cornell_box.obj" --sky 1 nan 1 -o "$tmp/x.pfm"
 expect_error render-shutter-still "--shutter applies to a moving camera" render "$data/cornell_box.obj" --shutter 0 0.5 -o "$tmp/x.pfm"

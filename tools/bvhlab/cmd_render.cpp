@@ -8,16 +8,20 @@
 
 #include "accel/core/check.h"
 #include "accel/io/atomic_file.h"
+#include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
 #include "renderer/wavefront.h"
 #include "tools/bvhlab/commands.h"
+#include "tools/bvhlab/pipeline.h"
 #include "traversal/oracle/embree_oracle.h"
 
 namespace bvhlab::cli {
 namespace {
 
 struct RenderOpts {
-    std::string scene, out, device = "cpu", kernel, dump_rays, strategy = "mis";
+    std::string scene, out, dump_rays, strategy = "mis";
+    BuildOptions build;
+    TraceOptions trace;
     uint32_t width = 640, height = 480;
     render::RenderSettings rs;
     std::vector<float> eye, target, up, sky, eye_end, shutter;
@@ -50,10 +54,8 @@ void register_render(CLI::App& app, Globals& g) {
         ->check(CLI::Range(0, 1024))
         ->capture_default_str();
     sub->add_option("--seed", o->rs.seed, "seed of every random number")->capture_default_str();
-    sub->add_option("--device", o->device, "cpu (the reference integrator, Embree) or gpu")
-        ->check(CLI::IsMember({"cpu", "gpu"}))
-        ->capture_default_str();
-    auto* kernel = sub->add_option("--kernel", o->kernel, "traversal kernel for the extend and shadow stages (gpu)");
+    o->trace.add_to(*sub);
+    o->build.add_to(*sub);
     sub->add_option("--sky", o->sky,
                     "constant sky radiance R G B (default: white 1 when the scene has no emitters, else black)")
         ->expected(3)
@@ -78,13 +80,11 @@ void register_render(CLI::App& app, Globals& g) {
                     "how emitters are reached: mis (default), bsdf or light alone (for checking the estimators)")
         ->check(CLI::IsMember({"mis", "bsdf", "light"}))
         ->capture_default_str();
-    sub->callback([o, &g, kernel] {
-        if (o->device == "gpu")
-            throw Error(
-                "render --device gpu: the GPU wavefront integrator is not built yet (issue 19 in progress); use "
-                "--device cpu");
-        if (kernel->count())
-            throw Error("--kernel applies to --device gpu; --device cpu traces with Embree (the reference)");
+    sub->callback([o, &g] {
+        // --device cpu without --kernel is the reference integrator: Embree traces every ray.
+        const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
+        if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
+        if (!reference) o->trace.validate(o->build);
         std::string why;
         if (!render::can_write_image(o->out, &why)) throw Error("cannot write " + o->out + ": " + why);
         accel::refuse_overwriting_input(o->out, o->scene, "--out");
@@ -126,20 +126,38 @@ void register_render(CLI::App& app, Globals& g) {
         o->rs.dump_rays_dir = o->dump_rays;
         o->rs.writer = git_commit();
 
-        trav::EmbreeOracle oracle(s.mesh);
-        std::unique_ptr<trav::Tracer> tracer = trav::make_embree_tracer(oracle, false);
+        std::unique_ptr<trav::EmbreeOracle> oracle;
+        std::unique_ptr<trav::Tracer> tracer;
+        Built built;
+        if (reference) {
+            oracle = std::make_unique<trav::EmbreeOracle>(s.mesh);
+            tracer = trav::make_embree_tracer(*oracle, false);
+        } else {
+            o->build.epo = false;  // a build figure; the render does not need it
+            built = build_scene(s, o->build, g);
+            tracer = std::move(make_tracers(built, o->trace, o->build, nullptr).at(0));
+        }
         render::RenderResult res;
         {
             Stage st(g, "rendering " + std::to_string(o->width) + "x" + std::to_string(o->height) + " at " +
-                            std::to_string(o->rs.spp) + " spp on the cpu");
-            res = render::render_host(rscene, cd, o->rs, *tracer, *tracer,
-                                      [&](uint32_t done, uint32_t total, const render::RenderResult& r) {
-                                          const double s = st.seconds();
-                                          char detail[96];
-                                          std::snprintf(detail, sizeof detail, "%u of %u spp, %.1f spp/s, %.1f Mrays/s",
-                                                        done, total, double(done) / s, double(r.rays()) / (s * 1e6));
-                                          st.progress(done, total, detail);
-                                      });
+                            std::to_string(o->rs.spp) + " spp on the " + o->trace.device + " (" + tracer->name() + ")");
+            auto progress = [&](uint32_t done, uint32_t total, const render::RenderResult& r) {
+                const double sec = st.seconds();
+                char detail[96];
+                std::snprintf(detail, sizeof detail, "%u of %u spp, %.1f spp/s, %.1f Mrays/s", done, total,
+                              double(done) / sec, double(r.rays()) / (sec * 1e6));
+                st.progress(done, total, detail);
+            };
+            if (o->trace.device == "gpu") {
+                trav::GpuTraceOptions gopts;
+                if (tracer->short_stack()) gopts.kd_stack = tracer->short_stack();
+                gopts.block_size = o->trace.block_size;
+                gopts.fetch_threshold = o->trace.fetch_threshold;
+                res = render::render_gpu(rscene, cd, o->rs, *built.device, trav::find_kernel(tracer->name()), gopts,
+                                         progress);
+            } else {
+                res = render::render_host(rscene, cd, o->rs, *tracer, *tracer, progress);
+            }
         }
         render::write_image(res.mean, o->out);
 
@@ -147,8 +165,12 @@ void register_render(CLI::App& app, Globals& g) {
         for (const render::BounceStats& b : res.bounces)
             bounces.push_back({{"extension_rays", b.extension_rays}, {"shadow_rays", b.shadow_rays}});
         nlohmann::json j = base_record("render", s);
-        j["device"] = "cpu";
-        j["tracer"] = tracer->name();
+        if (reference) {
+            j["device"] = "cpu";
+            j["kernel"] = tracer->name();
+        } else {
+            j.update(tracer_fields(built, *tracer));
+        }
         j["width"] = o->width;
         j["height"] = o->height;
         j["spp"] = res.spp;

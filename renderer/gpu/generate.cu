@@ -1,0 +1,23 @@
+// SPDX-License-Identifier: MIT
+// Stage "generate": one camera ray per pixel.
+#include "renderer/gpu/launch.cuh"
+#include "renderer/gpu/stage_kernels.h"
+
+namespace bvhlab::render::gpu {
+namespace {
+
+__global__ void generate_kernel(CameraData cam, PathParams p, PathView paths, uint32_t npix, uint32_t* count) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i == 0) *count = npix;
+    if (i < npix) generate_path(i, cam, p, paths);
+}
+
+}  // namespace
+
+void launch_generate(const CameraData& cam, const PathParams& p, PathView paths, uint32_t npix, uint32_t* d_count,
+                     void* stream) {
+    generate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(cam, p, paths, npix, d_count);
+    BVHLAB_CHECK_LAUNCH();
+}
+
+}  // namespace bvhlab::render::gpu

@@ -1,0 +1,205 @@
+// SPDX-License-Identifier: MIT
+// The GPU wavefront driver; see gpu_render.h.
+#include <cuda_runtime.h>
+
+#include <chrono>
+#include <filesystem>
+
+#include "accel/core/check.h"
+#include "renderer/gpu/extend.h"
+#include "renderer/gpu/gpu_render.h"
+#include "renderer/gpu/stage_kernels.h"
+#include "traversal/cuda_check.h"
+#include "traversal/rays/ray_file.h"
+
+namespace bvhlab::render {
+namespace {
+
+using trav::DeviceBuffer;
+
+/// The scene's arrays on the device and the view the stages read.
+struct DeviceScene {
+    DeviceBuffer<Vec3> vertices;
+    DeviceBuffer<uint32_t> indices, light_tris;
+    DeviceBuffer<int32_t> material_ids;
+    DeviceBuffer<RenderMaterial> materials;
+    DeviceBuffer<AliasEntry> alias;
+    DeviceBuffer<float> pick_pdf;
+    SceneView view;
+
+    explicit DeviceScene(const RenderScene& s)
+        : vertices(s.mesh().vertices),
+          indices(s.mesh().indices),
+          light_tris(s.light_tris()),
+          material_ids(s.material_ids()),
+          materials(s.materials()),
+          alias(s.alias_table()),
+          pick_pdf(s.pick_pdf()) {
+        view = s.view();  // the host view's scalars, then the device pointers
+        view.vertices = vertices.data();
+        view.indices = indices.data();
+        view.material_ids = material_ids.data();
+        view.materials = materials.data();
+        view.lights.tris = light_tris.data();
+        view.lights.table = alias.data();
+        view.lights.pick_pdf = pick_pdf.data();
+    }
+};
+
+/// One CUDA event per stage boundary of a pass, for the per-stage times.
+class Timeline {
+public:
+    explicit Timeline(size_t n) : events_(n) {
+        for (auto& e : events_) BVHLAB_CUDA_CHECK(cudaEventCreate(&e));
+    }
+    ~Timeline() {
+        for (auto& e : events_) BVHLAB_CUDA_CHECK_LOG(cudaEventDestroy(e));
+    }
+    void mark(size_t i) { BVHLAB_CUDA_CHECK(cudaEventRecord(events_[i])); }
+    double ms(size_t a, size_t b) const {
+        float t = 0.0f;
+        BVHLAB_CUDA_CHECK(cudaEventElapsedTime(&t, events_[a], events_[b]));
+        return double(t);
+    }
+    void wait(size_t i) const { BVHLAB_CUDA_CHECK(cudaEventSynchronize(events_[i])); }
+
+private:
+    std::vector<cudaEvent_t> events_;
+};
+
+uint32_t download_count(trav::RayQueue& q) {
+    uint32_t n = 0;
+    trav::detail::copy_to_host(&n, q.view().count, sizeof n);
+    return n;
+}
+
+/// --dump-rays on the GPU: copies a queue back (a synchronisation, only when asked for).
+void dump_queue(const RenderSettings& s, const char* kind, uint32_t bounce, trav::RayQueue& q, trav::Query query) {
+    if (s.dump_rays_dir.empty()) return;
+    trav::RaySet set;
+    set.rays.resize(download_count(q));
+    if (set.rays.empty()) return;
+    trav::detail::copy_to_host(set.rays.data(), q.view().rays, set.rays.size() * sizeof(trav::Ray));
+    set.query = query;
+    set.writer = s.writer;
+    const std::string name = std::string(kind) + "-bounce" + std::to_string(bounce) + ".rays";
+    trav::write_ray_file((std::filesystem::path(s.dump_rays_dir) / name).string(), set);
+}
+
+}  // namespace
+
+RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
+                        const trav::DeviceStructure& structure, const trav::KernelInfo& kernel,
+                        const trav::GpuTraceOptions& opts, const RenderProgress& progress) {
+    BVHLAB_CHECK(settings.spp >= 1, "--spp must be at least 1");
+    BVHLAB_CHECK(settings.max_depth >= 1 && settings.max_depth <= 1024, "--max-depth must be in [1, 1024]");
+    trav::check_kernel_fits(kernel, structure.layout(), structure.depth(), opts);
+    if (!settings.dump_rays_dir.empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(settings.dump_rays_dir, ec);
+        if (ec) throw Error("cannot create --dump-rays folder " + settings.dump_rays_dir + ": " + ec.message());
+    }
+    using Clock = std::chrono::steady_clock;
+    const auto t_start = Clock::now();
+    const uint32_t npix = camera.width * camera.height, cap = npix;
+    void* stream = nullptr;  // the default stream: every stage in order, no host waits
+
+    DeviceScene ds(scene);
+    trav::RayQueue ext(cap), shadow_q(cap);
+    DeviceBuffer<Vec3> tp(cap), next_tp(cap), shadow_rad(cap), shadow_rad_c(cap), radiance(npix), sum(npix),
+        sum_sq(npix);
+    DeviceBuffer<uint32_t> pixel[2] = {DeviceBuffer<uint32_t>(cap), DeviceBuffer<uint32_t>(cap)};
+    DeviceBuffer<uint32_t> shadow_pixel(cap), indices(cap), next_ray_counter(1);
+    DeviceBuffer<float> pdf(cap), next_pdf(cap);
+    DeviceBuffer<trav::Ray> next_ray(cap), shadow_ray(cap);
+    DeviceBuffer<uint8_t> alive(cap), shadow_flag(cap);
+    DeviceBuffer<uint8_t> temp(gpu::compact_temp_bytes(cap));
+    DeviceBuffer<unsigned long long> ext_stats(settings.max_depth), shadow_stats(settings.max_depth);
+    for (auto* b : {&radiance, &sum, &sum_sq}) b->fill_bytes(0, stream);
+    ext_stats.fill_bytes(0, stream);
+    shadow_stats.fill_bytes(0, stream);
+
+    const ShadeOut so{next_ray.data(),   next_tp.data(),    next_pdf.data(),   alive.data(),
+                      shadow_ray.data(), shadow_rad.data(), shadow_flag.data()};
+    // Events: 0 pass start, 1 generated, then 5 per bounce (extended, shaded, shadow compacted,
+    // shadows traced and resolved, paths compacted), then accumulated.
+    const size_t per_bounce = 5, n_events = 2 + per_bounce * settings.max_depth + 1;
+    Timeline tl(n_events);
+    RenderResult res;
+    auto read_bounces = [&] {
+        std::vector<unsigned long long> ec, sc;
+        ext_stats.download(ec);
+        shadow_stats.download(sc);
+        res.bounces.assign(settings.max_depth, {});
+        for (uint32_t b = 0; b < settings.max_depth; ++b) res.bounces[b] = {ec[b], sc[b]};
+    };
+    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, settings.strategy, settings.bug};
+    for (uint32_t pass = 0; pass < settings.spp; ++pass) {
+        pp.sample = pass;
+        int cur = 0;
+        auto paths = [&] {
+            trav::RayQueueView q = ext.view();
+            return PathView{q.rays, q.hits, tp.data(), pixel[cur].data(), pdf.data()};
+        };
+        tl.mark(0);
+        gpu::launch_generate(camera, pp, paths(), npix, ext.view().count, stream);
+        tl.mark(1);
+        for (uint32_t b = 0; b < settings.max_depth; ++b) {
+            const size_t e = 2 + per_bounce * b;
+            gpu::launch_add_count(ext.view().count, ext_stats.data() + b, stream);
+            if (pass == 0) dump_queue(settings, "extension", b, ext, trav::Query::kClosest);
+            gpu::extend(structure, kernel, ext, trav::Query::kClosest, next_ray_counter, opts, stream);
+            tl.mark(e);
+            gpu::launch_shade(b, ds.view, pp, paths(), so, radiance.data(), ext.view().count, cap, stream);
+            tl.mark(e + 1);
+            gpu::launch_select(shadow_flag.data(), indices.data(), shadow_q.view().count, cap, temp.data(), temp.size(),
+                               stream);
+            gpu::launch_gather_shadow(indices.data(), shadow_q.view().count, cap, so, pixel[cur].data(),
+                                      shadow_q.view().rays, shadow_pixel.data(), shadow_rad_c.data(), stream);
+            tl.mark(e + 2);
+            gpu::launch_add_count(shadow_q.view().count, shadow_stats.data() + b, stream);
+            if (pass == 0) dump_queue(settings, "shadow", b, shadow_q, trav::Query::kAny);
+            gpu::extend(structure, kernel, shadow_q, trav::Query::kAny, next_ray_counter, opts, stream);
+            gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_pixel.data(), shadow_rad_c.data(), radiance.data(),
+                                       shadow_q.view().count, cap, stream);
+            tl.mark(e + 3);
+            gpu::launch_select(alive.data(), indices.data(), ext.view().count, cap, temp.data(), temp.size(), stream);
+            const int nxt = 1 - cur;
+            trav::RayQueueView q = ext.view();
+            gpu::launch_gather_paths(indices.data(), ext.view().count, cap, so, pixel[cur].data(),
+                                     PathView{q.rays, q.hits, tp.data(), pixel[nxt].data(), pdf.data()}, stream);
+            cur = nxt;
+            tl.mark(e + 4);
+        }
+        gpu::launch_accumulate(radiance.data(), sum.data(), sum_sq.data(), npix, stream);
+        const size_t last = n_events - 1;
+        tl.mark(last);
+        tl.wait(last);
+        res.ms_generate += tl.ms(0, 1);
+        for (uint32_t b = 0; b < settings.max_depth; ++b) {
+            const size_t e = 2 + per_bounce * b;
+            res.ms_extend += tl.ms(e - 1, e);  // from the previous bounce's end (or generation)
+            res.ms_shade += tl.ms(e, e + 1);
+            res.ms_compact += tl.ms(e + 1, e + 2) + tl.ms(e + 3, e + 4);
+            res.ms_shadow += tl.ms(e + 2, e + 3);
+        }
+        res.ms_accumulate += tl.ms(last - 1, last);
+        res.spp = pass + 1;
+        if (progress) {
+            read_bounces();
+            progress(res.spp, settings.spp, res);
+        }
+        if (settings.time_limit_s > 0.0 &&
+            std::chrono::duration<double>(Clock::now() - t_start).count() >= settings.time_limit_s)
+            break;
+    }
+    read_bounces();
+    std::vector<Vec3> h_sum, h_sq;
+    sum.download(h_sum);
+    sum_sq.download(h_sq);
+    finish_result(res, h_sum, h_sq, camera.width, camera.height);
+    res.ms_total = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
+    return res;
+}
+
+}  // namespace bvhlab::render
