@@ -32,18 +32,21 @@ def main():
         kernel_ms[s] += b["median_ms"]
         kernel_rays[s] += b["rays"]
         bad[s] += b.get("mismatches", 0)
-    print("| scene | triangles | spp | render Mrays/s | extend kernel Mrays/s (same rays) | ratio (goal >= 0.75) "
-          "| real mismatches | ms per stage: extend / shade / shadow / compact / other |")
-    print("|---|---:|---:|---:|---:|---:|---:|---|")
+    print("| scene | triangles | spp | render Mrays/s | after set-up | extend kernel Mrays/s (same rays) "
+          "| ratio (goal >= 0.75) | after set-up | real mismatches "
+          "| ms: set-up / extend / shade / shadow / compact / other |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for r in renders:
         name = os.path.basename(r["scene_file"]) if "scene_file" in r else r["scene"]
         key = r.get("out", "").split("/")[-1].removesuffix(".pfm") or name
         k = kernel_rays[key] / (kernel_ms[key] * 1e3) if kernel_ms[key] else float("nan")
         ms = r["ms"]
-        other = ms["total"] - ms["extend"] - ms["shade"] - ms["shadow"] - ms["compact"]
-        print(f"| {r['scene']} | {r['triangles']:,} | {r['spp']} | {r['mrays_per_s']:,.0f} | {k:,.0f} | "
-              f"{r['mrays_per_s'] / k:.2f} | {bad[key]} | {ms['extend']:.0f} / {ms['shade']:.0f} / "
-              f"{ms['shadow']:.0f} / {ms['compact']:.0f} / {other:.0f} |")
+        setup = ms.get("setup", 0.0)
+        other = ms["total"] - setup - ms["extend"] - ms["shade"] - ms["shadow"] - ms["compact"]
+        passes = r["rays"] / ((ms["total"] - setup) * 1e3)
+        print(f"| {r['scene']} | {r['triangles']:,} | {r['spp']} | {r['mrays_per_s']:,.0f} | {passes:,.0f} | "
+              f"{k:,.0f} | {r['mrays_per_s'] / k:.2f} | {passes / k:.2f} | {bad[key]} | {setup:.0f} / "
+              f"{ms['extend']:.0f} / {ms['shade']:.0f} / {ms['shadow']:.0f} / {ms['compact']:.0f} / {other:.0f} |")
     print()
     print("Rays per bounce (all passes), extension / shadow:")
     print()

@@ -3,6 +3,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -22,12 +23,12 @@ void parallel(size_t n, F f) {
     });
 }
 
-/// Path state of one pass, structure-of-arrays, sized for every pixel.
+/// Path state of one pass, structure-of-arrays, sized for every slot of a wave.
 struct HostPaths {
     std::vector<trav::Ray> ray, next_ray, shadow_ray;
     std::vector<trav::Hit> hit, occlusion;
     std::vector<Vec3> throughput, next_throughput, shadow_radiance;
-    std::vector<uint32_t> pixel, shadow_pixel;
+    std::vector<uint32_t> slot, shadow_slot;
     std::vector<float> prev_pdf, next_pdf;
     std::vector<uint8_t> alive, shadow;
 
@@ -38,13 +39,13 @@ struct HostPaths {
           throughput(n),
           next_throughput(n),
           shadow_radiance(n),
-          pixel(n),
-          shadow_pixel(n),
+          slot(n),
+          shadow_slot(n),
           prev_pdf(n),
           next_pdf(n),
           alive(n),
           shadow(n) {}
-    PathView view() { return {ray.data(), hit.data(), throughput.data(), pixel.data(), prev_pdf.data()}; }
+    PathView view() { return {ray.data(), hit.data(), throughput.data(), slot.data(), prev_pdf.data()}; }
     ShadeOut out() {
         return {next_ray.data(),   next_throughput.data(), next_pdf.data(), alive.data(),
                 shadow_ray.data(), shadow_radiance.data(), shadow.data()};
@@ -81,6 +82,15 @@ void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::v
     while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
 }
 
+uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic) {
+    uint32_t k = s.wave_samples ? s.wave_samples : automatic;
+    k = std::max(1u, std::min(k, s.spp));
+    BVHLAB_CHECK(uint64_t(pixels) * k < (uint64_t(1) << 31), "a wave of " + std::to_string(k) + " samples of " +
+                                                                 std::to_string(pixels) +
+                                                                 " pixels is too many paths (2^31 or more)");
+    return k;
+}
+
 uint64_t RenderResult::rays() const {
     uint64_t n = 0;
     for (const BounceStats& b : bounces) n += b.extension_rays + b.shadow_rays;
@@ -98,21 +108,26 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
     }
     const auto t_start = Clock::now();
     const uint32_t npix = camera.width * camera.height;
+    const uint32_t wave = wave_samples(settings, npix, default_wave(false, npix));
+    const size_t cap = size_t(npix) * wave;
     const SceneView sv = scene.view();
-    HostPaths paths(npix);
-    std::vector<Vec3> radiance(npix, splat(0.0f)), sum(npix, splat(0.0f)), sum_sq(npix, splat(0.0f));
+    HostPaths paths(cap);
+    std::vector<Vec3> radiance(cap, splat(0.0f)), sum(npix, splat(0.0f)), sum_sq(npix, splat(0.0f));
     RenderResult res;
     res.bounces.resize(settings.max_depth);
-    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, settings.strategy, settings.bug};
-    for (uint32_t pass = 0; pass < settings.spp; ++pass) {
-        pp.sample = pass;
+    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy, settings.bug};
+    res.ms_setup = ms_since(t_start);
+    for (uint32_t pass = 0; res.spp < settings.spp; ++pass) {
+        pp.first_sample = res.spp;
+        const uint32_t k = std::min(wave, settings.spp - res.spp);
+        const size_t n_gen = size_t(npix) * k;
         auto t0 = Clock::now();
-        paths.ray.resize(npix);
-        paths.throughput.resize(npix);
-        paths.pixel.resize(npix);
-        paths.prev_pdf.resize(npix);
+        paths.ray.resize(n_gen);
+        paths.throughput.resize(n_gen);
+        paths.slot.resize(n_gen);
+        paths.prev_pdf.resize(n_gen);
         PathView pv = paths.view();
-        parallel(npix, [&](uint32_t i) { generate_path(i, camera, pp, pv); });
+        parallel(n_gen, [&](uint32_t i) { generate_path(i, camera, pp, pv); });
         res.ms_generate += ms_since(t0);
         for (uint32_t bounce = 0; bounce < settings.max_depth && !paths.ray.empty(); ++bounce) {
             const size_t n = paths.ray.size();
@@ -138,7 +153,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
             for (size_t i = 0; i < n; ++i)
                 if (paths.shadow[i]) {
                     shadow_rays.push_back(paths.shadow_ray[i]);
-                    paths.shadow_pixel[ns] = paths.pixel[i];
+                    paths.shadow_slot[ns] = paths.slot[i];
                     paths.shadow_radiance[ns++] = paths.shadow_radiance[i];
                 }
             res.ms_compact += ms_since(t0);
@@ -150,7 +165,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
                 shadow.run();
                 shadow.hits(paths.occlusion);
                 const trav::Hit* occ = paths.occlusion.data();
-                const uint32_t* spx = paths.shadow_pixel.data();
+                const uint32_t* spx = paths.shadow_slot.data();
                 const Vec3* srad = paths.shadow_radiance.data();
                 parallel(ns, [&](uint32_t i) { resolve_shadow(i, occ, spx, srad, rad); });
                 res.ms_shadow += ms_since(t0);
@@ -163,21 +178,21 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
                 if (paths.alive[i]) {
                     paths.ray[live] = paths.next_ray[i];
                     paths.throughput[live] = paths.next_throughput[i];
-                    paths.pixel[live] = paths.pixel[i];
+                    paths.slot[live] = paths.slot[i];
                     paths.prev_pdf[live] = paths.next_pdf[i];
                     ++live;
                 }
             paths.ray.resize(live);
             paths.throughput.resize(live);
-            paths.pixel.resize(live);
+            paths.slot.resize(live);
             paths.prev_pdf.resize(live);
             res.ms_compact += ms_since(t0);
         }
         t0 = Clock::now();
         Vec3 *rad = radiance.data(), *s1 = sum.data(), *s2 = sum_sq.data();
-        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, rad, s1, s2); });
+        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, npix, k, rad, s1, s2); });
         res.ms_accumulate += ms_since(t0);
-        res.spp = pass + 1;
+        res.spp += k;
         if (progress) progress(res.spp, settings.spp, res);
         if (settings.time_limit_s > 0.0 && ms_since(t_start) >= 1000.0 * settings.time_limit_s) break;
     }

@@ -26,9 +26,12 @@ struct RenderSettings {
     PlantedBug bug = PlantedBug::kNone;
     std::string dump_rays_dir;  ///< non-empty: each bounce's rays of pass 0 as ray files here
     std::string writer;         ///< the commit recorded in dumped ray files
+    /// Samples of every pixel traced together in one pass (a wave); 0: the driver's default
+    /// (the GPU: enough for about 2M paths; the CPU: 1).
+    uint32_t wave_samples = 0;
 };
 
-/// Per bounce: rays traced and paths alive, summed over the passes.
+/// Per bounce: rays traced (extension rays = paths alive), summed over the passes.
 struct BounceStats {
     uint64_t extension_rays = 0;
     uint64_t shadow_rays = 0;
@@ -37,19 +40,33 @@ struct BounceStats {
 struct RenderResult {
     Image mean;              ///< radiance per pixel, averaged over the passes
     Image variance_of_mean;  ///< per channel: sample variance / passes (0 with one pass)
-    uint32_t spp = 0;        ///< passes done
+    uint32_t spp = 0;        ///< samples per pixel done
     std::vector<BounceStats> bounces;
     double ms_generate = 0, ms_extend = 0, ms_shade = 0, ms_shadow = 0, ms_compact = 0, ms_accumulate = 0;
+    double ms_setup = 0;  ///< before the first pass: uploads, allocations, the first launches
     double ms_total = 0;
     uint64_t rays() const;
 };
 
-/// Fills res.mean and res.variance_of_mean from per-pixel sums over res.spp passes, and drops
+/// Paths per wave the GPU driver aims for unless told (NOTES.md, session 15: one sample of
+/// 640x480 per pass, ~300k rays per trace, left the H100 idle between launches).
+constexpr uint32_t kGpuWavePaths = 2u << 20;
+
+/// The driver's default samples per pass: about kGpuWavePaths paths on the GPU, 1 on the CPU.
+inline uint32_t default_wave(bool gpu, uint32_t pixels) {
+    return gpu && pixels < kGpuWavePaths ? kGpuWavePaths / pixels : 1u;
+}
+
+/// The samples per pass for `pixels` pixels: settings.wave_samples, else `automatic`, at most
+/// spp and at least 1. Throws bvhlab::Error when the wave would hold 2^31 paths or more.
+uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic);
+
+/// Fills res.mean and res.variance_of_mean from per-pixel sums over res.spp samples, and drops
 /// trailing bounces that traced nothing. Shared by the host and GPU drivers.
 void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::vector<Vec3>& sum_sq, uint32_t width,
                    uint32_t height);
 
-/// Progress after each pass: passes done, passes asked for.
+/// Progress after each pass: samples per pixel done, and asked for.
 using RenderProgress = std::function<void(uint32_t done, uint32_t total, const RenderResult& so_far)>;
 
 /// Renders on the host. `extend` answers closest-hit rays, `shadow` any-hit rays (they may be

@@ -171,15 +171,21 @@ if has render; then
         log "render $n"
         d=$rays/render-$n
         rm -rf "$d"
+        # Timed without --dump-rays (dumping copies every queue back and writes files inside
+        # the pass); then the first wave again, dumped, for the kernel-only figure.
         "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 \
-            --spp "${RENDER_SPP:-64}" --max-depth 8 --dump-rays "$d" -o "/tmp/renders/$n.pfm" --json \
+            --spp "${RENDER_SPP:-64}" --max-depth 8 -o "/tmp/renders/$n.pfm" --json \
             >>"$out/render.jsonl" 2>>"$out/render.err" || status=1
+        "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 \
+            --spp 6 --wave 6 --max-depth 8 --dump-rays "$d" -o "/tmp/renders/$n-dump.pfm" \
+            >>"$out/render.err" 2>&1 || status=1
         for f in "$d"/*.rays; do
             # Each record names its ray file (ray_file): the bounce and extension or shadow.
             "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel "$kernel" --runs 5 --json \
                 >>"$out/render_bench.jsonl" || status=1
         done
     done
+    rm -f /tmp/renders/*-dump.pfm
     tar cJf "$out/renders.tar.xz" -C /tmp/renders . || status=1
     log "render compute-sanitizer memcheck"
     compute-sanitizer --tool memcheck --error-exitcode 3 "$bin/bvhlab" -q render "$BVHLAB_DATA/glass_mirror.obj" \

@@ -2,9 +2,11 @@
 // The wavefront integrator's per-path stages (Laine, Karras & Aila 2013, "Megakernels
 // considered harmful"), written once for both devices: the CPU driver calls them in a TBB loop,
 // the GPU driver from one small kernel each. Path state is structure-of-arrays; a stage reads
-// and writes only entry i, and the pixel's radiance, which within one sample pass belongs to
-// exactly one path. Tracing and compaction are the drivers' own (Embree or a registry kernel;
-// a serial pack or CUB).
+// and writes only entry i, and the radiance of its path's slot. A pass (a "wave") traces
+// `samples` samples of every pixel at once: path slot s is pixel s % pixels, sample
+// first_sample + s / pixels, so that each trace launch holds millions of rays even for small
+// images (NOTES.md, session 15: one sample per pass left the H100 idle between launches). Tracing and compaction are
+// the drivers' own (Embree or a registry kernel; a serial pack or CUB).
 #pragma once
 
 #include <cstdint>
@@ -37,7 +39,8 @@ struct PathParams {
     uint32_t max_depth;  ///< most segments per path (1: camera rays only)
     uint32_t rr_depth;   ///< Russian roulette from this bounce on
     uint32_t seed;
-    uint32_t sample;  ///< the sample pass
+    uint32_t first_sample;  ///< the pass's first sample index
+    uint32_t pixels;        ///< pixels of the image: slot s is pixel s % pixels
     Strategy strategy;
     PlantedBug bug;
 };
@@ -47,7 +50,7 @@ struct PathView {
     trav::Ray* ray;
     trav::Hit* hit;
     Vec3* throughput;
-    uint32_t* pixel;
+    uint32_t* slot;   ///< the path's slot in the pass: its pixel, its sample and its radiance entry
     float* prev_pdf;  ///< the BSDF density that chose ray; 0 for the camera and delta lobes
 };
 
@@ -58,7 +61,7 @@ struct ShadeOut {
     float* next_pdf;
     uint8_t* alive;
     trav::Ray* shadow_ray;
-    Vec3* shadow_radiance;  ///< added to the pixel when the shadow ray is unoccluded
+    Vec3* shadow_radiance;  ///< added to the slot's radiance when the shadow ray is unoccluded
     uint8_t* shadow;
 };
 
@@ -66,11 +69,14 @@ BVHLAB_HD inline const RenderMaterial& material_of(const SceneView& s, uint32_t 
     return s.materials[s.material_ids[tri] + 1];
 }
 
-/// Stage "generate": path i of the pass is pixel i's camera ray.
+BVHLAB_HD inline uint32_t pixel_of(const PathParams& p, uint32_t slot) { return slot % p.pixels; }
+BVHLAB_HD inline uint32_t sample_of(const PathParams& p, uint32_t slot) { return p.first_sample + slot / p.pixels; }
+
+/// Stage "generate": slot i's camera ray.
 BVHLAB_HD inline void generate_path(uint32_t i, const CameraData& cam, const PathParams& p, PathView paths) {
-    paths.ray[i] = camera_ray(cam, i, p.sample, p.seed);
+    paths.ray[i] = camera_ray(cam, pixel_of(p, i), sample_of(p, i), p.seed);
     paths.throughput[i] = splat(1.0f);
-    paths.pixel[i] = i;
+    paths.slot[i] = i;
     paths.prev_pdf[i] = 0.0f;
 }
 
@@ -80,7 +86,7 @@ BVHLAB_HD inline Vec3 offset_point(Vec3 p, Vec3 ng, Vec3 d, float offset) {
 }
 
 /// Stage "shade" for path i at bounce `bounce` (0: the camera ray's hit): adds what it sees to
-/// radiance[pixel], and leaves a shadow ray for next-event estimation and the continuation.
+/// radiance[slot], and leaves a shadow ray for next-event estimation and the continuation.
 BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths,
                                  ShadeOut out, Vec3* radiance) {
     out.alive[i] = 0;
@@ -88,7 +94,7 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     const trav::Ray ray = paths.ray[i];
     const trav::Hit hit = paths.hit[i];
     Vec3 beta = paths.throughput[i];
-    const uint32_t px = paths.pixel[i];
+    const uint32_t px = paths.slot[i];
     const float prev_pdf = paths.prev_pdf[i];
     const bool bsdf_counts = p.strategy != Strategy::kLightOnly || prev_pdf == 0.0f;
     const bool mis = p.strategy == Strategy::kMis && prev_pdf > 0.0f;
@@ -125,7 +131,8 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     const Frame frame = Frame::around(n);
     const Vec3 wo_l = frame.to_local(wo);
     const Vec3 base = m.base;
-    auto rnd = [&](uint32_t d) { return rand01(px, p.sample, bounce_dim(bounce, d), p.seed); };
+    const uint32_t pixel = pixel_of(p, px), sample = sample_of(p, px);
+    auto rnd = [&](uint32_t d) { return rand01(pixel, sample, bounce_dim(bounce, d), p.seed); };
 
     // Next-event estimation, for every lobe that is not a delta.
     const bool smooth = m.type == BsdfType::kMirror || m.type == BsdfType::kGlass;
@@ -186,19 +193,25 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     out.alive[i] = 1;
 }
 
-/// Stage "shadow": adds an unoccluded shadow ray's radiance to its pixel.
-BVHLAB_HD inline void resolve_shadow(uint32_t i, const trav::Hit* occlusion, const uint32_t* pixel,
+/// Stage "shadow": adds an unoccluded shadow ray's radiance to its slot.
+BVHLAB_HD inline void resolve_shadow(uint32_t i, const trav::Hit* occlusion, const uint32_t* slot,
                                      const Vec3* shadow_radiance, Vec3* radiance) {
-    if (!occlusion[i].is_hit()) radiance[pixel[i]] = radiance[pixel[i]] + shadow_radiance[i];
+    if (!occlusion[i].is_hit()) radiance[slot[i]] = radiance[slot[i]] + shadow_radiance[i];
 }
 
-/// Stage "accumulate": folds pass radiance into the per-pixel sum and sum of squares (for the
-/// variance the image comparisons use), then clears it for the next pass.
-BVHLAB_HD inline void accumulate_pixel(uint32_t px, Vec3* radiance, Vec3* sum, Vec3* sum_sq) {
-    const Vec3 l = radiance[px];
-    sum[px] = sum[px] + l;
-    sum_sq[px] = sum_sq[px] + l * l;
-    radiance[px] = splat(0.0f);
+/// Stage "accumulate": folds pixel px's `samples` slots of the pass into its sum and sum of
+/// squares (for the variance the image comparisons use), and clears them for the next pass.
+BVHLAB_HD inline void accumulate_pixel(uint32_t px, uint32_t pixels, uint32_t samples, Vec3* radiance, Vec3* sum,
+                                       Vec3* sum_sq) {
+    Vec3 s1 = sum[px], s2 = sum_sq[px];
+    for (uint32_t k = 0; k < samples; ++k) {
+        Vec3& r = radiance[size_t(k) * pixels + px];
+        s1 = s1 + r;
+        s2 = s2 + r * r;
+        r = splat(0.0f);
+    }
+    sum[px] = s1;
+    sum_sq[px] = s2;
 }
 
 }  // namespace bvhlab::render

@@ -1,20 +1,20 @@
 // SPDX-License-Identifier: MIT
-// Stage "accumulate": the pass's radiance into the per-pixel sums.
+// Stage "accumulate": the pass's radiance slots into the per-pixel sums.
 #include "renderer/gpu/launch.cuh"
 #include "renderer/gpu/stage_kernels.h"
 
 namespace bvhlab::render::gpu {
 namespace {
 
-__global__ void accumulate_kernel(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix) {
+__global__ void accumulate_kernel(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix, uint32_t samples) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i < npix) accumulate_pixel(i, radiance, sum, sum_sq);
+    if (i < npix) accumulate_pixel(i, npix, samples, radiance, sum, sum_sq);
 }
 
 }  // namespace
 
-void launch_accumulate(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix, void* stream) {
-    accumulate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(radiance, sum, sum_sq, npix);
+void launch_accumulate(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix, uint32_t samples, void* stream) {
+    accumulate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(radiance, sum, sum_sq, npix, samples);
     BVHLAB_CHECK_LAUNCH();
 }
 

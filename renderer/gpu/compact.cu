@@ -12,25 +12,25 @@ namespace bvhlab::render::gpu {
 namespace {
 
 __global__ void gather_paths_kernel(const uint32_t* idx, const uint32_t* count, uint32_t capacity, ShadeOut in,
-                                    const uint32_t* pixel_in, PathView out) {
+                                    const uint32_t* slot_in, PathView out) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= capacity || i >= *count) return;
     const uint32_t j = idx[i];
     out.ray[i] = in.next_ray[j];
     out.throughput[i] = in.next_throughput[j];
     out.prev_pdf[i] = in.next_pdf[j];
-    out.pixel[i] = pixel_in[j];
+    out.slot[i] = slot_in[j];
 }
 
 __global__ void gather_shadow_kernel(const uint32_t* idx, const uint32_t* count, uint32_t capacity, ShadeOut in,
-                                     const uint32_t* pixel_in, trav::Ray* ray_out, uint32_t* pixel_out,
+                                     const uint32_t* slot_in, trav::Ray* ray_out, uint32_t* slot_out,
                                      Vec3* radiance_out) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= capacity || i >= *count) return;
     const uint32_t j = idx[i];
     ray_out[i] = in.shadow_ray[j];
     radiance_out[i] = in.shadow_radiance[j];
-    pixel_out[i] = pixel_in[j];
+    slot_out[i] = slot_in[j];
 }
 
 __global__ void add_count_kernel(const uint32_t* count, unsigned long long* total) { *total += *count; }
@@ -52,17 +52,17 @@ void launch_select(const uint8_t* flags, uint32_t* d_indices, uint32_t* d_count,
 }
 
 void launch_gather_paths(const uint32_t* idx, const uint32_t* d_count, uint32_t capacity, ShadeOut in,
-                         const uint32_t* pixel_in, PathView out, void* stream) {
+                         const uint32_t* slot_in, PathView out, void* stream) {
     gather_paths_kernel<<<stage_blocks(capacity), kStageBlock, 0, as_stream(stream)>>>(idx, d_count, capacity, in,
-                                                                                       pixel_in, out);
+                                                                                       slot_in, out);
     BVHLAB_CHECK_LAUNCH();
 }
 
 void launch_gather_shadow(const uint32_t* idx, const uint32_t* d_count, uint32_t capacity, ShadeOut in,
-                          const uint32_t* pixel_in, trav::Ray* ray_out, uint32_t* pixel_out, Vec3* radiance_out,
+                          const uint32_t* slot_in, trav::Ray* ray_out, uint32_t* slot_out, Vec3* radiance_out,
                           void* stream) {
     gather_shadow_kernel<<<stage_blocks(capacity), kStageBlock, 0, as_stream(stream)>>>(
-        idx, d_count, capacity, in, pixel_in, ray_out, pixel_out, radiance_out);
+        idx, d_count, capacity, in, slot_in, ray_out, slot_out, radiance_out);
     BVHLAB_CHECK_LAUNCH();
 }
 

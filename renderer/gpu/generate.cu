@@ -1,22 +1,22 @@
 // SPDX-License-Identifier: MIT
-// Stage "generate": one camera ray per pixel.
+// Stage "generate": one camera ray per slot of the wave.
 #include "renderer/gpu/launch.cuh"
 #include "renderer/gpu/stage_kernels.h"
 
 namespace bvhlab::render::gpu {
 namespace {
 
-__global__ void generate_kernel(CameraData cam, PathParams p, PathView paths, uint32_t npix, uint32_t* count) {
+__global__ void generate_kernel(CameraData cam, PathParams p, PathView paths, uint32_t n, uint32_t* count) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i == 0) *count = npix;
-    if (i < npix) generate_path(i, cam, p, paths);
+    if (i == 0) *count = n;
+    if (i < n) generate_path(i, cam, p, paths);
 }
 
 }  // namespace
 
-void launch_generate(const CameraData& cam, const PathParams& p, PathView paths, uint32_t npix, uint32_t* d_count,
+void launch_generate(const CameraData& cam, const PathParams& p, PathView paths, uint32_t paths_n, uint32_t* d_count,
                      void* stream) {
-    generate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(cam, p, paths, npix, d_count);
+    generate_kernel<<<stage_blocks(paths_n), kStageBlock, 0, as_stream(stream)>>>(cam, p, paths, paths_n, d_count);
     BVHLAB_CHECK_LAUNCH();
 }
 

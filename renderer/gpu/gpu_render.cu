@@ -2,6 +2,7 @@
 // The GPU wavefront driver; see gpu_render.h.
 #include <cuda_runtime.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -101,15 +102,17 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     }
     using Clock = std::chrono::steady_clock;
     const auto t_start = Clock::now();
-    const uint32_t npix = camera.width * camera.height, cap = npix;
+    const uint32_t npix = camera.width * camera.height;
+    const uint32_t wave = wave_samples(settings, npix, default_wave(true, npix));
+    const uint32_t cap = npix * wave;
     void* stream = nullptr;  // the default stream: every stage in order, no host waits
 
     DeviceScene ds(scene);
     trav::RayQueue ext(cap), shadow_q(cap);
-    DeviceBuffer<Vec3> tp(cap), next_tp(cap), shadow_rad(cap), shadow_rad_c(cap), radiance(npix), sum(npix),
+    DeviceBuffer<Vec3> tp(cap), next_tp(cap), shadow_rad(cap), shadow_rad_c(cap), radiance(cap), sum(npix),
         sum_sq(npix);
-    DeviceBuffer<uint32_t> pixel[2] = {DeviceBuffer<uint32_t>(cap), DeviceBuffer<uint32_t>(cap)};
-    DeviceBuffer<uint32_t> shadow_pixel(cap), indices(cap), next_ray_counter(1);
+    DeviceBuffer<uint32_t> slot[2] = {DeviceBuffer<uint32_t>(cap), DeviceBuffer<uint32_t>(cap)};
+    DeviceBuffer<uint32_t> shadow_slot(cap), indices(cap), next_ray_counter(1);
     DeviceBuffer<float> pdf(cap), next_pdf(cap);
     DeviceBuffer<trav::Ray> next_ray(cap), shadow_ray(cap);
     DeviceBuffer<uint8_t> alive(cap), shadow_flag(cap);
@@ -133,16 +136,19 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         res.bounces.assign(settings.max_depth, {});
         for (uint32_t b = 0; b < settings.max_depth; ++b) res.bounces[b] = {ec[b], sc[b]};
     };
-    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, settings.strategy, settings.bug};
-    for (uint32_t pass = 0; pass < settings.spp; ++pass) {
-        pp.sample = pass;
+    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy, settings.bug};
+    BVHLAB_CUDA_CHECK(cudaDeviceSynchronize());
+    res.ms_setup = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
+    for (uint32_t pass = 0; res.spp < settings.spp; ++pass) {
+        pp.first_sample = res.spp;
+        const uint32_t k = std::min(wave, settings.spp - res.spp);
         int cur = 0;
         auto paths = [&] {
             trav::RayQueueView q = ext.view();
-            return PathView{q.rays, q.hits, tp.data(), pixel[cur].data(), pdf.data()};
+            return PathView{q.rays, q.hits, tp.data(), slot[cur].data(), pdf.data()};
         };
         tl.mark(0);
-        gpu::launch_generate(camera, pp, paths(), npix, ext.view().count, stream);
+        gpu::launch_generate(camera, pp, paths(), npix * k, ext.view().count, stream);
         tl.mark(1);
         for (uint32_t b = 0; b < settings.max_depth; ++b) {
             const size_t e = 2 + per_bounce * b;
@@ -154,24 +160,24 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             tl.mark(e + 1);
             gpu::launch_select(shadow_flag.data(), indices.data(), shadow_q.view().count, cap, temp.data(), temp.size(),
                                stream);
-            gpu::launch_gather_shadow(indices.data(), shadow_q.view().count, cap, so, pixel[cur].data(),
-                                      shadow_q.view().rays, shadow_pixel.data(), shadow_rad_c.data(), stream);
+            gpu::launch_gather_shadow(indices.data(), shadow_q.view().count, cap, so, slot[cur].data(),
+                                      shadow_q.view().rays, shadow_slot.data(), shadow_rad_c.data(), stream);
             tl.mark(e + 2);
             gpu::launch_add_count(shadow_q.view().count, shadow_stats.data() + b, stream);
             if (pass == 0) dump_queue(settings, "shadow", b, shadow_q, trav::Query::kAny);
             gpu::extend(structure, kernel, shadow_q, trav::Query::kAny, next_ray_counter, opts, stream);
-            gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_pixel.data(), shadow_rad_c.data(), radiance.data(),
+            gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_slot.data(), shadow_rad_c.data(), radiance.data(),
                                        shadow_q.view().count, cap, stream);
             tl.mark(e + 3);
             gpu::launch_select(alive.data(), indices.data(), ext.view().count, cap, temp.data(), temp.size(), stream);
             const int nxt = 1 - cur;
             trav::RayQueueView q = ext.view();
-            gpu::launch_gather_paths(indices.data(), ext.view().count, cap, so, pixel[cur].data(),
-                                     PathView{q.rays, q.hits, tp.data(), pixel[nxt].data(), pdf.data()}, stream);
+            gpu::launch_gather_paths(indices.data(), ext.view().count, cap, so, slot[cur].data(),
+                                     PathView{q.rays, q.hits, tp.data(), slot[nxt].data(), pdf.data()}, stream);
             cur = nxt;
             tl.mark(e + 4);
         }
-        gpu::launch_accumulate(radiance.data(), sum.data(), sum_sq.data(), npix, stream);
+        gpu::launch_accumulate(radiance.data(), sum.data(), sum_sq.data(), npix, k, stream);
         const size_t last = n_events - 1;
         tl.mark(last);
         tl.wait(last);
@@ -184,7 +190,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             res.ms_shadow += tl.ms(e + 2, e + 3);
         }
         res.ms_accumulate += tl.ms(last - 1, last);
-        res.spp = pass + 1;
+        res.spp += k;
         if (progress) {
             read_bounces();
             progress(res.spp, settings.spp, res);

@@ -6,17 +6,17 @@
 namespace bvhlab::render::gpu {
 namespace {
 
-__global__ void resolve_kernel(const trav::Hit* occ, const uint32_t* pixel, const Vec3* rad, Vec3* radiance,
+__global__ void resolve_kernel(const trav::Hit* occ, const uint32_t* slot, const Vec3* rad, Vec3* radiance,
                                const uint32_t* count, uint32_t capacity) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i < capacity && i < *count) resolve_shadow(i, occ, pixel, rad, radiance);
+    if (i < capacity && i < *count) resolve_shadow(i, occ, slot, rad, radiance);
 }
 
 }  // namespace
 
-void launch_resolve_shadow(const trav::Hit* occlusion, const uint32_t* pixel, const Vec3* shadow_radiance,
+void launch_resolve_shadow(const trav::Hit* occlusion, const uint32_t* slot, const Vec3* shadow_radiance,
                            Vec3* radiance, const uint32_t* d_count, uint32_t capacity, void* stream) {
-    resolve_kernel<<<stage_blocks(capacity), kStageBlock, 0, as_stream(stream)>>>(occlusion, pixel, shadow_radiance,
+    resolve_kernel<<<stage_blocks(capacity), kStageBlock, 0, as_stream(stream)>>>(occlusion, slot, shadow_radiance,
                                                                                   radiance, d_count, capacity);
     BVHLAB_CHECK_LAUNCH();
 }

@@ -194,6 +194,24 @@ TEST(Render, SameSeedSameImageOtherSeedOtherImage) {
     EXPECT_EQ(a.bounces[0].extension_rays, 2u * 16 * 16);
 }
 
+// Samples traced together in one wave are the samples traced one pass at a time: each path's
+// numbers depend on its pixel and sample only, and the sums run in sample order.
+TEST(Render, WaveSizeDoesNotChangeTheImage) {
+    const SceneSetup s = cornell();
+    RenderSettings rs;
+    rs.spp = 5;
+    const RenderResult one = render(s.mesh, s.cam, 12, rs);
+    rs.wave_samples = 2;  // passes of 2, 2 and 1 samples
+    const RenderResult waves = render(s.mesh, s.cam, 12, rs);
+    EXPECT_EQ(waves.spp, 5u);
+    ASSERT_EQ(one.mean.pixels.size(), waves.mean.pixels.size());
+    for (size_t i = 0; i < one.mean.pixels.size(); ++i) {
+        ASSERT_EQ(one.mean.pixels[i].x, waves.mean.pixels[i].x) << i;
+        ASSERT_EQ(one.variance_of_mean.pixels[i].z, waves.variance_of_mean.pixels[i].z) << i;
+    }
+    EXPECT_EQ(one.bounces[1].extension_rays, waves.bounces[1].extension_rays);
+}
+
 // A sky-lit scene with no emitters gets the white sky; one with emitters a black sky.
 TEST(Render, DefaultSkyRule) {
     accel::Material grey;

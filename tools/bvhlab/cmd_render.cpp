@@ -54,6 +54,10 @@ void register_render(CLI::App& app, Globals& g) {
         ->check(CLI::Range(0, 1024))
         ->capture_default_str();
     sub->add_option("--seed", o->rs.seed, "seed of every random number")->capture_default_str();
+    sub->add_option("--wave", o->rs.wave_samples,
+                    "samples of every pixel traced together per pass (default: about 2M paths on the gpu, 1 on the "
+                    "cpu); the image does not depend on it")
+        ->check(CLI::Range(1, 1 << 20));
     o->trace.add_to(*sub);
     o->build.add_to(*sub);
     sub->add_option("--sky", o->sky,
@@ -178,15 +182,17 @@ void register_render(CLI::App& app, Globals& g) {
         j["max_depth"] = o->rs.max_depth;
         j["rr_depth"] = o->rs.rr_depth;
         j["seed"] = o->rs.seed;
+        j["wave_samples"] = render::wave_samples(o->rs, o->width * o->height,
+                                                 render::default_wave(o->trace.device == "gpu", o->width * o->height));
         j["strategy"] = o->strategy;
         j["lighting"] = rscene.lighting();
         j["sky"] = vec_json(rscene.sky());
         j["emissive_triangles"] = rscene.light_tris().size();
         j["out"] = o->out;
         j["rays"] = res.rays();
-        j["ms"] = {{"total", res.ms_total},          {"generate", res.ms_generate}, {"extend", res.ms_extend},
-                   {"shade", res.ms_shade},          {"shadow", res.ms_shadow},     {"compact", res.ms_compact},
-                   {"accumulate", res.ms_accumulate}};
+        j["ms"] = {{"total", res.ms_total},           {"generate", res.ms_generate}, {"extend", res.ms_extend},
+                   {"shade", res.ms_shade},           {"shadow", res.ms_shadow},     {"compact", res.ms_compact},
+                   {"accumulate", res.ms_accumulate}, {"setup", res.ms_setup}};
         j["mrays_per_s"] = res.ms_total > 0.0 ? double(res.rays()) / (res.ms_total * 1e3) : 0.0;
         j["bounces"] = bounces;
         if (g.json)
