@@ -31,8 +31,9 @@ struct HostPaths {
     std::vector<uint32_t> slot, shadow_slot;
     std::vector<float> prev_pdf, next_pdf;
     std::vector<uint8_t> alive, shadow;
+    std::vector<Vec3> albedo, normal;  // per slot, when asked for
 
-    explicit HostPaths(size_t n)
+    explicit HostPaths(size_t n, bool aovs)
         : ray(n),
           next_ray(n),
           shadow_ray(n),
@@ -44,11 +45,20 @@ struct HostPaths {
           prev_pdf(n),
           next_pdf(n),
           alive(n),
-          shadow(n) {}
+          shadow(n),
+          albedo(aovs ? n : 0),
+          normal(aovs ? n : 0) {}
     PathView view() { return {ray.data(), hit.data(), throughput.data(), slot.data(), prev_pdf.data()}; }
     ShadeOut out() {
-        return {next_ray.data(),   next_throughput.data(), next_pdf.data(), alive.data(),
-                shadow_ray.data(), shadow_radiance.data(), shadow.data()};
+        return {next_ray.data(),
+                next_throughput.data(),
+                next_pdf.data(),
+                alive.data(),
+                shadow_ray.data(),
+                shadow_radiance.data(),
+                shadow.data(),
+                albedo.empty() ? nullptr : albedo.data(),
+                normal.empty() ? nullptr : normal.data()};
     }
 };
 
@@ -82,6 +92,17 @@ void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::v
     while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
 }
 
+void finish_aovs(RenderResult& res, const std::vector<Vec3>& albedo, const std::vector<Vec3>& normal) {
+    if (albedo.empty()) return;
+    res.albedo = Image(res.mean.width, res.mean.height);
+    res.normal = Image(res.mean.width, res.mean.height);
+    for (size_t px = 0; px < albedo.size(); ++px) {
+        res.albedo.pixels[px] = albedo[px] * (1.0f / float(res.spp));
+        const float len = length(normal[px]);
+        res.normal.pixels[px] = len > 0.0f ? normal[px] * (1.0f / len) : splat(0.0f);
+    }
+}
+
 uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic) {
     uint32_t k = s.wave_samples ? s.wave_samples : automatic;
     k = std::max(1u, std::min(k, s.spp));
@@ -111,8 +132,9 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
     const uint32_t wave = wave_samples(settings, npix, default_wave(false, npix));
     const size_t cap = size_t(npix) * wave;
     const SceneView sv = scene.view();
-    HostPaths paths(cap);
+    HostPaths paths(cap, settings.aovs);
     std::vector<Vec3> radiance(cap, splat(0.0f)), sum(npix, splat(0.0f)), sum_sq(npix, splat(0.0f));
+    std::vector<Vec3> albedo(settings.aovs ? npix : 0, splat(0.0f)), normal(albedo.size(), splat(0.0f));
     RenderResult res;
     res.bounces.resize(settings.max_depth);
     PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy, settings.bug};
@@ -189,14 +211,18 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
             res.ms_compact += ms_since(t0);
         }
         t0 = Clock::now();
-        Vec3 *rad = radiance.data(), *s1 = sum.data(), *s2 = sum_sq.data();
-        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, npix, k, rad, s1, s2); });
+        Vec3* rad = radiance.data();
+        const ShadeOut so = paths.out();
+        const PixelSums sums{sum.data(), sum_sq.data(), settings.aovs ? albedo.data() : nullptr,
+                             settings.aovs ? normal.data() : nullptr};
+        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, npix, k, rad, so, sums); });
         res.ms_accumulate += ms_since(t0);
         res.spp += k;
         if (progress) progress(res.spp, settings.spp, res);
         if (settings.time_limit_s > 0.0 && ms_since(t_start) >= 1000.0 * settings.time_limit_s) break;
     }
     finish_result(res, sum, sum_sq, camera.width, camera.height);
+    finish_aovs(res, albedo, normal);
     res.ms_total = ms_since(t_start);
     return res;
 }

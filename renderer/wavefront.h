@@ -29,6 +29,7 @@ struct RenderSettings {
     /// Samples of every pixel traced together in one pass (a wave); 0: the driver's default
     /// (the GPU: enough for about 2M paths; the CPU: 1).
     uint32_t wave_samples = 0;
+    bool aovs = false;  ///< also the first hits' albedo and normal, averaged per pixel
 };
 
 /// Per bounce: rays traced (extension rays = paths alive), summed over the passes.
@@ -38,8 +39,9 @@ struct BounceStats {
 };
 
 struct RenderResult {
-    Image mean;              ///< radiance per pixel, averaged over the passes
-    Image variance_of_mean;  ///< per channel: sample variance / passes (0 with one pass)
+    Image mean;              ///< radiance per pixel, averaged over the samples
+    Image variance_of_mean;  ///< per channel: sample variance / samples (0 with one sample)
+    Image albedo, normal;    ///< with RenderSettings::aovs: mean albedo, normalised mean normal
     uint32_t spp = 0;        ///< samples per pixel done
     std::vector<BounceStats> bounces;
     double ms_generate = 0, ms_extend = 0, ms_shade = 0, ms_shadow = 0, ms_compact = 0, ms_accumulate = 0;
@@ -65,6 +67,9 @@ uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automat
 /// trailing bounces that traced nothing. Shared by the host and GPU drivers.
 void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::vector<Vec3>& sum_sq, uint32_t width,
                    uint32_t height);
+
+/// Fills res.albedo and res.normal from per-pixel sums (nothing when `albedo` is empty).
+void finish_aovs(RenderResult& res, const std::vector<Vec3>& albedo, const std::vector<Vec3>& normal);
 
 /// Progress after each pass: samples per pixel done, and asked for.
 using RenderProgress = std::function<void(uint32_t done, uint32_t total, const RenderResult& so_far)>;

@@ -63,7 +63,23 @@ struct ShadeOut {
     trav::Ray* shadow_ray;
     Vec3* shadow_radiance;  ///< added to the slot's radiance when the shadow ray is unoccluded
     uint8_t* shadow;
+    Vec3* albedo;  ///< per slot, or null: the first hit's reflectance (for denoisers)
+    Vec3* normal;  ///< per slot, or null: the first hit's normal, facing the camera
 };
+
+/// The reflectance a denoiser's albedo buffer shows for a material: the base colour of
+/// diffuse lobes, the reflectance of specular ones, white for glass.
+BVHLAB_HD inline Vec3 material_albedo(const RenderMaterial& m) {
+    switch (m.type) {
+        case BsdfType::kMirror:
+        case BsdfType::kConductor:
+            return m.specular;
+        case BsdfType::kGlass:
+            return splat(1.0f);
+        default:
+            return m.base;
+    }
+}
 
 BVHLAB_HD inline const RenderMaterial& material_of(const SceneView& s, uint32_t tri) {
     return s.materials[s.material_ids[tri] + 1];
@@ -99,6 +115,7 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     const bool bsdf_counts = p.strategy != Strategy::kLightOnly || prev_pdf == 0.0f;
     const bool mis = p.strategy == Strategy::kMis && prev_pdf > 0.0f;
     if (!hit.is_hit()) {
+        if (bounce == 0 && out.albedo) out.albedo[px] = out.normal[px] = splat(0.0f);
         if (bsdf_counts && max3(s.lights.sky) > 0.0f) {
             const float w = mis ? power_heuristic(prev_pdf, sky_direction_pdf(s.lights)) : 1.0f;
             radiance[px] = radiance[px] + beta * s.lights.sky * w;
@@ -113,6 +130,10 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     const Vec3 ng = cr * (1.0f / area2);
     const Vec3 pos = ray.org + ray.dir * hit.t;
     const RenderMaterial& m = material_of(s, tri);
+    if (bounce == 0 && out.albedo) {
+        out.albedo[px] = material_albedo(m);
+        out.normal[px] = dot(ng, ray.dir) > 0.0f ? ng * -1.0f : ng;
+    }
     Vec3 add = splat(0.0f);
     if (bsdf_counts && max3(m.emission) > 0.0f) {
         float w = 1.0f;
@@ -199,19 +220,32 @@ BVHLAB_HD inline void resolve_shadow(uint32_t i, const trav::Hit* occlusion, con
     if (!occlusion[i].is_hit()) radiance[slot[i]] = radiance[slot[i]] + shadow_radiance[i];
 }
 
-/// Stage "accumulate": folds pixel px's `samples` slots of the pass into its sum and sum of
-/// squares (for the variance the image comparisons use), and clears them for the next pass.
-BVHLAB_HD inline void accumulate_pixel(uint32_t px, uint32_t pixels, uint32_t samples, Vec3* radiance, Vec3* sum,
-                                       Vec3* sum_sq) {
-    Vec3 s1 = sum[px], s2 = sum_sq[px];
+/// Per-pixel sums the accumulate stage adds the pass's slots into.
+struct PixelSums {
+    Vec3* sum;
+    Vec3* sum_sq;
+    Vec3* albedo;  ///< null when no albedo or normal buffers were asked for
+    Vec3* normal;
+};
+
+/// Stage "accumulate": folds pixel px's `samples` slots of the pass into its sums (the sum of
+/// squares gives the variance the image comparisons use), and clears the radiance slots.
+BVHLAB_HD inline void accumulate_pixel(uint32_t px, uint32_t pixels, uint32_t samples, Vec3* radiance,
+                                       const ShadeOut& aov, PixelSums out) {
+    Vec3 s1 = out.sum[px], s2 = out.sum_sq[px];
     for (uint32_t k = 0; k < samples; ++k) {
-        Vec3& r = radiance[size_t(k) * pixels + px];
+        const size_t slot = size_t(k) * pixels + px;
+        Vec3& r = radiance[slot];
         s1 = s1 + r;
         s2 = s2 + r * r;
         r = splat(0.0f);
+        if (out.albedo) {
+            out.albedo[px] = out.albedo[px] + aov.albedo[slot];
+            out.normal[px] = out.normal[px] + aov.normal[slot];
+        }
     }
-    sum[px] = s1;
-    sum_sq[px] = s2;
+    out.sum[px] = s1;
+    out.sum_sq[px] = s2;
 }
 
 }  // namespace bvhlab::render

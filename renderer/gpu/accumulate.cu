@@ -6,15 +6,16 @@
 namespace bvhlab::render::gpu {
 namespace {
 
-__global__ void accumulate_kernel(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix, uint32_t samples) {
+__global__ void accumulate_kernel(Vec3* radiance, ShadeOut aov, PixelSums sums, uint32_t npix, uint32_t samples) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i < npix) accumulate_pixel(i, npix, samples, radiance, sum, sum_sq);
+    if (i < npix) accumulate_pixel(i, npix, samples, radiance, aov, sums);
 }
 
 }  // namespace
 
-void launch_accumulate(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix, uint32_t samples, void* stream) {
-    accumulate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(radiance, sum, sum_sq, npix, samples);
+void launch_accumulate(Vec3* radiance, const ShadeOut& aov, const PixelSums& sums, uint32_t npix, uint32_t samples,
+                       void* stream) {
+    accumulate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(radiance, aov, sums, npix, samples);
     BVHLAB_CHECK_LAUNCH();
 }
 

@@ -116,14 +116,27 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     DeviceBuffer<float> pdf(cap), next_pdf(cap);
     DeviceBuffer<trav::Ray> next_ray(cap), shadow_ray(cap);
     DeviceBuffer<uint8_t> alive(cap), shadow_flag(cap);
+    const size_t aov_slots = settings.aovs ? cap : 0, aov_pixels = settings.aovs ? npix : 0;
+    DeviceBuffer<Vec3> albedo(aov_slots), normal(aov_slots), albedo_sum(aov_pixels), normal_sum(aov_pixels);
+    albedo_sum.fill_bytes(0, stream);
+    normal_sum.fill_bytes(0, stream);
     DeviceBuffer<uint8_t> temp(gpu::compact_temp_bytes(cap));
     DeviceBuffer<unsigned long long> ext_stats(settings.max_depth), shadow_stats(settings.max_depth);
     for (auto* b : {&radiance, &sum, &sum_sq}) b->fill_bytes(0, stream);
     ext_stats.fill_bytes(0, stream);
     shadow_stats.fill_bytes(0, stream);
 
-    const ShadeOut so{next_ray.data(),   next_tp.data(),    next_pdf.data(),   alive.data(),
-                      shadow_ray.data(), shadow_rad.data(), shadow_flag.data()};
+    const ShadeOut so{next_ray.data(),
+                      next_tp.data(),
+                      next_pdf.data(),
+                      alive.data(),
+                      shadow_ray.data(),
+                      shadow_rad.data(),
+                      shadow_flag.data(),
+                      settings.aovs ? albedo.data() : nullptr,
+                      settings.aovs ? normal.data() : nullptr};
+    const PixelSums sums{sum.data(), sum_sq.data(), settings.aovs ? albedo_sum.data() : nullptr,
+                         settings.aovs ? normal_sum.data() : nullptr};
     // Events: 0 pass start, 1 generated, then 5 per bounce (extended, shaded, shadow compacted,
     // shadows traced and resolved, paths compacted), then accumulated.
     const size_t per_bounce = 5, n_events = 2 + per_bounce * settings.max_depth + 1;
@@ -177,7 +190,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             cur = nxt;
             tl.mark(e + 4);
         }
-        gpu::launch_accumulate(radiance.data(), sum.data(), sum_sq.data(), npix, k, stream);
+        gpu::launch_accumulate(radiance.data(), so, sums, npix, k, stream);
         const size_t last = n_events - 1;
         tl.mark(last);
         tl.wait(last);
@@ -204,6 +217,10 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     sum.download(h_sum);
     sum_sq.download(h_sq);
     finish_result(res, h_sum, h_sq, camera.width, camera.height);
+    std::vector<Vec3> h_albedo, h_normal;
+    albedo_sum.download(h_albedo);
+    normal_sum.download(h_normal);
+    finish_aovs(res, h_albedo, h_normal);
     res.ms_total = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
     return res;
 }

@@ -25,7 +25,8 @@ void launch_resolve_shadow(const trav::Hit* occlusion, const uint32_t* slot, con
                            Vec3* radiance, const uint32_t* d_count, uint32_t capacity, void* stream);
 
 /// accumulate.cu: accumulate_pixel for every pixel, over the pass's `samples` slots of each.
-void launch_accumulate(Vec3* radiance, Vec3* sum, Vec3* sum_sq, uint32_t npix, uint32_t samples, void* stream);
+void launch_accumulate(Vec3* radiance, const ShadeOut& aov, const PixelSums& sums, uint32_t npix, uint32_t samples,
+                       void* stream);
 
 /// compact.cu: the temporary bytes CUB's select needs for `capacity` flags.
 size_t compact_temp_bytes(uint32_t capacity);

@@ -5,6 +5,7 @@
 // against Embree with 0 real mismatches.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "accel/core/check.h"
@@ -84,6 +85,28 @@ TEST(GpuRender, AgreesWithTheCpuReferenceWithinNoise) {
             EXPECT_TRUE(c.agree) << c.summary();
             RecordProperty(s.name + "/" + kernel, c.summary());
         }
+    }
+}
+
+// The GPU's albedo and normal buffers are the CPU's, up to the jitter of other seeds.
+TEST(GpuRender, AlbedoAndNormalBuffersMatchTheCpu) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    for (const Scene& s : scenes(false)) {
+        SCOPED_TRACE(s.name);
+        RenderSettings rs;
+        rs.spp = 64;
+        rs.aovs = true;
+        const RenderResult cpu = cpu_reference(s, 32, 24, rs);
+        const RenderResult gpu = gpu_render(s, 32, 24, rs, "dynamic-speculative-fma");
+        ASSERT_EQ(gpu.albedo.pixels.size(), cpu.albedo.pixels.size());
+        double diff = 0.0, total = 0.0;
+        for (size_t i = 0; i < cpu.albedo.pixels.size(); ++i) {
+            diff += std::fabs(gpu.albedo.pixels[i].y - cpu.albedo.pixels[i].y);
+            total += cpu.albedo.pixels[i].y;
+            EXPECT_NEAR(dot(gpu.normal.pixels[i], cpu.normal.pixels[i]),
+                        length(cpu.normal.pixels[i]) * length(gpu.normal.pixels[i]), 0.2f);
+        }
+        EXPECT_LT(diff, 0.01 * total);
     }
 }
 

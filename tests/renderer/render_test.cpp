@@ -212,6 +212,36 @@ TEST(Render, WaveSizeDoesNotChangeTheImage) {
     EXPECT_EQ(one.bounces[1].extension_rays, waves.bounces[1].extension_rays);
 }
 
+// The denoiser buffers: each pixel's albedo is a mix of the materials it sees (the Cornell
+// box's walls, or nothing), and its normal is a unit vector facing the camera (or zero).
+TEST(Render, AlbedoAndNormalBuffers) {
+    const SceneSetup s = cornell();
+    RenderSettings rs;
+    rs.spp = 4;
+    rs.aovs = true;
+    const RenderResult r = render(s.mesh, s.cam, 16, rs);
+    ASSERT_EQ(r.albedo.pixels.size(), 256u);
+    ASSERT_EQ(r.normal.pixels.size(), 256u);
+    size_t seen = 0;
+    for (size_t i = 0; i < 256; ++i) {
+        const Vec3 a = r.albedo.pixels[i], n = r.normal.pixels[i];
+        EXPECT_LE(max3(a), 0.78f + 1e-5f);  // no Cornell box reflectance exceeds the light's Kd
+        EXPECT_GE(a.x, 0.0f);
+        const float len = length(n);
+        if (len > 0.0f) {
+            ++seen;
+            EXPECT_NEAR(len, 1.0f, 1e-4f);
+        }
+    }
+    EXPECT_GT(seen, 200u);  // the box fills most of the view
+    // The centre pixel sees the back wall (white, 0.725 0.71 0.68) head-on.
+    const Vec3 c = r.albedo.at(8, 6), n = r.normal.at(8, 6);
+    EXPECT_NEAR(c.x, 0.725f, 1e-5f);
+    EXPECT_NEAR(n.z, -1.0f, 1e-3f);
+    rs.aovs = false;
+    EXPECT_TRUE(render(s.mesh, s.cam, 16, rs).albedo.pixels.empty());
+}
+
 // A sky-lit scene with no emitters gets the white sky; one with emitters a black sky.
 TEST(Render, DefaultSkyRule) {
     accel::Material grey;

@@ -275,6 +275,7 @@ expect_error render-degenerate-camera "degenerate camera" render "$data/cornell_
 expect_error render-empty "no usable triangles" render "$tmp/empty.obj" -o "$tmp/x.pfm"
 expect_error render-out-is-input "cannot write .*cornell_box[.]obj: .*[.]obj" render "$data/cornell_box.obj" -o "$data/cornell_box.obj"
 expect_error render-bad-strategy "strategy" render "$data/cornell_box.obj" --strategy none -o "$tmp/x.pfm"
+expect_error render-cost-bad-ext "cannot write .*cost[.]xyz" render "$data/cornell_box.obj" --cost-image "$tmp/cost.xyz" -o "$tmp/x.pfm"
 expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh
@@ -285,7 +286,11 @@ check_schema bench bench "$data/cornell_box.obj" --types primary --width 8 --hei
 check_schema verify verify "$data/cornell_box.obj" --width 8 --height 8
 check_schema quality quality "$data/cornell_box.obj" --types primary --width 8 --height 8
 check_schema run run "$data/cornell_box.obj" --runs 1 --width 8 --height 8
-check_schema render render "$data/cornell_box.obj" --width 8 --height 8 --spp 2 -o "$tmp/schema.pfm"
+check_schema render render "$data/cornell_box.obj" --width 8 --height 8 --spp 2 -o "$tmp/schema.pfm" --aov \
+    --cost-image "$tmp/cost.pfm"
+for f in schema-albedo.pfm schema-normal.pfm cost.pfm; do
+    if [ -s "$tmp/$f" ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL render wrote no $f"; fi
+done
 # A build without CUDA has no kernels to list.
 if "$bin" -q kernels --json | grep -q .; then check_schema kernels kernels; fi
 

@@ -19,7 +19,8 @@ namespace bvhlab::cli {
 namespace {
 
 struct RenderOpts {
-    std::string scene, out, dump_rays, strategy = "mis";
+    std::string scene, out, dump_rays, strategy = "mis", cost_image;
+    bool aov = false;
     BuildOptions build;
     TraceOptions trace;
     uint32_t width = 640, height = 480;
@@ -31,6 +32,40 @@ struct RenderOpts {
 Vec3 vec3_of(const std::vector<float>& v) { return {v[0], v[1], v[2]}; }
 
 nlohmann::json vec_json(Vec3 v) { return {v.x, v.y, v.z}; }
+
+/// "dir/name-KIND.ext" for --out "dir/name.ext".
+std::string aov_path(const std::string& out, const char* kind) {
+    const std::filesystem::path p(out);
+    return (p.parent_path() / (p.stem().string() + "-" + kind + p.extension().string())).string();
+}
+
+/// The primary rays' traversal work per pixel (sample 0 of each pixel), as an image and as
+/// means for the summary line.
+nlohmann::json write_cost_image(const Built& built, int kd_stack, const render::CameraData& cd, uint32_t seed,
+                                const std::string& path) {
+    trav::RaySet set;
+    const uint32_t npix = cd.width * cd.height;
+    set.rays.resize(npix);
+    for (uint32_t px = 0; px < npix; ++px) set.rays[px] = render::camera_ray(cd, px, 0, seed);
+    std::vector<trav::Hit> hits;
+    std::vector<trav::TraversalCounters> counters;
+    trav::trace_cpu_counted(built.structure, kd_stack, set, hits, &counters);
+    render::Image img(cd.width, cd.height);
+    double nodes = 0.0, tests = 0.0, leaves = 0.0;
+    for (uint32_t px = 0; px < npix; ++px) {
+        const trav::TraversalCounters& c = counters[px];
+        img.pixels[px] = {float(c.nodes), float(c.tri_tests), float(c.leaves)};
+        nodes += c.nodes;
+        tests += c.tri_tests;
+        leaves += c.leaves;
+    }
+    render::write_image(img, path);
+    return {{"file", path},
+            {"nodes_per_ray", nodes / npix},
+            {"tri_tests_per_ray", tests / npix},
+            {"leaves_per_ray", leaves / npix},
+            {"counted_by", "the structure's shared traversal on the CPU, sample 0 of each pixel"}};
+}
 
 }  // namespace
 
@@ -78,6 +113,13 @@ void register_render(CLI::App& app, Globals& g) {
     sub->add_option("--shutter", o->shutter, "shutter open and close times in [0, 1] of the motion")
         ->expected(2)
         ->check(FiniteRange(0.0, 1.0));
+    sub->add_flag("--aov", o->aov,
+                  "also write the first hits' albedo and normal (for denoisers) beside --out, as NAME-albedo.EXT and "
+                  "NAME-normal.EXT (normals in [-1, 1]: use .exr or .pfm)");
+    sub->add_option(
+        "--cost-image", o->cost_image,
+        "write the primary rays' traversal cost per pixel (R: interior nodes visited, G: triangle tests, B: "
+        "leaves), counted by the structure's shared CPU traversal");
     sub->add_option("--dump-rays", o->dump_rays,
                     "folder: write the first sample pass's extension and shadow rays of every bounce as ray files");
     sub->add_option("--strategy", o->strategy,
@@ -89,12 +131,21 @@ void register_render(CLI::App& app, Globals& g) {
         const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
         if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
         if (!reference) o->trace.validate(o->build);
-        std::string why;
-        if (!render::can_write_image(o->out, &why)) throw Error("cannot write " + o->out + ": " + why);
-        accel::refuse_overwriting_input(o->out, o->scene, "--out");
-        const std::filesystem::path folder = std::filesystem::path(o->out).parent_path();
-        if (!folder.empty() && !std::filesystem::is_directory(folder))
-            throw Error("cannot write " + o->out + ": its folder " + folder.string() + " does not exist");
+        std::vector<std::string> outputs{o->out};
+        if (o->aov) {
+            outputs.push_back(aov_path(o->out, "albedo"));
+            outputs.push_back(aov_path(o->out, "normal"));
+        }
+        if (!o->cost_image.empty()) outputs.push_back(o->cost_image);
+        for (const std::string& out : outputs) {
+            std::string why;
+            if (!render::can_write_image(out, &why)) throw Error("cannot write " + out + ": " + why);
+            accel::refuse_overwriting_input(out, o->scene, "--out");
+            const std::filesystem::path folder = std::filesystem::path(out).parent_path();
+            if (!folder.empty() && !std::filesystem::is_directory(folder))
+                throw Error("cannot write " + out + ": its folder " + folder.string() + " does not exist");
+        }
+        o->rs.aovs = o->aov;
         Scene s = load_scene(o->scene, g);
         accel::refuse_overwriting_input(o->out, s.source, "--out");
         if (s.mesh.triangle_count() == 0) throw Error("cannot render " + o->scene + ": it has no triangles");
@@ -164,6 +215,18 @@ void register_render(CLI::App& app, Globals& g) {
             }
         }
         render::write_image(res.mean, o->out);
+        if (o->aov) {
+            render::write_image(res.albedo, outputs[1]);
+            render::write_image(res.normal, outputs[2]);
+        }
+        nlohmann::json cost;
+        if (!o->cost_image.empty()) {
+            if (reference) {
+                o->build.epo = false;
+                built = build_scene(s, o->build, g);
+            }
+            cost = write_cost_image(built, o->build.kd_stack, cd, o->rs.seed, o->cost_image);
+        }
 
         nlohmann::json bounces = nlohmann::json::array();
         for (const render::BounceStats& b : res.bounces)
@@ -195,6 +258,8 @@ void register_render(CLI::App& app, Globals& g) {
                    {"accumulate", res.ms_accumulate}, {"setup", res.ms_setup}};
         j["mrays_per_s"] = res.ms_total > 0.0 ? double(res.rays()) / (res.ms_total * 1e3) : 0.0;
         j["bounces"] = bounces;
+        if (o->aov) j["aov"] = {outputs[1], outputs[2]};
+        if (!cost.is_null()) j["primary_cost"] = cost;
         if (g.json)
             emit(j);
         else
