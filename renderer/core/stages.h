@@ -101,12 +101,26 @@ BVHLAB_HD inline Vec3 offset_point(Vec3 p, Vec3 ng, Vec3 d, float offset) {
     return p + ng * (dot(ng, d) >= 0.0f ? offset : -offset);
 }
 
+/// What shading one path leaves: its continuation (if alive) and a shadow ray (if shadow).
+struct ShadeResult {
+    trav::Ray next_ray;
+    Vec3 next_throughput;
+    float next_pdf;
+    bool alive;
+    trav::Ray shadow_ray;
+    Vec3 shadow_radiance;
+    bool shadow;
+};
+
 /// Stage "shade" for path i at bounce `bounce` (0: the camera ray's hit): adds what it sees to
-/// radiance[slot], and leaves a shadow ray for next-event estimation and the continuation.
-BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths,
-                                 ShadeOut out, Vec3* radiance) {
-    out.alive[i] = 0;
-    out.shadow[i] = 0;
+/// radiance[slot] (and, at bounce 0, the first hit to albedo/normal[slot] when not null), and
+/// returns the shadow ray for next-event estimation and the continuation. The drivers store
+/// the result: the CPU at i (then compacts), the GPU at its compacted position.
+BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths,
+                                   Vec3* radiance, Vec3* albedo, Vec3* normal) {
+    ShadeResult out;
+    out.alive = false;
+    out.shadow = false;
     const trav::Ray ray = paths.ray[i];
     const trav::Hit hit = paths.hit[i];
     Vec3 beta = paths.throughput[i];
@@ -115,12 +129,12 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     const bool bsdf_counts = p.strategy != Strategy::kLightOnly || prev_pdf == 0.0f;
     const bool mis = p.strategy == Strategy::kMis && prev_pdf > 0.0f;
     if (!hit.is_hit()) {
-        if (bounce == 0 && out.albedo) out.albedo[px] = out.normal[px] = splat(0.0f);
+        if (bounce == 0 && albedo) albedo[px] = normal[px] = splat(0.0f);
         if (bsdf_counts && max3(s.lights.sky) > 0.0f) {
             const float w = mis ? power_heuristic(prev_pdf, sky_direction_pdf(s.lights)) : 1.0f;
             radiance[px] = radiance[px] + beta * s.lights.sky * w;
         }
-        return;
+        return out;
     }
     const uint32_t tri = uint32_t(hit.tri);
     const Vec3 v0 = s.vertices[s.indices[3 * tri]], v1 = s.vertices[s.indices[3 * tri + 1]],
@@ -130,9 +144,9 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     const Vec3 ng = cr * (1.0f / area2);
     const Vec3 pos = ray.org + ray.dir * hit.t;
     const RenderMaterial& m = material_of(s, tri);
-    if (bounce == 0 && out.albedo) {
-        out.albedo[px] = material_albedo(m);
-        out.normal[px] = dot(ng, ray.dir) > 0.0f ? ng * -1.0f : ng;
+    if (bounce == 0 && albedo) {
+        albedo[px] = material_albedo(m);
+        normal[px] = dot(ng, ray.dir) > 0.0f ? ng * -1.0f : ng;
     }
     Vec3 add = splat(0.0f);
     if (bsdf_counts && max3(m.emission) > 0.0f) {
@@ -144,7 +158,7 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
         add = beta * m.emission * w;
     }
     radiance[px] = radiance[px] + add;
-    if (bounce + 1 >= p.max_depth) return;
+    if (bounce + 1 >= p.max_depth) return out;
 
     const Vec3 wo = ray.dir * -1.0f;
     const bool opaque = m.type != BsdfType::kGlass;
@@ -192,26 +206,44 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
             const float w = p.strategy == Strategy::kMis ? power_heuristic(pdf_l, pdf_b) : 1.0f;
             const Vec3 org = offset_point(pos, ng, dir, s.offset);
             // Stop short of the light's own triangle: 1e-4 of the distance.
-            out.shadow_ray[i] = {org, 0.0f, dir, dist < INFINITY ? dist * (1.0f - 1e-4f) : INFINITY};
-            out.shadow_radiance[i] = beta * fcos * le * (w / pdf_l);
-            out.shadow[i] = 1;
+            out.shadow_ray = {org, 0.0f, dir, dist < INFINITY ? dist * (1.0f - 1e-4f) : INFINITY};
+            out.shadow_radiance = beta * fcos * le * (w / pdf_l);
+            out.shadow = true;
         }
     }
 
     // The continuation, by BSDF sampling.
     BsdfSample bs;
-    if (!sample_bsdf(m, base, wo_l, rnd(kDimBsdfLobe), rnd(kDimBsdf0), rnd(kDimBsdf1), bs)) return;
+    if (!sample_bsdf(m, base, wo_l, rnd(kDimBsdfLobe), rnd(kDimBsdf0), rnd(kDimBsdf1), bs)) return out;
     beta = beta * bs.weight;
     if (bounce + 1 >= p.rr_depth) {
         const float q = min_f(0.95f, max3(beta));
-        if (!(rnd(kDimRoulette) < q)) return;
+        if (!(rnd(kDimRoulette) < q)) return out;
         beta = beta * (1.0f / q);
     }
     const Vec3 dir = normalize(frame.to_world(bs.wi));
-    out.next_ray[i] = {offset_point(pos, ng, dir, s.offset), 0.0f, dir, INFINITY};
-    out.next_throughput[i] = beta;
-    out.next_pdf[i] = bs.delta ? 0.0f : bs.pdf;
-    out.alive[i] = 1;
+    out.next_ray = {offset_point(pos, ng, dir, s.offset), 0.0f, dir, INFINITY};
+    out.next_throughput = beta;
+    out.next_pdf = bs.delta ? 0.0f : bs.pdf;
+    out.alive = true;
+    return out;
+}
+
+/// shade() with the result stored at entry i of `out` (the CPU driver, which compacts after).
+BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths,
+                                 ShadeOut out, Vec3* radiance) {
+    const ShadeResult r = shade(i, bounce, s, p, paths, radiance, out.albedo, out.normal);
+    out.alive[i] = r.alive;
+    out.shadow[i] = r.shadow;
+    if (r.alive) {
+        out.next_ray[i] = r.next_ray;
+        out.next_throughput[i] = r.next_throughput;
+        out.next_pdf[i] = r.next_pdf;
+    }
+    if (r.shadow) {
+        out.shadow_ray[i] = r.shadow_ray;
+        out.shadow_radiance[i] = r.shadow_radiance;
+    }
 }
 
 /// Stage "shadow": adds an unoccluded shadow ray's radiance to its slot.

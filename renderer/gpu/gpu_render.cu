@@ -11,6 +11,7 @@
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/gpu/stage_kernels.h"
 #include "traversal/cuda_check.h"
+#include "traversal/gpu/device_buffer.h"
 #include "traversal/rays/ray_file.h"
 
 namespace bvhlab::render {
@@ -56,6 +57,8 @@ public:
     ~Timeline() {
         for (auto& e : events_) BVHLAB_CUDA_CHECK_LOG(cudaEventDestroy(e));
     }
+    Timeline(const Timeline&) = delete;
+    Timeline& operator=(const Timeline&) = delete;
     void mark(size_t i) { BVHLAB_CUDA_CHECK(cudaEventRecord(events_[i])); }
     double ms(size_t a, size_t b) const {
         float t = 0.0f;
@@ -108,39 +111,36 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     void* stream = nullptr;  // the default stream: every stage in order, no host waits
 
     DeviceScene ds(scene);
-    trav::RayQueue ext(cap), shadow_q(cap);
-    DeviceBuffer<Vec3> tp(cap), next_tp(cap), shadow_rad(cap), shadow_rad_c(cap), radiance(cap), sum(npix),
-        sum_sq(npix);
+    // Path state in two sets: the shade stage reads set `cur` and writes the survivors into
+    // the other, compacted (compact.cuh).
+    trav::RayQueue ext[2] = {trav::RayQueue(cap), trav::RayQueue(cap)};
+    trav::RayQueue shadow_q(cap);
+    DeviceBuffer<Vec3> tp[2] = {DeviceBuffer<Vec3>(cap), DeviceBuffer<Vec3>(cap)};
+    DeviceBuffer<float> pdf[2] = {DeviceBuffer<float>(cap), DeviceBuffer<float>(cap)};
     DeviceBuffer<uint32_t> slot[2] = {DeviceBuffer<uint32_t>(cap), DeviceBuffer<uint32_t>(cap)};
-    DeviceBuffer<uint32_t> shadow_slot(cap), indices(cap), next_ray_counter(1);
-    DeviceBuffer<float> pdf(cap), next_pdf(cap);
-    DeviceBuffer<trav::Ray> next_ray(cap), shadow_ray(cap);
-    DeviceBuffer<uint8_t> alive(cap), shadow_flag(cap);
+    DeviceBuffer<Vec3> shadow_rad(cap), radiance(cap), sum(npix), sum_sq(npix);
+    DeviceBuffer<uint32_t> shadow_slot(cap), next_ray_counter(1);
     const size_t aov_slots = settings.aovs ? cap : 0, aov_pixels = settings.aovs ? npix : 0;
     DeviceBuffer<Vec3> albedo(aov_slots), normal(aov_slots), albedo_sum(aov_pixels), normal_sum(aov_pixels);
-    albedo_sum.fill_bytes(0, stream);
-    normal_sum.fill_bytes(0, stream);
-    DeviceBuffer<uint8_t> temp(gpu::compact_temp_bytes(cap));
     DeviceBuffer<unsigned long long> ext_stats(settings.max_depth), shadow_stats(settings.max_depth);
-    for (auto* b : {&radiance, &sum, &sum_sq}) b->fill_bytes(0, stream);
+    for (auto* b : {&radiance, &sum, &sum_sq, &albedo_sum, &normal_sum}) b->fill_bytes(0, stream);
     ext_stats.fill_bytes(0, stream);
     shadow_stats.fill_bytes(0, stream);
 
-    const ShadeOut so{next_ray.data(),
-                      next_tp.data(),
-                      next_pdf.data(),
-                      alive.data(),
-                      shadow_ray.data(),
-                      shadow_rad.data(),
-                      shadow_flag.data(),
-                      settings.aovs ? albedo.data() : nullptr,
-                      settings.aovs ? normal.data() : nullptr};
+    ShadeOut aov{};  // only the AOV pointers: the accumulate stage reads them
+    aov.albedo = settings.aovs ? albedo.data() : nullptr;
+    aov.normal = settings.aovs ? normal.data() : nullptr;
     const PixelSums sums{sum.data(), sum_sq.data(), settings.aovs ? albedo_sum.data() : nullptr,
                          settings.aovs ? normal_sum.data() : nullptr};
-    // Events: 0 pass start, 1 generated, then 5 per bounce (extended, shaded, shadow compacted,
-    // shadows traced and resolved, paths compacted), then accumulated.
-    const size_t per_bounce = 5, n_events = 2 + per_bounce * settings.max_depth + 1;
-    Timeline tl(n_events);
+    auto path_set = [&](int c) {
+        const trav::RayQueueView q = ext[c].view();
+        return PathView{q.rays, q.hits, tp[c].data(), slot[c].data(), pdf[c].data()};
+    };
+    // Events per pass: 0 start, 1 generated, then 3 per bounce (extended, shaded and
+    // compacted, shadows traced and resolved), then accumulated. Two timelines: pass p is
+    // enqueued before the host waits for pass p - 1, so the GPU never idles between passes.
+    const size_t per_bounce = 3, n_events = 2 + per_bounce * settings.max_depth + 1, last = n_events - 1;
+    Timeline tl[2] = {Timeline(n_events), Timeline(n_events)};
     RenderResult res;
     auto read_bounces = [&] {
         std::vector<unsigned long long> ec, sc;
@@ -149,69 +149,71 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         res.bounces.assign(settings.max_depth, {});
         for (uint32_t b = 0; b < settings.max_depth; ++b) res.bounces[b] = {ec[b], sc[b]};
     };
+    auto collect = [&](const Timeline& t, uint32_t samples) {
+        t.wait(last);
+        res.ms_generate += t.ms(0, 1);
+        for (uint32_t b = 0; b < settings.max_depth; ++b) {
+            const size_t e = 2 + per_bounce * b;
+            res.ms_extend += t.ms(e - 1, e);  // from the previous bounce's end (or generation)
+            res.ms_shade += t.ms(e, e + 1);   // shading and compaction, fused
+            res.ms_shadow += t.ms(e + 1, e + 2);
+        }
+        res.ms_accumulate += t.ms(last - 1, last);
+        res.spp += samples;
+    };
     PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy, settings.bug};
     BVHLAB_CUDA_CHECK(cudaDeviceSynchronize());
     res.ms_setup = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
-    for (uint32_t pass = 0; res.spp < settings.spp; ++pass) {
-        pp.first_sample = res.spp;
-        const uint32_t k = std::min(wave, settings.spp - res.spp);
+    uint32_t enqueued = 0, in_flight = 0;  // samples enqueued; those of the pass not yet collected
+    uint32_t pass = 0;
+    auto last_report = Clock::now();
+    for (; enqueued < settings.spp; ++pass) {
+        Timeline& t = tl[pass % 2];
+        pp.first_sample = enqueued;
+        const uint32_t k = std::min(wave, settings.spp - enqueued);
         int cur = 0;
-        auto paths = [&] {
-            trav::RayQueueView q = ext.view();
-            return PathView{q.rays, q.hits, tp.data(), slot[cur].data(), pdf.data()};
-        };
-        tl.mark(0);
-        gpu::launch_generate(camera, pp, paths(), npix * k, ext.view().count, stream);
-        tl.mark(1);
+        t.mark(0);
+        gpu::launch_generate(camera, pp, path_set(cur), npix * k, ext[cur].view().count, stream);
+        t.mark(1);
         for (uint32_t b = 0; b < settings.max_depth; ++b) {
             const size_t e = 2 + per_bounce * b;
-            gpu::launch_add_count(ext.view().count, ext_stats.data() + b, stream);
-            if (pass == 0) dump_queue(settings, "extension", b, ext, trav::Query::kClosest);
-            gpu::extend(structure, kernel, ext, trav::Query::kClosest, next_ray_counter, opts, stream);
-            tl.mark(e);
-            gpu::launch_shade(b, ds.view, pp, paths(), so, radiance.data(), ext.view().count, cap, stream);
-            tl.mark(e + 1);
-            gpu::launch_select(shadow_flag.data(), indices.data(), shadow_q.view().count, cap, temp.data(), temp.size(),
-                               stream);
-            gpu::launch_gather_shadow(indices.data(), shadow_q.view().count, cap, so, slot[cur].data(),
-                                      shadow_q.view().rays, shadow_slot.data(), shadow_rad_c.data(), stream);
-            tl.mark(e + 2);
+            const int nxt = 1 - cur;
+            gpu::launch_add_count(ext[cur].view().count, ext_stats.data() + b, stream);
+            if (pass == 0) dump_queue(settings, "extension", b, ext[cur], trav::Query::kClosest);
+            gpu::extend(structure, kernel, ext[cur], trav::Query::kClosest, next_ray_counter, opts, stream);
+            t.mark(e);
+            trav::detail::fill_device_bytes(ext[nxt].view().count, 0, sizeof(uint32_t), stream);
+            trav::detail::fill_device_bytes(shadow_q.view().count, 0, sizeof(uint32_t), stream);
+            const gpu::NextQueues q{path_set(nxt),     ext[nxt].view().count, shadow_q.view().rays,
+                                    shadow_rad.data(), shadow_slot.data(),    shadow_q.view().count};
+            gpu::launch_shade(b, ds.view, pp, path_set(cur), q, radiance.data(), aov.albedo, aov.normal,
+                              ext[cur].view().count, cap, stream);
+            t.mark(e + 1);
             gpu::launch_add_count(shadow_q.view().count, shadow_stats.data() + b, stream);
             if (pass == 0) dump_queue(settings, "shadow", b, shadow_q, trav::Query::kAny);
             gpu::extend(structure, kernel, shadow_q, trav::Query::kAny, next_ray_counter, opts, stream);
-            gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_slot.data(), shadow_rad_c.data(), radiance.data(),
+            gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_slot.data(), shadow_rad.data(), radiance.data(),
                                        shadow_q.view().count, cap, stream);
-            tl.mark(e + 3);
-            gpu::launch_select(alive.data(), indices.data(), ext.view().count, cap, temp.data(), temp.size(), stream);
-            const int nxt = 1 - cur;
-            trav::RayQueueView q = ext.view();
-            gpu::launch_gather_paths(indices.data(), ext.view().count, cap, so, slot[cur].data(),
-                                     PathView{q.rays, q.hits, tp.data(), slot[nxt].data(), pdf.data()}, stream);
+            t.mark(e + 2);
             cur = nxt;
-            tl.mark(e + 4);
         }
-        gpu::launch_accumulate(radiance.data(), so, sums, npix, k, stream);
-        const size_t last = n_events - 1;
-        tl.mark(last);
-        tl.wait(last);
-        res.ms_generate += tl.ms(0, 1);
-        for (uint32_t b = 0; b < settings.max_depth; ++b) {
-            const size_t e = 2 + per_bounce * b;
-            res.ms_extend += tl.ms(e - 1, e);  // from the previous bounce's end (or generation)
-            res.ms_shade += tl.ms(e, e + 1);
-            res.ms_compact += tl.ms(e + 1, e + 2) + tl.ms(e + 3, e + 4);
-            res.ms_shadow += tl.ms(e + 2, e + 3);
-        }
-        res.ms_accumulate += tl.ms(last - 1, last);
-        res.spp += k;
-        if (progress) {
-            read_bounces();
+        gpu::launch_accumulate(radiance.data(), aov, sums, npix, k, stream);
+        t.mark(last);
+        enqueued += k;
+        if (pass > 0) collect(tl[(pass - 1) % 2], in_flight);
+        in_flight = k;
+        if (progress && std::chrono::duration<double>(Clock::now() - last_report).count() >= 0.5) {
+            read_bounces();  // a copy: waits for the pass just enqueued, twice a second at most
+            last_report = Clock::now();
             progress(res.spp, settings.spp, res);
         }
         if (settings.time_limit_s > 0.0 &&
-            std::chrono::duration<double>(Clock::now() - t_start).count() >= settings.time_limit_s)
+            std::chrono::duration<double>(Clock::now() - t_start).count() >= settings.time_limit_s) {
+            ++pass;
             break;
+        }
     }
+    if (pass > 0) collect(tl[(pass - 1) % 2], in_flight);
     read_bounces();
     std::vector<Vec3> h_sum, h_sq;
     sum.download(h_sum);
