@@ -297,9 +297,17 @@ uint64_t hash_file(const std::string& path, bool* exists) {
 SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
                           const LoadProgress& progress) {
     SceneLoad r;
+    auto note_materials = [&r](const std::vector<std::string>& files) {
+        r.material_files = files;
+        std::error_code ec;
+        for (const std::string& f : files)
+            if (!fs::is_regular_file(f, ec)) r.missing_material_files.push_back(f);
+    };
     if (cache_dir.empty()) {
-        r.mesh = load_obj(obj_path, &r.warnings, nullptr, progress);
+        std::vector<std::string> mtl_files;
+        r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
         r.scene_hash = scene_hash(r.mesh);
+        note_materials(mtl_files);
         return r;
     }
     bool exists = false;
@@ -314,6 +322,9 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
                 r.warnings = std::move(e.warnings);
                 r.scene_hash = hash_hex(e.h.scene_hash);
                 r.from_cache = true;
+                std::vector<std::string> files;
+                for (const Dependency& d : e.deps) files.push_back(d.path);
+                note_materials(files);
                 return r;
             }
         } catch (const Unusable& u) {
@@ -323,6 +334,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
     std::vector<std::string> mtl_files;
     r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
     r.scene_hash = scene_hash(r.mesh);
+    note_materials(mtl_files);
     std::vector<Dependency> deps;
     for (const std::string& m : mtl_files) {
         Dependency d{m, false, 0};

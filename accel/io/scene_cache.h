@@ -30,9 +30,12 @@ uint64_t hash_file(const std::string& path, bool* exists = nullptr);
 struct SceneLoad {
     TriangleMesh mesh;
     std::vector<std::string> warnings;  ///< the loader's (a missing .mtl, say), cached ones included
-    std::string scene_hash;             ///< scene_hash(mesh)
-    bool from_cache = false;            ///< the cache served it
-    std::string cache_file;             ///< the entry read or written ("" when the cache is off)
+    /// The material files the OBJ names (`mtllib`, resolved against its folder), and which of
+    /// them do not exist: the renderer refuses those (issue 19), the other commands warn.
+    std::vector<std::string> material_files, missing_material_files;
+    std::string scene_hash;   ///< scene_hash(mesh)
+    bool from_cache = false;  ///< the cache served it
+    std::string cache_file;   ///< the entry read or written ("" when the cache is off)
     /// A one-line warning when the cache could not be used or written (a damaged or foreign
     /// entry, an unwritable folder): the load itself succeeded.
     std::string cache_warning;

@@ -74,6 +74,21 @@ void expect_same(const SceneLoad& a, const SceneLoad& b) {
 
 }  // namespace
 
+// The material files the OBJ names, and the missing ones, on a parse and on a cache hit.
+TEST(SceneCache, ReportsMissingMaterialFiles) {
+    Fixture f;
+    Fixture::write(f.obj, "mtllib scene.mtl\nmtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    for (int run = 0; run < 2; ++run) {
+        const SceneLoad l = f.load();
+        EXPECT_EQ(l.from_cache, run == 1);
+        ASSERT_EQ(l.material_files.size(), 2u);
+        ASSERT_EQ(l.missing_material_files.size(), 1u);
+        EXPECT_NE(l.missing_material_files[0].find("gone.mtl"), std::string::npos);
+    }
+    const SceneLoad off = load_obj_cached(f.obj.string(), "", "test-writer");
+    EXPECT_EQ(off.missing_material_files.size(), 1u);
+}
+
 TEST(SceneCache, AHitGivesWhatTheParseGave) {
     Fixture fx;
     const SceneLoad first = fx.load();

@@ -276,6 +276,14 @@ expect_error render-empty "no usable triangles" render "$tmp/empty.obj" -o "$tmp
 expect_error render-out-is-input "cannot write .*cornell_box[.]obj: .*[.]obj" render "$data/cornell_box.obj" -o "$data/cornell_box.obj"
 expect_error render-bad-strategy "strategy" render "$data/cornell_box.obj" --strategy none -o "$tmp/x.pfm"
 expect_error render-cost-bad-ext "cannot write .*cost[.]xyz" render "$data/cornell_box.obj" --cost-image "$tmp/cost.xyz" -o "$tmp/x.pfm"
+printf 'mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n' >"$tmp/nomtl.obj"
+expect_error render-missing-mtl "material file .*gone[.]mtl does not exist" render "$tmp/nomtl.obj" -o "$tmp/x.pfm"
+if "$bin" render "$tmp/nomtl.obj" --missing-textures warn --width 4 --height 4 --spp 1 -o "$tmp/warn.pfm" \
+    2>"$tmp/err" >/dev/null && grep -q "warning: material file .*gone.mtl" "$tmp/err" && [ -s "$tmp/warn.pfm" ]; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL render --missing-textures warn"; sed 's/^/    /' "$tmp/err" | head -3
+fi
 expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh

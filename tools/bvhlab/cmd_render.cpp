@@ -19,7 +19,7 @@ namespace bvhlab::cli {
 namespace {
 
 struct RenderOpts {
-    std::string scene, out, dump_rays, strategy = "mis", cost_image;
+    std::string scene, out, dump_rays, strategy = "mis", cost_image, missing = "error";
     bool aov = false;
     BuildOptions build;
     TraceOptions trace;
@@ -113,6 +113,11 @@ void register_render(CLI::App& app, Globals& g) {
     sub->add_option("--shutter", o->shutter, "shutter open and close times in [0, 1] of the motion")
         ->expected(2)
         ->check(FiniteRange(0.0, 1.0));
+    sub->add_option("--missing-textures", o->missing,
+                    "a material file (or texture) the scene names but that does not exist: error (default), or warn "
+                    "and render with the default material, one warning per file")
+        ->check(CLI::IsMember({"error", "warn"}))
+        ->capture_default_str();
     sub->add_flag("--aov", o->aov,
                   "also write the first hits' albedo and normal (for denoisers) beside --out, as NAME-albedo.EXT and "
                   "NAME-normal.EXT (normals in [-1, 1]: use .exr or .pfm)");
@@ -148,6 +153,16 @@ void register_render(CLI::App& app, Globals& g) {
         o->rs.aovs = o->aov;
         Scene s = load_scene(o->scene, g);
         accel::refuse_overwriting_input(o->out, s.source, "--out");
+        for (const std::string& f : s.missing_material_files) {
+            if (o->missing == "error")
+                throw Error("cannot render " + o->scene + ": its material file " + f +
+                            " does not exist (--missing-textures warn renders with the default material)");
+            if (!g.quiet)
+                std::fprintf(stderr,
+                             "[bvhlab] warning: material file %s does not exist: its materials render as the "
+                             "default grey\n",
+                             f.c_str());
+        }
         if (s.mesh.triangle_count() == 0) throw Error("cannot render " + o->scene + ": it has no triangles");
 
         trav::Camera cam = s.camera;

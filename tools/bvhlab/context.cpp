@@ -208,6 +208,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         s.hash = load.scene_hash;
         s.load_ms = 1000.0 * st.seconds();
         s.scene_cache = cache_dir.empty() ? "off" : load.from_cache ? "hit" : "miss";
+        s.missing_material_files = load.missing_material_files;
         if (!g.quiet) {
             if (load.from_cache)
                 std::fprintf(stderr, "[bvhlab] served by the scene cache (%s)\n", load.cache_file.c_str());

@@ -72,6 +72,7 @@ struct Scene {
     std::string hash;
     double load_ms = 0.0;             ///< loading (or generating) the mesh
     std::string scene_cache = "off";  ///< hit (the cache served the load), miss (parsed, then cached) or off
+    std::vector<std::string> missing_material_files;  ///< `mtllib` files that do not exist
 };
 
 /// Resolves SPEC: an OBJ path, a scene name from $BVHLAB_SCENES/scenes.json or data/scenes.json,
