@@ -104,6 +104,37 @@ void write_image(const Image& img, const std::string& path) {
 #endif
 }
 
+Image read_image(const std::string& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw Error("cannot open " + path + ": no such file");
+    if (extension_of(path) == ".pfm") return read_pfm(path);
+#if defined(BVHLAB_HAVE_OIIO)
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw Error("cannot read " + path + ": " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    const int ch = spec.nchannels;
+    if (spec.width <= 0 || spec.height <= 0 || ch <= 0) throw Error("cannot read " + path + ": an empty image");
+    std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(ch));
+    if (!in->read_image(0, 0, 0, ch, OIIO::TypeDesc::FLOAT, px.data()))
+        throw Error("cannot read " + path + ": " + in->geterror());
+    const std::string space = spec.get_string_attribute("oiio:ColorSpace");
+    const bool srgb = space == "sRGB" || (space.empty() && spec.format.basetype == OIIO::TypeDesc::UINT8);
+    auto linear = [srgb](float c) {
+        if (!srgb) return c;
+        return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+    };
+    Image img{uint32_t(spec.width), uint32_t(spec.height)};
+    for (size_t i = 0; i < img.pixels.size(); ++i) {
+        const float* p = &px[i * size_t(ch)];
+        img.pixels[i] =
+            ch >= 3 ? Vec3{linear(p[0]), linear(p[1]), linear(p[2])} : Vec3{linear(p[0]), linear(p[0]), linear(p[0])};
+    }
+    return img;
+#else
+    throw Error("cannot read " + path + ": this build has no OpenImageIO, so it reads .pfm images only");
+#endif
+}
+
 Image read_pfm(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open " + path + ": " + std::strerror(errno));

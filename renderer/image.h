@@ -33,6 +33,12 @@ void write_image(const Image& img, const std::string& path);
 /// Reads a PFM file (colour "PF" or grey "Pf", either byte order). Throws bvhlab::Error.
 Image read_pfm(const std::string& path);
 
+/// Reads an image as linear RGB: PFM always, anything else through OpenImageIO (8-bit and
+/// other sRGB-tagged files are linearised; one channel is grey; alpha is dropped). Throws
+/// bvhlab::Error naming the file when it is missing, unreadable, or needs OpenImageIO that this
+/// build lacks.
+Image read_image(const std::string& path);
+
 /// Linear to sRGB-encoded, for 8-bit output.
 float srgb_encode(float linear);
 

@@ -99,7 +99,23 @@ RenderScene::RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky) 
         for (size_t i = 0; i < light_tris_.size(); ++i) pick_pdf_[light_tris_[i]] = float(power[i] / total);
     }
     const size_t n = light_tris_.size();
-    if (sky.given) {
+    if (!sky.env_file.empty()) {
+        BVHLAB_CHECK(std::isfinite(sky.env_scale) && sky.env_scale >= 0.0f, "--env-scale must be a finite number >= 0");
+        env_ = read_image(sky.env_file);
+        for (Vec3& p : env_.pixels) {
+            if (!std::isfinite(p.x + p.y + p.z) || p.x < 0.0f || p.y < 0.0f || p.z < 0.0f)
+                throw Error("environment map " + sky.env_file + " has a negative, NaN or infinite pixel");
+            p = p * sky.env_scale;
+        }
+        build_env_tables();
+        lighting_ = std::to_string(n) + " emissive triangles, environment map " + sky.env_file + " (" +
+                    std::to_string(env_.width) + "x" + std::to_string(env_.height) + ", scale " +
+                    std::to_string(sky.env_scale) + ")";
+        if (env_row_cdf_.empty()) {  // black everywhere: nothing to sample
+            env_ = Image();
+            lighting_ += ", black";
+        }
+    } else if (sky.given) {
         sky_ = sky.radiance;
         lighting_ = std::to_string(n) + " emissive triangles, sky (" + std::to_string(sky_.x) + ", " +
                     std::to_string(sky_.y) + ", " + std::to_string(sky_.z) + ") as given";
@@ -109,9 +125,45 @@ RenderScene::RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky) 
     } else {
         lighting_ = std::to_string(n) + " emissive triangles, black sky (none given)";
     }
-    const bool sky_on = max3(sky_) > 0.0f;
+    const bool sky_on = max3(sky_) > 0.0f || env_.width > 0;
     sky_pick_ = !sky_on ? 0.0f : (n == 0 ? 1.0f : 0.5f);
     offset_ = 1e-5f * std::max(mesh.diagonal(), 1e-6f);
+}
+
+void RenderScene::build_env_tables() {
+    const uint32_t w = env_.width, h = env_.height;
+    std::vector<double> row(h, 0.0), weight(size_t(w) * h);
+    for (uint32_t y = 0; y < h; ++y) {
+        const double st = std::sin(kPi * (double(y) + 0.5) / double(h));
+        for (uint32_t x = 0; x < w; ++x) {
+            const double v = double(luminance(env_.at(x, y))) * st;
+            weight[size_t(y) * w + x] = v;
+            row[y] += v;
+        }
+    }
+    const double total = std::accumulate(row.begin(), row.end(), 0.0);
+    if (!(total > 0.0)) return;
+    env_row_cdf_.assign(h + 1, 0.0f);
+    env_row_pdf_.assign(h, 0.0f);
+    env_col_cdf_.assign(size_t(h) * (w + 1), 0.0f);
+    env_col_pdf_.assign(size_t(h) * w, 0.0f);
+    double acc = 0.0;
+    for (uint32_t y = 0; y < h; ++y) {
+        acc += row[y];
+        env_row_cdf_[y + 1] = float(acc / total);
+        env_row_pdf_[y] = float(row[y] / total * h);
+        float* cdf = &env_col_cdf_[size_t(y) * (w + 1)];
+        double c = 0.0;
+        for (uint32_t x = 0; x < w; ++x) {
+            // A row without light is never picked; it gets a uniform table all the same.
+            const double p = row[y] > 0.0 ? weight[size_t(y) * w + x] / row[y] : 1.0 / w;
+            c += p;
+            cdf[x + 1] = float(c);
+            env_col_pdf_[size_t(y) * w + x] = float(p * w);
+        }
+        cdf[w] = 1.0f;
+    }
+    env_row_cdf_[h] = 1.0f;
 }
 
 SceneView RenderScene::view() const {
@@ -126,6 +178,10 @@ SceneView RenderScene::view() const {
     v.lights.count = uint32_t(light_tris_.size());
     v.lights.sky = sky_;
     v.lights.sky_pick = sky_pick_;
+    if (env_.width > 0) {
+        v.lights.env = {env_.pixels.data(),  env_row_cdf_.data(), env_col_cdf_.data(), env_row_pdf_.data(),
+                        env_col_pdf_.data(), env_.width,          env_.height};
+    }
     v.offset = offset_;
     return v;
 }

@@ -8,6 +8,7 @@
 
 #include "accel/core/mesh.h"
 #include "renderer/core/stages.h"
+#include "renderer/image.h"
 #include "traversal/rays/raygen.h"
 
 namespace bvhlab::render {
@@ -16,6 +17,8 @@ namespace bvhlab::render {
 struct SkyOption {
     bool given = false;  ///< false: the default rule (white 1 without emitters, black with)
     Vec3 radiance{0.0f, 0.0f, 0.0f};
+    std::string env_file;  ///< a lat-long environment map instead (read_image); "" for none
+    float env_scale = 1.0f;
 };
 
 class RenderScene {
@@ -35,10 +38,18 @@ public:
     Vec3 sky() const { return sky_; }
     float sky_pick() const { return sky_pick_; }
     float offset() const { return offset_; }
+    /// The environment map (empty image when none) and its sampling tables.
+    const Image& env() const { return env_; }
+    const std::vector<float>& env_row_cdf() const { return env_row_cdf_; }
+    const std::vector<float>& env_col_cdf() const { return env_col_cdf_; }
+    const std::vector<float>& env_row_pdf() const { return env_row_pdf_; }
+    const std::vector<float>& env_col_pdf() const { return env_col_pdf_; }
     /// One line on how the scene is lit, for the summary ("12 emissive triangles, black sky").
     const std::string& lighting() const { return lighting_; }
 
 private:
+    void build_env_tables();
+
     const accel::TriangleMesh& mesh_;
     std::vector<RenderMaterial> materials_;  // [0] default
     std::vector<int32_t> material_ids_;
@@ -49,6 +60,8 @@ private:
     float sky_pick_ = 0.0f;
     float offset_ = 0.0f;
     std::string lighting_;
+    Image env_;
+    std::vector<float> env_row_cdf_, env_col_cdf_, env_row_pdf_, env_col_pdf_;
 };
 
 /// Vose's alias table for non-negative `weights` with a positive sum.

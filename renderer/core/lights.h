@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "renderer/core/environment.h"
 #include "renderer/core/sampling.h"
 
 namespace bvhlab::render {
@@ -21,6 +22,7 @@ struct LightView {
     const float* pick_pdf = nullptr;    ///< per mesh triangle: its probability among the lights (0: not a light)
     uint32_t count = 0;
     Vec3 sky{0.0f, 0.0f, 0.0f};  ///< constant radiance of every direction no triangle covers
+    EnvView env;                 ///< a lat-long environment map instead of the constant sky
     float sky_pick = 0.0f;       ///< probability that next-event estimation picks the sky
 };
 
@@ -32,9 +34,19 @@ BVHLAB_HD inline uint32_t alias_pick(const AliasEntry* table, uint32_t n, float 
     return (x - float(i)) < table[i].keep ? i : table[i].alias;
 }
 
-/// Density (solid angle) with which next-event estimation samples the sky direction w. The sky
-/// is sampled uniformly over the sphere.
-BVHLAB_HD inline float sky_direction_pdf(const LightView& l) { return l.sky_pick * (1.0f / (4.0f * kPi)); }
+/// Whether rays that leave the scene see any light.
+BVHLAB_HD inline bool has_sky(const LightView& l) { return l.env.present() || max3(l.sky) > 0.0f; }
+
+/// Radiance from direction d (unit) where no triangle is hit.
+BVHLAB_HD inline Vec3 sky_radiance(const LightView& l, Vec3 d) {
+    return l.env.present() ? env_radiance(l.env, d) : l.sky;
+}
+
+/// Density (solid angle) with which next-event estimation samples the sky direction d: by the
+/// environment map's importance, or uniformly over the sphere for a constant sky.
+BVHLAB_HD inline float sky_direction_pdf(const LightView& l, Vec3 d) {
+    return l.sky_pick * (l.env.present() ? env_pdf(l.env, d) : 1.0f / (4.0f * kPi));
+}
 
 /// Density (solid angle) with which next-event estimation samples the point of triangle `tri`
 /// of area `area` seen at distance `dist` under cosine `cos_light` (> 0).

@@ -130,9 +130,9 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     const bool mis = p.strategy == Strategy::kMis && prev_pdf > 0.0f;
     if (!hit.is_hit()) {
         if (bounce == 0 && albedo) albedo[px] = normal[px] = splat(0.0f);
-        if (bsdf_counts && max3(s.lights.sky) > 0.0f) {
-            const float w = mis ? power_heuristic(prev_pdf, sky_direction_pdf(s.lights)) : 1.0f;
-            radiance[px] = radiance[px] + beta * s.lights.sky * w;
+        if (bsdf_counts && has_sky(s.lights)) {
+            const float w = mis ? power_heuristic(prev_pdf, sky_direction_pdf(s.lights, ray.dir)) : 1.0f;
+            radiance[px] = radiance[px] + beta * sky_radiance(s.lights, ray.dir) * w;
         }
         return out;
     }
@@ -177,10 +177,16 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
         Vec3 dir, le;
         float dist, pdf_l;
         if (u < s.lights.sky_pick) {
-            dir = sample_uniform_sphere(rnd(kDimLight0), rnd(kDimLight1));
+            if (s.lights.env.present()) {
+                float pdf_env;
+                dir = env_sample(s.lights.env, rnd(kDimLight0), rnd(kDimLight1), pdf_env);
+                pdf_l = s.lights.sky_pick * pdf_env;
+            } else {
+                dir = sample_uniform_sphere(rnd(kDimLight0), rnd(kDimLight1));
+                pdf_l = sky_direction_pdf(s.lights, dir);
+            }
             dist = INFINITY;
-            pdf_l = sky_direction_pdf(s.lights);
-            le = s.lights.sky;
+            le = sky_radiance(s.lights, dir);
         } else {
             const float ul = (u - s.lights.sky_pick) / (1.0f - s.lights.sky_pick);
             const uint32_t lt = s.lights.tris[alias_pick(s.lights.table, s.lights.count, min_f(ul, 0.99999994f))];

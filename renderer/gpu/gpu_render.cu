@@ -27,6 +27,8 @@ struct DeviceScene {
     DeviceBuffer<RenderMaterial> materials;
     DeviceBuffer<AliasEntry> alias;
     DeviceBuffer<float> pick_pdf;
+    DeviceBuffer<Vec3> env;
+    DeviceBuffer<float> env_row_cdf, env_col_cdf, env_row_pdf, env_col_pdf;
     SceneView view;
 
     explicit DeviceScene(const RenderScene& s)
@@ -36,7 +38,12 @@ struct DeviceScene {
           material_ids(s.material_ids()),
           materials(s.materials()),
           alias(s.alias_table()),
-          pick_pdf(s.pick_pdf()) {
+          pick_pdf(s.pick_pdf()),
+          env(s.env().pixels),
+          env_row_cdf(s.env_row_cdf()),
+          env_col_cdf(s.env_col_cdf()),
+          env_row_pdf(s.env_row_pdf()),
+          env_col_pdf(s.env_col_pdf()) {
         view = s.view();  // the host view's scalars, then the device pointers
         view.vertices = vertices.data();
         view.indices = indices.data();
@@ -45,6 +52,11 @@ struct DeviceScene {
         view.lights.tris = light_tris.data();
         view.lights.table = alias.data();
         view.lights.pick_pdf = pick_pdf.data();
+        view.lights.env.pixels = env.data();
+        view.lights.env.row_cdf = env_row_cdf.data();
+        view.lights.env.col_cdf = env_col_cdf.data();
+        view.lights.env.row_pdf = env_row_pdf.data();
+        view.lights.env.col_pdf = env_col_pdf.data();
     }
 };
 

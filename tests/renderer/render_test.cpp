@@ -122,6 +122,93 @@ TEST(Furnace, DiffuseGlassAndSmoothConductorReturnTheSky) {
     expect_furnace(render(icosphere(3, metal), sphere_camera(), 32, rs, sky), 0.5f, "conductor", 0.45f, 0.996f);
 }
 
+/// A lat-long map written as PFM: `base` everywhere, and `spot` in a patch above the horizon.
+std::string write_env(const test::TempFile& f, float base, float spot) {
+    Image img(64, 32);
+    for (uint32_t y = 0; y < 32; ++y)
+        for (uint32_t x = 0; x < 64; ++x)
+            img.at(x, y) = (x >= 40 && x < 46 && y >= 6 && y < 10) ? splat(spot) : splat(base);
+    write_image(img, f.path());
+    return f.path();
+}
+
+// An environment map of constant radiance is a uniform sky: the furnace again, now through
+// the map's importance sampling and its density in the MIS weights.
+TEST(Furnace, ConstantEnvironmentMapReturnsItsRadiance) {
+    test::TempFile env("const_env.pfm");
+    SkyOption sky;
+    sky.env_file = write_env(env, 0.5f, 0.5f);
+    RenderSettings rs;
+    rs.spp = 64;
+    accel::Material white;
+    white.diffuse = splat(1.0f);
+    expect_furnace(render(icosphere(3, white), sphere_camera(), 32, rs, sky), 0.5f, "lambertian, map");
+    sky.env_scale = 2.0f;
+    expect_furnace(render(icosphere(3, white), sphere_camera(), 32, rs, sky), 1.0f, "lambertian, map x 2");
+}
+
+// The map's sampler: its density integrates to 1 over the sphere, each sample reports the
+// density env_pdf gives its direction, and the bright patch gets its share of the samples.
+TEST(Environment, ImportanceSamplingMatchesItsDensity) {
+    test::TempFile env("spot_env.pfm");
+    SkyOption sky;
+    sky.env_file = write_env(env, 0.1f, 50.0f);
+    accel::Material grey;
+    const accel::TriangleMesh mesh = icosphere(0, grey);
+    const RenderScene scene(mesh, sky);
+    const EnvView e = scene.view().lights.env;
+    ASSERT_TRUE(e.present());
+    double integral = 0.0, spot_mc = 0.0;
+    const int n = 400000;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 d = sample_uniform_sphere(rand01(i, 0, 0, 9), rand01(i, 0, 1, 9));
+        integral += env_pdf(e, d) * 4.0 * kPi / n;
+    }
+    EXPECT_NEAR(integral, 1.0, 0.01);
+    int in_spot = 0;
+    for (int i = 0; i < n; ++i) {
+        float pdf;
+        const Vec3 d = env_sample(e, rand01(i, 1, 0, 9), rand01(i, 1, 1, 9), pdf);
+        EXPECT_NEAR(length(d), 1.0f, 1e-4f);
+        ASSERT_NEAR(pdf, env_pdf(e, d), 1e-3f * pdf + 1e-6f);
+        in_spot += env_radiance(e, d).x > 1.0f;
+        // The same fraction by uniform sampling, weighted by the density: an estimate of it.
+        const Vec3 u = sample_uniform_sphere(rand01(i, 2, 0, 9), rand01(i, 2, 1, 9));
+        if (env_radiance(e, u).x > 1.0f) spot_mc += env_pdf(e, u) * 4.0 * kPi / n;
+    }
+    EXPECT_NEAR(double(in_spot) / n, spot_mc, 0.02);
+    EXPECT_GT(double(in_spot) / n, 0.5);  // the patch holds most of the light
+    // The mapping round-trips.
+    const Vec3 d = normalize(Vec3{0.3f, 0.5f, -0.8f});
+    float u, v;
+    env_uv(d, u, v);
+    const Vec3 back = env_direction(u, v);
+    EXPECT_NEAR(dot(back, d), 1.0f, 1e-5f);
+}
+
+// Under a map with a bright patch, BSDF sampling alone, map sampling alone and MIS agree.
+TEST(Estimators, EnvironmentMapStrategiesAgree) {
+    test::TempFile env("spot_env2.pfm");
+    SkyOption sky;
+    sky.env_file = write_env(env, 0.2f, 20.0f);
+    accel::Material grey;
+    grey.diffuse = splat(0.7f);
+    const accel::TriangleMesh mesh = icosphere(2, grey);
+    RenderSettings rs;
+    rs.spp = 256;
+    const RenderResult mis = render(mesh, sphere_camera(), 24, rs, sky);
+    rs.strategy = Strategy::kLightOnly;
+    const RenderResult light = render(mesh, sphere_camera(), 24, rs, sky);
+    rs.strategy = Strategy::kBsdfOnly;
+    rs.spp = 1024;
+    const RenderResult bsdf = render(mesh, sphere_camera(), 24, rs, sky);
+    CompareConfig loose;
+    loose.pixel_outliers = 0.1;
+    const Comparison ml = compare_renders(mis, light, loose), mb = compare_renders(mis, bsdf, loose);
+    EXPECT_TRUE(ml.agree) << ml.summary();
+    EXPECT_TRUE(mb.agree) << mb.summary();
+}
+
 // The furnace catches a light-transport bug: without the cosine the sphere is too bright.
 TEST(Furnace, CatchesAMissingCosine) {
     SkyOption sky{true, splat(0.5f)};

@@ -284,6 +284,10 @@ if "$bin" render "$tmp/nomtl.obj" --missing-textures warn --width 4 --height 4 -
 else
     fail=$((fail + 1)); echo "FAIL render --missing-textures warn"; sed 's/^/    /' "$tmp/err" | head -3
 fi
+expect_error render-missing-env "--env .*nope[.]exr: no such file" render "$data/cornell_box.obj" --env "$tmp/nope.exr" -o "$tmp/x.pfm"
+expect_error render-env-and-sky "excludes|--sky" render "$data/cornell_box.obj" --env "$tmp/nope.exr" --sky 1 1 1 -o "$tmp/x.pfm"
+printf 'PF\n2 1\n-1.0\n' >"$tmp/bad_env.pfm"
+expect_error render-truncated-env "bad_env[.]pfm is truncated" render "$data/cornell_box.obj" --env "$tmp/bad_env.pfm" -o "$tmp/x.pfm"
 expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh

@@ -26,7 +26,8 @@ struct RenderOpts {
     uint32_t width = 640, height = 480;
     render::RenderSettings rs;
     std::vector<float> eye, target, up, sky, eye_end, shutter;
-    float fov = 0.0f, aperture = 0.0f, focus = 0.0f;
+    float fov = 0.0f, aperture = 0.0f, focus = 0.0f, env_scale = 1.0f;
+    std::string env;
 };
 
 Vec3 vec3_of(const std::vector<float>& v) { return {v[0], v[1], v[2]}; }
@@ -99,6 +100,13 @@ void register_render(CLI::App& app, Globals& g) {
                     "constant sky radiance R G B (default: white 1 when the scene has no emitters, else black)")
         ->expected(3)
         ->check(FiniteRange(0.0, 1e30));
+    auto* env = sub->add_option("--env", o->env,
+                                "lat-long (equirectangular) environment map, linear radiance: .exr, .hdr, .pfm (+y up, "
+                                "the image centre along -z)");
+    sub->add_option("--env-scale", o->env_scale, "multiplies the environment map")
+        ->check(FiniteRange(0.0, 1e30))
+        ->capture_default_str();
+    env->excludes("--sky");
     sub->add_option("--eye", o->eye, "camera position x y z (default: the scene's camera)")
         ->expected(3)
         ->check(Finite());
@@ -188,6 +196,19 @@ void register_render(CLI::App& app, Globals& g) {
             sky.given = true;
             sky.radiance = vec3_of(o->sky);
         }
+        if (!o->env.empty()) {
+            std::error_code ec;
+            if (std::filesystem::is_regular_file(o->env, ec)) {
+                sky.env_file = o->env;
+                sky.env_scale = o->env_scale;
+            } else if (o->missing == "error") {
+                throw Error("cannot render with --env " + o->env +
+                            ": no such file (--missing-textures warn renders with the default sky)");
+            } else if (!g.quiet) {
+                std::fprintf(stderr, "[bvhlab] warning: environment map %s does not exist: the default sky is used\n",
+                             o->env.c_str());
+            }
+        }
         render::RenderScene rscene(s.mesh, sky);
         if (!g.quiet) std::fprintf(stderr, "[bvhlab] lighting: %s\n", rscene.lighting().c_str());
         o->rs.strategy = o->strategy == "mis"    ? render::Strategy::kMis
@@ -265,6 +286,11 @@ void register_render(CLI::App& app, Globals& g) {
         j["strategy"] = o->strategy;
         j["lighting"] = rscene.lighting();
         j["sky"] = vec_json(rscene.sky());
+        if (rscene.env().width > 0)
+            j["env"] = {{"file", o->env},
+                        {"width", rscene.env().width},
+                        {"height", rscene.env().height},
+                        {"scale", o->env_scale}};
         j["emissive_triangles"] = rscene.light_tris().size();
         j["out"] = o->out;
         j["rays"] = res.rays();
