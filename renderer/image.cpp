@@ -27,8 +27,6 @@ std::string extension_of(const std::string& path) {
     return e;
 }
 
-bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
-
 void write_pfm(const Image& img, const std::string& path) {
     accel::write_file_atomically(path, [&](std::FILE* f) {
         // Negative scale: little-endian. PFM stores the bottom row first.
@@ -39,6 +37,8 @@ void write_pfm(const Image& img, const std::string& path) {
 }
 
 #if defined(BVHLAB_HAVE_OIIO)
+bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
+
 void write_oiio(const Image& img, const std::string& path, const std::string& ext) {
     // OpenImageIO picks the format by the name, so the temporary keeps the extension.
     const fs::path final_path(path);
