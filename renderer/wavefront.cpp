@@ -62,45 +62,51 @@ struct HostPaths {
     }
 };
 
-void dump(const RenderSettings& s, const char* kind, uint32_t bounce, const std::vector<trav::Ray>& rays,
-          trav::Query q) {
+}  // namespace
+
+void check_settings(const RenderSettings& s) {
+    BVHLAB_CHECK(s.spp >= 1, "--spp must be at least 1");
+    BVHLAB_CHECK(s.max_depth >= 1 && s.max_depth <= 1024, "--max-depth must be in [1, 1024]");
+    if (s.dump_rays_dir.empty()) return;
+    std::error_code ec;
+    std::filesystem::create_directories(s.dump_rays_dir, ec);
+    if (ec) throw Error("cannot create --dump-rays folder " + s.dump_rays_dir + ": " + ec.message());
+}
+
+void dump_rays(const RenderSettings& s, const char* kind, uint32_t bounce, std::vector<trav::Ray> rays,
+               trav::Query query) {
     if (s.dump_rays_dir.empty() || rays.empty()) return;
     trav::RaySet set;
-    set.rays = rays;
-    set.query = q;
+    set.rays = std::move(rays);
+    set.query = query;
     set.writer = s.writer;
     const std::string name = std::string(kind) + "-bounce" + std::to_string(bounce) + ".rays";
     trav::write_ray_file((std::filesystem::path(s.dump_rays_dir) / name).string(), set);
 }
 
-}  // namespace
-
-void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::vector<Vec3>& sum_sq, uint32_t width,
-                   uint32_t height) {
+void finish_result(RenderResult& res, const PixelTotals& t, uint32_t width, uint32_t height) {
     res.mean = Image(width, height);
     res.variance_of_mean = Image(width, height);
     const float k = float(res.spp);
     for (size_t px = 0; px < res.mean.pixels.size(); ++px) {
-        const Vec3 m = sum[px] * (1.0f / k);
+        const Vec3 m = t.sum[px] * (1.0f / k);
         res.mean.pixels[px] = m;
         if (res.spp > 1) {
             // Unbiased sample variance, then that of the mean.
-            const Vec3 var = (sum_sq[px] - m * m * k) * (1.0f / (k - 1.0f));
+            const Vec3 var = (t.sum_sq[px] - m * m * k) * (1.0f / (k - 1.0f));
             res.variance_of_mean.pixels[px] = vmax(var, splat(0.0f)) * (1.0f / k);
         }
     }
-    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
-}
-
-void finish_aovs(RenderResult& res, const std::vector<Vec3>& albedo, const std::vector<Vec3>& normal) {
-    if (albedo.empty()) return;
-    res.albedo = Image(res.mean.width, res.mean.height);
-    res.normal = Image(res.mean.width, res.mean.height);
-    for (size_t px = 0; px < albedo.size(); ++px) {
-        res.albedo.pixels[px] = albedo[px] * (1.0f / float(res.spp));
-        const float len = length(normal[px]);
-        res.normal.pixels[px] = len > 0.0f ? normal[px] * (1.0f / len) : splat(0.0f);
+    if (!t.albedo.empty()) {
+        res.albedo = Image(width, height);
+        res.normal = Image(width, height);
+        for (size_t px = 0; px < t.albedo.size(); ++px) {
+            res.albedo.pixels[px] = t.albedo[px] * (1.0f / k);
+            const float len = length(t.normal[px]);
+            res.normal.pixels[px] = len > 0.0f ? t.normal[px] * (1.0f / len) : splat(0.0f);
+        }
     }
+    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
 }
 
 uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic) {
@@ -120,22 +126,22 @@ uint64_t RenderResult::rays() const {
 
 RenderResult render_host(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
                          trav::Tracer& extend, trav::Tracer& shadow, const RenderProgress& progress) {
-    BVHLAB_CHECK(settings.spp >= 1, "--spp must be at least 1");
-    BVHLAB_CHECK(settings.max_depth >= 1 && settings.max_depth <= 1024, "--max-depth must be in [1, 1024]");
-    if (!settings.dump_rays_dir.empty()) {
-        std::error_code ec;
-        std::filesystem::create_directories(settings.dump_rays_dir, ec);
-        if (ec) throw Error("cannot create --dump-rays folder " + settings.dump_rays_dir + ": " + ec.message());
-    }
+    check_settings(settings);
     const auto t_start = Clock::now();
     const uint32_t npix = camera.width * camera.height;
     const uint32_t wave = wave_samples(settings, npix, default_wave(false, npix));
     const size_t cap = size_t(npix) * wave;
     const SceneView sv = scene.view();
     HostPaths paths(cap, settings.aovs);
-    std::vector<Vec3> radiance(cap, splat(0.0f)), sum(npix, splat(0.0f)), sum_sq(npix, splat(0.0f));
-    std::vector<Vec3> albedo(settings.aovs ? npix : 0, splat(0.0f)), normal(albedo.size(), splat(0.0f));
+    std::vector<Vec3> radiance(cap, splat(0.0f));
+    PixelTotals totals;
+    totals.sum.assign(npix, splat(0.0f));
+    totals.sum_sq.assign(npix, splat(0.0f));
+    totals.albedo.assign(settings.aovs ? npix : 0, splat(0.0f));
+    totals.normal.assign(totals.albedo.size(), splat(0.0f));
+    std::vector<trav::Ray> shadow_rays;  // reused by every bounce
     RenderResult res;
+    res.wave_samples = wave;
     res.bounces.resize(settings.max_depth);
     PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy, settings.bug};
     res.ms_setup = ms_since(t_start);
@@ -154,7 +160,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
         for (uint32_t bounce = 0; bounce < settings.max_depth && !paths.ray.empty(); ++bounce) {
             const size_t n = paths.ray.size();
             res.bounces[bounce].extension_rays += n;
-            if (pass == 0) dump(settings, "extension", bounce, paths.ray, trav::Query::kClosest);
+            if (pass == 0) dump_rays(settings, "extension", bounce, paths.ray, trav::Query::kClosest);
             t0 = Clock::now();
             extend.set_rays(paths.ray, trav::Query::kClosest);
             extend.run();
@@ -170,7 +176,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
 
             // Compact the shadow rays, trace them, add the unoccluded ones.
             t0 = Clock::now();
-            std::vector<trav::Ray> shadow_rays;
+            shadow_rays.clear();
             size_t ns = 0;
             for (size_t i = 0; i < n; ++i)
                 if (paths.shadow[i]) {
@@ -181,7 +187,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
             res.ms_compact += ms_since(t0);
             if (ns) {
                 res.bounces[bounce].shadow_rays += ns;
-                if (pass == 0) dump(settings, "shadow", bounce, shadow_rays, trav::Query::kAny);
+                if (pass == 0) dump_rays(settings, "shadow", bounce, shadow_rays, trav::Query::kAny);
                 t0 = Clock::now();
                 shadow.set_rays(shadow_rays, trav::Query::kAny);
                 shadow.run();
@@ -213,16 +219,15 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
         t0 = Clock::now();
         Vec3* rad = radiance.data();
         const ShadeOut so = paths.out();
-        const PixelSums sums{sum.data(), sum_sq.data(), settings.aovs ? albedo.data() : nullptr,
-                             settings.aovs ? normal.data() : nullptr};
-        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, npix, k, rad, so, sums); });
+        const PixelSums sums{totals.sum.data(), totals.sum_sq.data(), settings.aovs ? totals.albedo.data() : nullptr,
+                             settings.aovs ? totals.normal.data() : nullptr};
+        parallel(npix, [&](uint32_t px) { accumulate_pixel(px, npix, k, rad, so.albedo, so.normal, sums); });
         res.ms_accumulate += ms_since(t0);
         res.spp += k;
         if (progress) progress(res.spp, settings.spp, res);
         if (settings.time_limit_s > 0.0 && ms_since(t_start) >= 1000.0 * settings.time_limit_s) break;
     }
-    finish_result(res, sum, sum_sq, camera.width, camera.height);
-    finish_aovs(res, albedo, normal);
+    finish_result(res, totals, camera.width, camera.height);
     res.ms_total = ms_since(t_start);
     return res;
 }

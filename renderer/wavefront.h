@@ -39,10 +39,11 @@ struct BounceStats {
 };
 
 struct RenderResult {
-    Image mean;              ///< radiance per pixel, averaged over the samples
-    Image variance_of_mean;  ///< per channel: sample variance / samples (0 with one sample)
-    Image albedo, normal;    ///< with RenderSettings::aovs: mean albedo, normalised mean normal
-    uint32_t spp = 0;        ///< samples per pixel done
+    Image mean;                 ///< radiance per pixel, averaged over the samples
+    Image variance_of_mean;     ///< per channel: sample variance / samples (0 with one sample)
+    Image albedo, normal;       ///< with RenderSettings::aovs: mean albedo, normalised mean normal
+    uint32_t spp = 0;           ///< samples per pixel done
+    uint32_t wave_samples = 0;  ///< samples per pixel traced per pass
     std::vector<BounceStats> bounces;
     double ms_generate = 0, ms_extend = 0, ms_shade = 0, ms_shadow = 0, ms_compact = 0, ms_accumulate = 0;
     double ms_setup = 0;  ///< before the first pass: uploads, allocations, the first launches
@@ -63,13 +64,24 @@ inline uint32_t default_wave(bool gpu, uint32_t pixels) {
 /// spp and at least 1. Throws bvhlab::Error when the wave would hold 2^31 paths or more.
 uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic);
 
-/// Fills res.mean and res.variance_of_mean from per-pixel sums over res.spp samples, and drops
-/// trailing bounces that traced nothing. Shared by the host and GPU drivers.
-void finish_result(RenderResult& res, const std::vector<Vec3>& sum, const std::vector<Vec3>& sum_sq, uint32_t width,
-                   uint32_t height);
+/// What both drivers check and prepare before a render: spp, max depth, the --dump-rays
+/// folder (created). Throws bvhlab::Error naming the problem.
+void check_settings(const RenderSettings& s);
 
-/// Fills res.albedo and res.normal from per-pixel sums (nothing when `albedo` is empty).
-void finish_aovs(RenderResult& res, const std::vector<Vec3>& albedo, const std::vector<Vec3>& normal);
+/// --dump-rays: one bounce's rays as DIR/KIND-bounceN.rays (nothing when no folder is set or
+/// there are no rays).
+void dump_rays(const RenderSettings& s, const char* kind, uint32_t bounce, std::vector<trav::Ray> rays,
+               trav::Query query);
+
+/// Per-pixel sums over res.spp samples, as the accumulate stage leaves them; albedo and normal
+/// are empty unless RenderSettings::aovs.
+struct PixelTotals {
+    std::vector<Vec3> sum, sum_sq, albedo, normal;
+};
+
+/// Fills res.mean, res.variance_of_mean and (with AOVs) res.albedo and res.normal, and drops
+/// trailing bounces that traced nothing. Shared by the host and GPU drivers.
+void finish_result(RenderResult& res, const PixelTotals& totals, uint32_t width, uint32_t height);
 
 /// Progress after each pass: samples per pixel done, and asked for.
 using RenderProgress = std::function<void(uint32_t done, uint32_t total, const RenderResult& so_far)>;

@@ -266,10 +266,11 @@ struct PixelSums {
     Vec3* normal;
 };
 
-/// Stage "accumulate": folds pixel px's `samples` slots of the pass into its sums (the sum of
-/// squares gives the variance the image comparisons use), and clears the radiance slots.
+/// Stage "accumulate": folds pixel px's `samples` slots of the pass (radiance, and the per-slot
+/// albedo and normal when out.albedo is set) into its sums (the sum of squares gives the
+/// variance the image comparisons use), and clears the radiance slots.
 BVHLAB_HD inline void accumulate_pixel(uint32_t px, uint32_t pixels, uint32_t samples, Vec3* radiance,
-                                       const ShadeOut& aov, PixelSums out) {
+                                       const Vec3* albedo, const Vec3* normal, PixelSums out) {
     Vec3 s1 = out.sum[px], s2 = out.sum_sq[px];
     for (uint32_t k = 0; k < samples; ++k) {
         const size_t slot = size_t(k) * pixels + px;
@@ -278,8 +279,8 @@ BVHLAB_HD inline void accumulate_pixel(uint32_t px, uint32_t pixels, uint32_t sa
         s2 = s2 + r * r;
         r = splat(0.0f);
         if (out.albedo) {
-            out.albedo[px] = out.albedo[px] + aov.albedo[slot];
-            out.normal[px] = out.normal[px] + aov.normal[slot];
+            out.albedo[px] = out.albedo[px] + albedo[slot];
+            out.normal[px] = out.normal[px] + normal[slot];
         }
     }
     out.sum[px] = s1;

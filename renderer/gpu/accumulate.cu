@@ -6,16 +6,18 @@
 namespace bvhlab::render::gpu {
 namespace {
 
-__global__ void accumulate_kernel(Vec3* radiance, ShadeOut aov, PixelSums sums, uint32_t npix, uint32_t samples) {
+__global__ void accumulate_kernel(Vec3* radiance, const Vec3* albedo, const Vec3* normal, PixelSums sums, uint32_t npix,
+                                  uint32_t samples) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i < npix) accumulate_pixel(i, npix, samples, radiance, aov, sums);
+    if (i < npix) accumulate_pixel(i, npix, samples, radiance, albedo, normal, sums);
 }
 
 }  // namespace
 
-void launch_accumulate(Vec3* radiance, const ShadeOut& aov, const PixelSums& sums, uint32_t npix, uint32_t samples,
-                       void* stream) {
-    accumulate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(radiance, aov, sums, npix, samples);
+void launch_accumulate(Vec3* radiance, const Vec3* albedo, const Vec3* normal, const PixelSums& sums, uint32_t npix,
+                       uint32_t samples, void* stream) {
+    accumulate_kernel<<<stage_blocks(npix), kStageBlock, 0, as_stream(stream)>>>(radiance, albedo, normal, sums, npix,
+                                                                                 samples);
     BVHLAB_CHECK_LAUNCH();
 }
 

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <filesystem>
 
 #include "accel/core/check.h"
 #include "renderer/gpu/extend.h"
@@ -12,7 +11,6 @@
 #include "renderer/gpu/stage_kernels.h"
 #include "traversal/cuda_check.h"
 #include "traversal/gpu/device_buffer.h"
-#include "traversal/rays/ray_file.h"
 
 namespace bvhlab::render {
 namespace {
@@ -83,23 +81,14 @@ private:
     std::vector<cudaEvent_t> events_;
 };
 
-uint32_t download_count(trav::RayQueue& q) {
-    uint32_t n = 0;
-    trav::detail::copy_to_host(&n, q.view().count, sizeof n);
-    return n;
-}
-
 /// --dump-rays on the GPU: copies a queue back (a synchronisation, only when asked for).
 void dump_queue(const RenderSettings& s, const char* kind, uint32_t bounce, trav::RayQueue& q, trav::Query query) {
     if (s.dump_rays_dir.empty()) return;
-    trav::RaySet set;
-    set.rays.resize(download_count(q));
-    if (set.rays.empty()) return;
-    trav::detail::copy_to_host(set.rays.data(), q.view().rays, set.rays.size() * sizeof(trav::Ray));
-    set.query = query;
-    set.writer = s.writer;
-    const std::string name = std::string(kind) + "-bounce" + std::to_string(bounce) + ".rays";
-    trav::write_ray_file((std::filesystem::path(s.dump_rays_dir) / name).string(), set);
+    uint32_t n = 0;
+    trav::detail::copy_to_host(&n, q.view().count, sizeof n);
+    std::vector<trav::Ray> rays(n);
+    if (n) trav::detail::copy_to_host(rays.data(), q.view().rays, n * sizeof(trav::Ray));
+    dump_rays(s, kind, bounce, std::move(rays), query);
 }
 
 }  // namespace
@@ -107,14 +96,8 @@ void dump_queue(const RenderSettings& s, const char* kind, uint32_t bounce, trav
 RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
                         const trav::DeviceStructure& structure, const trav::KernelInfo& kernel,
                         const trav::GpuTraceOptions& opts, const RenderProgress& progress) {
-    BVHLAB_CHECK(settings.spp >= 1, "--spp must be at least 1");
-    BVHLAB_CHECK(settings.max_depth >= 1 && settings.max_depth <= 1024, "--max-depth must be in [1, 1024]");
+    check_settings(settings);
     trav::check_kernel_fits(kernel, structure.layout(), structure.depth(), opts);
-    if (!settings.dump_rays_dir.empty()) {
-        std::error_code ec;
-        std::filesystem::create_directories(settings.dump_rays_dir, ec);
-        if (ec) throw Error("cannot create --dump-rays folder " + settings.dump_rays_dir + ": " + ec.message());
-    }
     using Clock = std::chrono::steady_clock;
     const auto t_start = Clock::now();
     const uint32_t npix = camera.width * camera.height;
@@ -139,9 +122,8 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     ext_stats.fill_bytes(0, stream);
     shadow_stats.fill_bytes(0, stream);
 
-    ShadeOut aov{};  // only the AOV pointers: the accumulate stage reads them
-    aov.albedo = settings.aovs ? albedo.data() : nullptr;
-    aov.normal = settings.aovs ? normal.data() : nullptr;
+    Vec3* const slot_albedo = settings.aovs ? albedo.data() : nullptr;
+    Vec3* const slot_normal = settings.aovs ? normal.data() : nullptr;
     const PixelSums sums{sum.data(), sum_sq.data(), settings.aovs ? albedo_sum.data() : nullptr,
                          settings.aovs ? normal_sum.data() : nullptr};
     auto path_set = [&](int c) {
@@ -154,6 +136,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     const size_t per_bounce = 3, n_events = 2 + per_bounce * settings.max_depth + 1, last = n_events - 1;
     Timeline tl[2] = {Timeline(n_events), Timeline(n_events)};
     RenderResult res;
+    res.wave_samples = wave;
     auto read_bounces = [&] {
         std::vector<unsigned long long> ec, sc;
         ext_stats.download(ec);
@@ -198,7 +181,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             trav::detail::fill_device_bytes(shadow_q.view().count, 0, sizeof(uint32_t), stream);
             const gpu::NextQueues q{path_set(nxt),     ext[nxt].view().count, shadow_q.view().rays,
                                     shadow_rad.data(), shadow_slot.data(),    shadow_q.view().count};
-            gpu::launch_shade(b, ds.view, pp, path_set(cur), q, radiance.data(), aov.albedo, aov.normal,
+            gpu::launch_shade(b, ds.view, pp, path_set(cur), q, radiance.data(), slot_albedo, slot_normal,
                               ext[cur].view().count, cap, stream);
             t.mark(e + 1);
             gpu::launch_add_count(shadow_q.view().count, shadow_stats.data() + b, stream);
@@ -209,7 +192,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             t.mark(e + 2);
             cur = nxt;
         }
-        gpu::launch_accumulate(radiance.data(), aov, sums, npix, k, stream);
+        gpu::launch_accumulate(radiance.data(), slot_albedo, slot_normal, sums, npix, k, stream);
         t.mark(last);
         enqueued += k;
         if (pass > 0) collect(tl[(pass - 1) % 2], in_flight);
@@ -227,14 +210,12 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     }
     if (pass > 0) collect(tl[(pass - 1) % 2], in_flight);
     read_bounces();
-    std::vector<Vec3> h_sum, h_sq;
-    sum.download(h_sum);
-    sum_sq.download(h_sq);
-    finish_result(res, h_sum, h_sq, camera.width, camera.height);
-    std::vector<Vec3> h_albedo, h_normal;
-    albedo_sum.download(h_albedo);
-    normal_sum.download(h_normal);
-    finish_aovs(res, h_albedo, h_normal);
+    PixelTotals totals;
+    sum.download(totals.sum);
+    sum_sq.download(totals.sum_sq);
+    albedo_sum.download(totals.albedo);
+    normal_sum.download(totals.normal);
+    finish_result(res, totals, camera.width, camera.height);
     res.ms_total = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
     return res;
 }

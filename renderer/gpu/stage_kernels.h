@@ -36,8 +36,8 @@ void launch_resolve_shadow(const trav::Hit* occlusion, const uint32_t* slot, con
                            Vec3* radiance, const uint32_t* d_count, uint32_t capacity, void* stream);
 
 /// accumulate.cu: accumulate_pixel for every pixel, over the pass's `samples` slots of each.
-void launch_accumulate(Vec3* radiance, const ShadeOut& aov, const PixelSums& sums, uint32_t npix, uint32_t samples,
-                       void* stream);
+void launch_accumulate(Vec3* radiance, const Vec3* albedo, const Vec3* normal, const PixelSums& sums, uint32_t npix,
+                       uint32_t samples, void* stream);
 
 /// counts.cu: *d_total += *d_count (per-bounce ray counts, read once at the end).
 void launch_add_count(const uint32_t* d_count, unsigned long long* d_total, void* stream);

@@ -25,8 +25,9 @@ struct RenderOpts {
     TraceOptions trace;
     uint32_t width = 640, height = 480;
     render::RenderSettings rs;
-    std::vector<float> eye, target, up, sky, eye_end, shutter;
-    float fov = 0.0f, aperture = 0.0f, focus = 0.0f, env_scale = 1.0f;
+    CameraOptions camera;
+    std::vector<float> sky, eye_end, shutter;
+    float aperture = 0.0f, focus = 0.0f, env_scale = 1.0f;
     std::string env;
 };
 
@@ -107,12 +108,7 @@ void register_render(CLI::App& app, Globals& g) {
         ->check(FiniteRange(0.0, 1e30))
         ->capture_default_str();
     env->excludes("--sky");
-    sub->add_option("--eye", o->eye, "camera position x y z (default: the scene's camera)")
-        ->expected(3)
-        ->check(Finite());
-    sub->add_option("--target", o->target, "camera target x y z")->expected(3)->check(Finite());
-    sub->add_option("--up", o->up, "camera up vector x y z")->expected(3)->check(Finite());
-    sub->add_option("--fov", o->fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0));
+    o->camera.add_to(*sub);
     sub->add_option("--aperture", o->aperture, "thin-lens aperture radius (0: pinhole)")->check(FiniteRange(0.0, 1e30));
     sub->add_option("--focus", o->focus, "focus distance (default: eye to target)")->check(FiniteRange(0.0, 1e30));
     sub->add_option("--eye-end", o->eye_end, "eye position at the end of the camera's motion (motion blur)")
@@ -173,11 +169,7 @@ void register_render(CLI::App& app, Globals& g) {
         }
         if (s.mesh.triangle_count() == 0) throw Error("cannot render " + o->scene + ": it has no triangles");
 
-        trav::Camera cam = s.camera;
-        if (o->eye.size() == 3) cam.eye = {o->eye[0], o->eye[1], o->eye[2]};
-        if (o->target.size() == 3) cam.target = {o->target[0], o->target[1], o->target[2]};
-        if (o->up.size() == 3) cam.up = {o->up[0], o->up[1], o->up[2]};
-        if (o->fov > 0.0f) cam.fov_y_deg = o->fov;
+        const trav::Camera cam = o->camera.apply(s.camera);
         render::LensOptions lens;
         lens.aperture_radius = o->aperture;
         lens.focus_distance = o->focus;
@@ -281,8 +273,7 @@ void register_render(CLI::App& app, Globals& g) {
         j["max_depth"] = o->rs.max_depth;
         j["rr_depth"] = o->rs.rr_depth;
         j["seed"] = o->rs.seed;
-        j["wave_samples"] = render::wave_samples(o->rs, o->width * o->height,
-                                                 render::default_wave(o->trace.device == "gpu", o->width * o->height));
+        j["wave_samples"] = res.wave_samples;
         j["strategy"] = o->strategy;
         j["lighting"] = rscene.lighting();
         j["sky"] = vec_json(rscene.sky());

@@ -382,19 +382,27 @@ void RayOptions::add_to(CLI::App& app) {
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
     app.add_option("--seed", cfg.seed, "seed of every random choice")->capture_default_str();
+    camera.add_to(app);
+}
+
+void CameraOptions::add_to(CLI::App& app) {
     app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")->expected(3)->check(Finite());
     app.add_option("--target", target, "camera target x y z")->expected(3)->check(Finite());
     app.add_option("--up", up, "camera up vector x y z")->expected(3)->check(Finite());
     app.add_option("--fov", fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0));
 }
 
+trav::Camera CameraOptions::apply(trav::Camera c) const {
+    if (eye.size() == 3) c.eye = {eye[0], eye[1], eye[2]};
+    if (target.size() == 3) c.target = {target[0], target[1], target[2]};
+    if (up.size() == 3) c.up = {up[0], up[1], up[2]};
+    if (fov > 0.0f) c.fov_y_deg = fov;
+    return c;
+}
+
 trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
     trav::ProtocolConfig c = cfg;
-    c.camera = s.camera;
-    if (eye.size() == 3) c.camera.eye = {eye[0], eye[1], eye[2]};
-    if (target.size() == 3) c.camera.target = {target[0], target[1], target[2]};
-    if (up.size() == 3) c.camera.up = {up[0], up[1], up[2]};
-    if (fov > 0.0f) c.camera.fov_y_deg = fov;
+    c.camera = camera.apply(s.camera);
     c.ao_length = s.ao_length;
     return c;
 }

@@ -123,10 +123,18 @@ struct BuildOptions {
 };
 
 /// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.
+/// Camera overrides: --eye, --target, --up (3 floats each), --fov.
+struct CameraOptions {
+    std::vector<float> eye, target, up;  ///< empty = the scene's
+    float fov = 0.0f;                    ///< fov_y in degrees, 0 = the scene's
+    void add_to(CLI::App& app);
+    /// `scene_camera` with the overrides given.
+    trav::Camera apply(trav::Camera scene_camera) const;
+};
+
 struct RayOptions {
     trav::ProtocolConfig cfg;
-    std::vector<float> eye, target, up;  ///< camera overrides (3 floats each), empty = scene's
-    float fov = 0.0f;                    ///< override of fov_y in degrees, 0 = scene's
+    CameraOptions camera;
     void add_to(CLI::App& app);
     /// The protocol config for a scene: its camera and AO length unless overridden.
     trav::ProtocolConfig for_scene(const Scene& s) const;
