@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <map>
 #include <numeric>
 
 #include "accel/core/check.h"
@@ -76,12 +78,60 @@ std::vector<AliasEntry> build_alias_table(const std::vector<double>& weights) {
     return table;
 }
 
-RenderScene::RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky) : mesh_(mesh) {
+std::string resolve_texture_path(const std::string& base_dir, const std::string& name) {
+    std::string p = name;
+    std::replace(p.begin(), p.end(), '\\', '/');
+    const std::filesystem::path path(p);
+    if (path.is_absolute() || base_dir.empty()) return path.lexically_normal().string();
+    return (std::filesystem::path(base_dir) / path).lexically_normal().string();
+}
+
+void RenderScene::load_textures(const TextureOptions& opts) {
+    std::map<std::string, int32_t> loaded;  // resolved path -> texture index, or -1 when missing
+    for (size_t i = 0; i < mesh_.materials.size(); ++i) {
+        const std::string& name = mesh_.materials[i].diffuse_texture;
+        if (name.empty()) continue;
+        const std::string path = resolve_texture_path(opts.base_dir, name);
+        auto it = loaded.find(path);
+        if (it == loaded.end()) {
+            int32_t index = -1;
+            std::error_code ec;
+            if (std::filesystem::is_regular_file(path, ec)) {
+                const Image img = read_image(path);
+                for (const Vec3& p : img.pixels)
+                    if (!std::isfinite(p.x + p.y + p.z) || p.x < 0.0f || p.y < 0.0f || p.z < 0.0f)
+                        throw Error("texture " + path + " has a negative, NaN or infinite texel");
+                BVHLAB_CHECK(texels_.size() + img.pixels.size() < (size_t(1) << 32),
+                             "the textures hold 2^32 texels or more");
+                index = int32_t(textures_.size());
+                textures_.push_back({uint32_t(texels_.size()), img.width, img.height, 0});
+                texels_.insert(texels_.end(), img.pixels.begin(), img.pixels.end());
+            } else if (!opts.warn_missing) {
+                throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name +
+                            "') does not exist (--missing-textures warn renders with its Kd)");
+            } else if (opts.warnings) {
+                opts.warnings->push_back("texture " + path + " does not exist: material '" + mesh_.materials[i].name +
+                                         "' renders with its Kd");
+            }
+            it = loaded.emplace(path, index).first;
+        }
+        materials_[i + 1].texture = it->second;
+    }
+    if (textures_.empty()) return;
+    if (mesh_.texcoords.size() == 6 * mesh_.triangle_count())
+        texcoords_ = mesh_.texcoords;
+    else if (opts.warnings)
+        opts.warnings->push_back("the scene has map_Kd textures but no texture coordinates (vt): they render with Kd");
+}
+
+RenderScene::RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures)
+    : mesh_(mesh) {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot render a scene with no triangles");
     materials_.push_back(default_material());
     for (const accel::Material& m : mesh.materials) materials_.push_back(map_material(m, -1));
     material_ids_ = mesh.material_ids;
     if (material_ids_.size() != mesh.triangle_count()) material_ids_.assign(mesh.triangle_count(), -1);
+    load_textures(textures);
     std::vector<double> power;
     pick_pdf_.assign(mesh.triangle_count(), 0.0f);
     for (size_t t = 0; t < mesh.triangle_count(); ++t) {
@@ -182,6 +232,7 @@ SceneView RenderScene::view() const {
         v.lights.env = {env_.pixels.data(),  env_row_cdf_.data(), env_col_cdf_.data(), env_row_pdf_.data(),
                         env_col_pdf_.data(), env_.width,          env_.height};
     }
+    v.textures = {texels_.data(), textures_.data(), texcoords_.empty() ? nullptr : texcoords_.data()};
     v.offset = offset_;
     return v;
 }

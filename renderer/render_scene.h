@@ -8,6 +8,7 @@
 
 #include "accel/core/mesh.h"
 #include "renderer/core/stages.h"
+#include "renderer/core/texture.h"
 #include "renderer/image.h"
 #include "traversal/rays/raygen.h"
 
@@ -21,10 +22,23 @@ struct SkyOption {
     float env_scale = 1.0f;
 };
 
+/// How map_Kd textures are found.
+struct TextureOptions {
+    std::string base_dir;                          ///< the folder relative texture paths start from (the OBJ's)
+    bool warn_missing = false;                     ///< a missing file: a warning and the material's Kd, not an error
+    std::vector<std::string>* warnings = nullptr;  ///< one line per missing file, when warn_missing
+};
+
+/// A texture path as an MTL file writes it, as a path on this machine: backslashes (Windows
+/// exports) become slashes, and a relative path starts at base_dir.
+std::string resolve_texture_path(const std::string& base_dir, const std::string& name);
+
 class RenderScene {
 public:
-    /// Maps the materials and builds the light table. Throws bvhlab::Error for an empty mesh.
-    RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky);
+    /// Maps the materials, loads their map_Kd textures (through read_image, each file once) and
+    /// builds the light table. Throws bvhlab::Error for an empty mesh, a texture that cannot be
+    /// read or has a negative or non-finite texel, and a missing one unless warn_missing.
+    RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures = {});
 
     /// Views into this object's arrays (host memory); valid while it lives.
     SceneView view() const;
@@ -35,6 +49,10 @@ public:
     const std::vector<AliasEntry>& alias_table() const { return alias_; }
     const std::vector<float>& pick_pdf() const { return pick_pdf_; }
     const std::vector<int32_t>& material_ids() const { return material_ids_; }
+    const std::vector<Vec3>& texels() const { return texels_; }
+    const std::vector<TextureInfo>& textures() const { return textures_; }
+    /// The mesh's texture coordinates when some material has a texture, else empty.
+    const std::vector<float>& texcoords() const { return texcoords_; }
     Vec3 sky() const { return sky_; }
     float sky_pick() const { return sky_pick_; }
     float offset() const { return offset_; }
@@ -49,10 +67,14 @@ public:
 
 private:
     void build_env_tables();
+    void load_textures(const TextureOptions& opts);
 
     const accel::TriangleMesh& mesh_;
     std::vector<RenderMaterial> materials_;  // [0] default
     std::vector<int32_t> material_ids_;
+    std::vector<Vec3> texels_;
+    std::vector<TextureInfo> textures_;
+    std::vector<float> texcoords_;
     std::vector<uint32_t> light_tris_;
     std::vector<AliasEntry> alias_;
     std::vector<float> pick_pdf_;

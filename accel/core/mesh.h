@@ -40,6 +40,9 @@ struct TriangleMesh {
     std::vector<Vec3> vertices;
     std::vector<uint32_t> indices;      ///< 3 per triangle
     std::vector<int32_t> material_ids;  ///< one per triangle, -1 = none
+    /// Texture coordinates per corner, 6 floats per triangle (u0 v0 u1 v1 u2 v2), when the OBJ
+    /// has `vt` lines; empty otherwise. A face without `vt` references gets zeros.
+    std::vector<float> texcoords;
     std::vector<Material> materials;
     DropCounts dropped;
 

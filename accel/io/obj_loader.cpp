@@ -323,6 +323,7 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     if (nv) std::memcpy(mesh.vertices.data(), attrib.vertices.data(), nv * sizeof(Vec3));  // (null when empty)
     for (size_t v : non_finite)
         if (v < nv) mesh.vertices[v] = {NAN, NAN, NAN};
+    const size_t nt = attrib.texcoords.size() / 2;
     for (const auto& shape : shapes) {
         size_t offset = 0;
         for (size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
@@ -333,16 +334,25 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
                 continue;
             }
             uint32_t idx[3];
+            float uv[6] = {};
             for (int k = 0; k < 3; ++k) {
-                const int vi = shape.mesh.indices[offset + k].vertex_index;
+                const tinyobj::index_t& ref = shape.mesh.indices[offset + k];
+                const int vi = ref.vertex_index;
                 if (vi < 0 || size_t(vi) >= nv) throw Error("'" + path + "': face index out of range");
                 idx[k] = uint32_t(vi);
+                if (ref.texcoord_index >= 0) {
+                    if (size_t(ref.texcoord_index) >= nt)
+                        throw Error("'" + path + "': texture coordinate index out of range");
+                    uv[2 * k] = attrib.texcoords[2 * size_t(ref.texcoord_index)];
+                    uv[2 * k + 1] = attrib.texcoords[2 * size_t(ref.texcoord_index) + 1];
+                }
             }
             offset += 3;
             const TriangleCheck check =
                 check_triangle(mesh.vertices[idx[0]], mesh.vertices[idx[1]], mesh.vertices[idx[2]]);
             if (!count_drop(check, mesh.dropped)) continue;
             mesh.indices.insert(mesh.indices.end(), idx, idx + 3);
+            if (nt) mesh.texcoords.insert(mesh.texcoords.end(), uv, uv + 6);
             const int mat = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
             mesh.material_ids.push_back(mat >= 0 && size_t(mat) < materials.size() ? mat : -1);
         }

@@ -179,6 +179,9 @@ Entry parse_entry(const std::string& data) {
     if (e.h.triangles > (uint64_t(1) << 40)) throw Unusable{"its triangle count is implausible"};
     in.array(e.mesh.indices, 3 * e.h.triangles, "index");
     in.array(e.mesh.material_ids, e.h.triangles, "material id");
+    const auto has_texcoords = in.pod<uint8_t>();
+    if (has_texcoords > 1) throw Unusable{"its texture-coordinate flag is neither 0 nor 1"};
+    if (has_texcoords) in.array(e.mesh.texcoords, 6 * e.h.triangles, "texture coordinate");
     if (!in.at_end()) throw Unusable{"it has trailing bytes"};
     for (uint32_t i : e.mesh.indices)
         if (i >= e.mesh.vertices.size()) throw Unusable{"an index is out of range"};
@@ -238,6 +241,8 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
     out.array(load.mesh.vertices);
     out.array(load.mesh.indices);
     out.array(load.mesh.material_ids);
+    out.pod(uint8_t(!load.mesh.texcoords.empty()));
+    out.array(load.mesh.texcoords);
     const uint64_t sum = fnv1a_words(out.bytes().data(), out.bytes().size());
     out.pod(sum);
     std::error_code ec;

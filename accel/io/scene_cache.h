@@ -16,7 +16,7 @@
 
 namespace bvhlab::accel {
 
-constexpr uint32_t kSceneCacheVersion = 2;  // 2: the renderer's material parameters
+constexpr uint32_t kSceneCacheVersion = 3;  // 2: the renderer's material parameters; 3: texcoords
 
 /// $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab, else $HOME/.cache/bvhlab ("" when none is set).
 std::string default_scene_cache_dir();

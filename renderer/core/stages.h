@@ -14,6 +14,7 @@
 #include "renderer/core/bsdf.h"
 #include "renderer/core/camera.h"
 #include "renderer/core/lights.h"
+#include "renderer/core/texture.h"
 
 namespace bvhlab::render {
 
@@ -32,6 +33,7 @@ struct SceneView {
     const int32_t* material_ids;      ///< per triangle, -1 for none
     const RenderMaterial* materials;  ///< [0] is the default material, then the mesh's
     LightView lights;
+    TextureView textures;
     float offset;  ///< spawned rays start this far off the surface
 };
 
@@ -67,9 +69,10 @@ struct ShadeOut {
     Vec3* normal;  ///< per slot, or null: the first hit's normal, facing the camera
 };
 
-/// The reflectance a denoiser's albedo buffer shows for a material: the base colour of
-/// diffuse lobes, the reflectance of specular ones, white for glass.
-BVHLAB_HD inline Vec3 material_albedo(const RenderMaterial& m) {
+/// The reflectance a denoiser's albedo buffer shows for a material of base colour `base`
+/// (textured or not): the base colour of diffuse lobes, the reflectance of specular ones,
+/// white for glass.
+BVHLAB_HD inline Vec3 material_albedo(const RenderMaterial& m, Vec3 base) {
     switch (m.type) {
         case BsdfType::kMirror:
         case BsdfType::kConductor:
@@ -77,8 +80,17 @@ BVHLAB_HD inline Vec3 material_albedo(const RenderMaterial& m) {
         case BsdfType::kGlass:
             return splat(1.0f);
         default:
-            return m.base;
+            return base;
     }
+}
+
+/// The base colour at barycentrics (b1, b2) of triangle `tri`: its map_Kd texture when it has
+/// one and the mesh has texture coordinates (the texture replaces Kd), else Kd.
+BVHLAB_HD inline Vec3 base_colour(const SceneView& s, const RenderMaterial& m, uint32_t tri, float b1, float b2) {
+    if (m.texture < 0 || !s.textures.texcoords) return m.base;
+    float u, v;
+    triangle_texcoords(s.textures.texcoords, tri, b1, b2, u, v);
+    return sample_texture(s.textures.texels, s.textures.info[m.texture], u, v);
 }
 
 BVHLAB_HD inline const RenderMaterial& material_of(const SceneView& s, uint32_t tri) {
@@ -144,8 +156,9 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     const Vec3 ng = cr * (1.0f / area2);
     const Vec3 pos = ray.org + ray.dir * hit.t;
     const RenderMaterial& m = material_of(s, tri);
+    const Vec3 base = base_colour(s, m, tri, hit.u, hit.v);
     if (bounce == 0 && albedo) {
-        albedo[px] = material_albedo(m);
+        albedo[px] = material_albedo(m, base);
         normal[px] = dot(ng, ray.dir) > 0.0f ? ng * -1.0f : ng;
     }
     Vec3 add = splat(0.0f);
@@ -165,7 +178,6 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     const Vec3 n = opaque && dot(ng, wo) < 0.0f ? ng * -1.0f : ng;
     const Frame frame = Frame::around(n);
     const Vec3 wo_l = frame.to_local(wo);
-    const Vec3 base = m.base;
     const uint32_t pixel = pixel_of(p, px), sample = sample_of(p, px);
     auto rnd = [&](uint32_t d) { return rand01(pixel, sample, bounce_dim(bounce, d), p.seed); };
 

@@ -27,6 +27,9 @@ struct DeviceScene {
     DeviceBuffer<float> pick_pdf;
     DeviceBuffer<Vec3> env;
     DeviceBuffer<float> env_row_cdf, env_col_cdf, env_row_pdf, env_col_pdf;
+    DeviceBuffer<Vec3> texels;
+    DeviceBuffer<TextureInfo> textures;
+    DeviceBuffer<float> texcoords;
     SceneView view;
 
     explicit DeviceScene(const RenderScene& s)
@@ -41,7 +44,10 @@ struct DeviceScene {
           env_row_cdf(s.env_row_cdf()),
           env_col_cdf(s.env_col_cdf()),
           env_row_pdf(s.env_row_pdf()),
-          env_col_pdf(s.env_col_pdf()) {
+          env_col_pdf(s.env_col_pdf()),
+          texels(s.texels()),
+          textures(s.textures()),
+          texcoords(s.texcoords()) {
         view = s.view();  // the host view's scalars, then the device pointers
         view.vertices = vertices.data();
         view.indices = indices.data();
@@ -55,6 +61,7 @@ struct DeviceScene {
         view.lights.env.col_cdf = env_col_cdf.data();
         view.lights.env.row_pdf = env_row_pdf.data();
         view.lights.env.col_pdf = env_col_pdf.data();
+        view.textures = {texels.data(), textures.data(), s.texcoords().empty() ? nullptr : texcoords.data()};
     }
 };
 

@@ -158,6 +158,23 @@ TEST(ObjLoader, KeepsTheRenderersMaterialParameters) {
     EXPECT_EQ(x.diffuse_texture, "textures\\wood.png");
 }
 
+// Texture coordinates per corner, as the faces reference them; a face without vt gets zeros,
+// a file without vt none at all, and a vt reference past the end is an error.
+TEST(ObjLoader, KeepsTextureCoordinatesPerCorner) {
+    test::TempFile obj("uv.obj",
+                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\n"
+                       "f 1/1 2/2 3/3\nf 2 4 3\nf 2/3 4/2 3/-3\n");
+    const accel::TriangleMesh m = accel::load_obj(obj.path());
+    ASSERT_EQ(m.triangle_count(), 3u);
+    const std::vector<float> want = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f, 0,    0,    0,
+                                     0,    0,    0,    0.5f, 0.6f, 0.3f, 0.4f, 0.1f, 0.2f};
+    EXPECT_EQ(m.texcoords, want);
+    test::TempFile plain("no_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    EXPECT_TRUE(accel::load_obj(plain.path()).texcoords.empty());
+    test::TempFile bad("bad_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/5 3/1\n");
+    EXPECT_THROW(accel::load_obj(bad.path()), Error);
+}
+
 TEST(ObjLoader, WriteThenLoadIsExact) {
     accel::TriangleMesh a = test::mesh_of({{0.1f, 0.2f, 0.3f, 1.0f / 3.0f, 0, 0, 0, 1e-7f, 5}});
     TempFile f("roundtrip.obj");

@@ -34,8 +34,8 @@ struct Fixture {
               "newmtl red\nKd 0.9 0.1 0.1\nKe 1 2 3\nKs 0.5 0.4 0.3\nKa 0.1 0.2 0.3\nNs 250\nNi 1.33\nd 0.75\n"
               "illum 7\nmap_Kd tex\\red.png\n");
         write(obj,
-              "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 2\nv nan 0 0\n"
-              "usemtl red\nf 1 2 3\nf 2 4 3\nf 1 5 6\nf 1 2 2\n");
+              "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 2\nv nan 0 0\nvt 0.25 0.5\nvt 1 0\n"
+              "usemtl red\nf 1/1 2/2 3/1\nf 2 4 3\nf 1 5 6\nf 1 2 2\n");
     }
     ~Fixture() { fs::remove_all(dir); }
     static void write(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
@@ -53,6 +53,7 @@ void expect_same(const SceneLoad& a, const SceneLoad& b) {
     EXPECT_EQ(0, std::memcmp(a.mesh.vertices.data(), b.mesh.vertices.data(), a.mesh.vertices.size() * sizeof(Vec3)));
     EXPECT_EQ(a.mesh.indices, b.mesh.indices);
     EXPECT_EQ(a.mesh.material_ids, b.mesh.material_ids);
+    EXPECT_EQ(a.mesh.texcoords, b.mesh.texcoords);
     ASSERT_EQ(a.mesh.materials.size(), b.mesh.materials.size());
     for (size_t i = 0; i < a.mesh.materials.size(); ++i) {
         EXPECT_EQ(a.mesh.materials[i].name, b.mesh.materials[i].name);

@@ -284,6 +284,16 @@ if "$bin" render "$tmp/nomtl.obj" --missing-textures warn --width 4 --height 4 -
 else
     fail=$((fail + 1)); echo "FAIL render --missing-textures warn"; sed 's/^/    /' "$tmp/err" | head -3
 fi
+mkdir -p "$tmp/texq"
+printf 'newmtl t\nKd 0.5 0.5 0.5\nmap_Kd maps\\gone.png\n' >"$tmp/texq/q.mtl"
+printf 'mtllib q.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl t\nf 1/1 2/1 3/1\n' >"$tmp/texq/q.obj"
+expect_error render-missing-texture "texture .*texq/maps/gone[.]png .*does not exist" render "$tmp/texq/q.obj" -o "$tmp/x.pfm"
+if "$bin" render "$tmp/texq/q.obj" --missing-textures warn --width 4 --height 4 --spp 1 -o "$tmp/warn_tex.pfm" \
+    2>"$tmp/err" >/dev/null && grep -q "warning: texture .*maps/gone.png does not exist" "$tmp/err" && [ -s "$tmp/warn_tex.pfm" ]; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL render --missing-textures warn (texture)"; sed 's/^/    /' "$tmp/err" | head -3
+fi
 expect_error render-missing-env "--env .*nope[.]exr: no such file" render "$data/cornell_box.obj" --env "$tmp/nope.exr" -o "$tmp/x.pfm"
 expect_error render-env-and-sky "excludes|--sky" render "$data/cornell_box.obj" --env "$tmp/nope.exr" --sky 1 1 1 -o "$tmp/x.pfm"
 printf 'PF\n2 1\n-1.0\n' >"$tmp/bad_env.pfm"

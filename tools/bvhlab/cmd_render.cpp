@@ -118,8 +118,9 @@ void register_render(CLI::App& app, Globals& g) {
         ->expected(2)
         ->check(FiniteRange(0.0, 1.0));
     sub->add_option("--missing-textures", o->missing,
-                    "a material file (or texture) the scene names but that does not exist: error (default), or warn "
-                    "and render with the default material, one warning per file")
+                    "a material file, map_Kd texture or --env map that does not exist: error (default), or warn "
+                    "and render without it (the default material, the material's Kd, the default sky), one warning "
+                    "per file")
         ->check(CLI::IsMember({"error", "warn"}))
         ->capture_default_str();
     sub->add_flag("--aov", o->aov,
@@ -201,7 +202,14 @@ void register_render(CLI::App& app, Globals& g) {
                              o->env.c_str());
             }
         }
-        render::RenderScene rscene(s.mesh, sky);
+        render::TextureOptions topts;
+        topts.base_dir = std::filesystem::path(s.source).parent_path().string();
+        topts.warn_missing = o->missing == "warn";
+        std::vector<std::string> texture_warnings;
+        topts.warnings = &texture_warnings;
+        render::RenderScene rscene(s.mesh, sky, topts);
+        if (!g.quiet)
+            for (const std::string& w : texture_warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
         if (!g.quiet) std::fprintf(stderr, "[bvhlab] lighting: %s\n", rscene.lighting().c_str());
         o->rs.strategy = o->strategy == "mis"    ? render::Strategy::kMis
                          : o->strategy == "bsdf" ? render::Strategy::kBsdfOnly
@@ -283,6 +291,7 @@ void register_render(CLI::App& app, Globals& g) {
                         {"height", rscene.env().height},
                         {"scale", o->env_scale}};
         j["emissive_triangles"] = rscene.light_tris().size();
+        j["textures"] = rscene.textures().size();
         j["out"] = o->out;
         j["rays"] = res.rays();
         j["ms"] = {{"total", res.ms_total},           {"generate", res.ms_generate}, {"extend", res.ms_extend},
