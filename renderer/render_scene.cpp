@@ -265,6 +265,7 @@ CameraData make_camera(const trav::Camera& cam, uint32_t width, uint32_t height,
     c.shutter_close = lens.shutter_close;
     c.width = width;
     c.height = height;
+    c.pixel_centres = lens.pixel_centres ? 1u : 0u;
     return c;
 }
 

@@ -96,6 +96,7 @@ struct LensOptions {
     Vec3 eye_end{0.0f, 0.0f, 0.0f};
     bool moving = false;  ///< eye_end is where the eye is at shutter time 1
     float shutter_open = 0.0f, shutter_close = 1.0f;
+    bool pixel_centres = false;  ///< no sub-pixel jitter (what the first-hit cache needs)
 };
 
 /// CameraData for `cam` (the catalogue's or the framing camera) and an image size. Throws

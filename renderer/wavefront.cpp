@@ -64,9 +64,13 @@ struct HostPaths {
 
 }  // namespace
 
-void check_settings(const RenderSettings& s) {
+void check_settings(const RenderSettings& s, const CameraData& camera) {
     BVHLAB_CHECK(s.spp >= 1, "--spp must be at least 1");
     BVHLAB_CHECK(s.max_depth >= 1 && s.max_depth <= 1024, "--max-depth must be in [1, 1024]");
+    BVHLAB_CHECK(!s.first_hit_cache || camera_rays_repeat(camera),
+                 "--first-hit-cache needs camera rays that repeat: pixel centres, no --aperture and no --eye-end");
+    BVHLAB_CHECK(s.compaction || s.dump_rays_dir.empty(),
+                 "--dump-rays needs compaction (without it the queues hold dead paths' placeholder rays)");
     if (s.dump_rays_dir.empty()) return;
     std::error_code ec;
     std::filesystem::create_directories(s.dump_rays_dir, ec);
@@ -106,7 +110,8 @@ void finish_result(RenderResult& res, const PixelTotals& t, uint32_t width, uint
             res.normal.pixels[px] = len > 0.0f ? t.normal[px] * (1.0f / len) : splat(0.0f);
         }
     }
-    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0) res.bounces.pop_back();
+    while (!res.bounces.empty() && res.bounces.back().extension_rays == 0 && res.bounces.back().queue_entries == 0)
+        res.bounces.pop_back();
 }
 
 uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic) {
@@ -126,7 +131,9 @@ uint64_t RenderResult::rays() const {
 
 RenderResult render_host(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
                          trav::Tracer& extend, trav::Tracer& shadow, const RenderProgress& progress) {
-    check_settings(settings);
+    check_settings(settings, camera);
+    BVHLAB_CHECK(!settings.sort_by_material && settings.compaction,
+                 "--sort-materials and --no-compaction apply to --device gpu");
     const auto t_start = Clock::now();
     const uint32_t npix = camera.width * camera.height;
     const uint32_t wave = wave_samples(settings, npix, default_wave(false, npix));
@@ -140,6 +147,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
     totals.albedo.assign(settings.aovs ? npix : 0, splat(0.0f));
     totals.normal.assign(totals.albedo.size(), splat(0.0f));
     std::vector<trav::Ray> shadow_rays;  // reused by every bounce
+    std::vector<trav::Hit> first_hits;   // the first-hit cache: one per pixel, once traced
     RenderResult res;
     res.wave_samples = wave;
     res.bounces.resize(settings.max_depth);
@@ -159,12 +167,22 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
         res.ms_generate += ms_since(t0);
         for (uint32_t bounce = 0; bounce < settings.max_depth && !paths.ray.empty(); ++bounce) {
             const size_t n = paths.ray.size();
-            res.bounces[bounce].extension_rays += n;
+            res.bounces[bounce].queue_entries += n;
             if (pass == 0) dump_rays(settings, "extension", bounce, paths.ray, trav::Query::kClosest);
             t0 = Clock::now();
-            extend.set_rays(paths.ray, trav::Query::kClosest);
-            extend.run();
-            extend.hits(paths.hit);
+            if (bounce == 0 && !first_hits.empty()) {
+                // Bounce 0 holds slot i at entry i, and slot i is pixel i % npix.
+                paths.hit.resize(n);
+                parallel(n, [&](uint32_t i) { paths.hit[i] = first_hits[i % npix]; });
+                res.cached_hits += n;
+            } else {
+                res.bounces[bounce].extension_rays += n;
+                extend.set_rays(paths.ray, trav::Query::kClosest);
+                extend.run();
+                extend.hits(paths.hit);
+                if (bounce == 0 && settings.first_hit_cache)
+                    first_hits.assign(paths.hit.begin(), paths.hit.begin() + npix);
+            }
             res.ms_extend += ms_since(t0);
 
             t0 = Clock::now();

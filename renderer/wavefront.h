@@ -30,12 +30,23 @@ struct RenderSettings {
     /// (the GPU: enough for about 2M paths; the CPU: 1).
     uint32_t wave_samples = 0;
     bool aovs = false;  ///< also the first hits' albedo and normal, averaged per pixel
+    /// The camera rays' hits traced once and reused by every later sample. Needs a camera whose
+    /// rays repeat (camera_rays_repeat: pixel centres, pinhole, still), so it costs the
+    /// anti-aliasing; the image equals the same camera's without the cache.
+    bool first_hit_cache = false;
+    /// GPU only: each bounce's paths sorted by the material they hit (CUB radix sort) before
+    /// shading, which then reads them in that order.
+    bool sort_by_material = false;
+    /// GPU only: false keeps dead paths in the queues (placeholder rays that miss at once), the
+    /// baseline of the compaction experiment. The image is the same either way.
+    bool compaction = true;
 };
 
 /// Per bounce: rays traced (extension rays = paths alive), summed over the passes.
 struct BounceStats {
-    uint64_t extension_rays = 0;
+    uint64_t extension_rays = 0;  ///< live paths traced (cached first hits not included)
     uint64_t shadow_rays = 0;
+    uint64_t queue_entries = 0;  ///< extension queue entries launched: with compaction, the live paths
 };
 
 struct RenderResult {
@@ -44,6 +55,7 @@ struct RenderResult {
     Image albedo, normal;       ///< with RenderSettings::aovs: mean albedo, normalised mean normal
     uint32_t spp = 0;           ///< samples per pixel done
     uint32_t wave_samples = 0;  ///< samples per pixel traced per pass
+    uint64_t cached_hits = 0;   ///< camera rays answered from the first-hit cache, not traced
     std::vector<BounceStats> bounces;
     double ms_generate = 0, ms_extend = 0, ms_shade = 0, ms_shadow = 0, ms_compact = 0, ms_accumulate = 0;
     double ms_setup = 0;  ///< before the first pass: uploads, allocations, the first launches
@@ -64,9 +76,10 @@ inline uint32_t default_wave(bool gpu, uint32_t pixels) {
 /// spp and at least 1. Throws bvhlab::Error when the wave would hold 2^31 paths or more.
 uint32_t wave_samples(const RenderSettings& s, uint32_t pixels, uint32_t automatic);
 
-/// What both drivers check and prepare before a render: spp, max depth, the --dump-rays
+/// What both drivers check and prepare before a render: spp, max depth, that the first-hit
+/// cache has a camera whose rays repeat, that --dump-rays has compaction, and the --dump-rays
 /// folder (created). Throws bvhlab::Error naming the problem.
-void check_settings(const RenderSettings& s);
+void check_settings(const RenderSettings& s, const CameraData& camera);
 
 /// --dump-rays: one bounce's rays as DIR/KIND-bounceN.rays (nothing when no folder is set or
 /// there are no rays).

@@ -20,12 +20,21 @@ struct CameraData {
     float focus_distance;               ///< along the view axis
     float shutter_open, shutter_close;  ///< in [0, 1]: the part of the eye's motion the frame sees
     uint32_t width, height;
+    uint32_t pixel_centres;  ///< 1: every sample through its pixel's centre (no anti-aliasing)
 };
+
+/// Whether every sample of a pixel gets the same camera ray: pixel centres, a pinhole and an
+/// eye that does not move. The first-hit cache needs it.
+BVHLAB_HD inline bool camera_rays_repeat(const CameraData& c) {
+    return c.pixel_centres && c.lens_radius == 0.0f && c.eye0.x == c.eye1.x && c.eye0.y == c.eye1.y &&
+           c.eye0.z == c.eye1.z;
+}
 
 /// The ray of one sample of pixel `pixel` (row-major), with its numbers from rand01.
 BVHLAB_HD inline trav::Ray camera_ray(const CameraData& c, uint32_t pixel, uint32_t sample, uint32_t seed) {
     const uint32_t x = pixel % c.width, y = pixel / c.width;
-    const float jx = rand01(pixel, sample, kDimPixelX, seed), jy = rand01(pixel, sample, kDimPixelY, seed);
+    const float jx = c.pixel_centres ? 0.5f : rand01(pixel, sample, kDimPixelX, seed);
+    const float jy = c.pixel_centres ? 0.5f : rand01(pixel, sample, kDimPixelY, seed);
     const float sx = (2.0f * (float(x) + jx) / float(c.width) - 1.0f) * c.tan_half_fov_y * c.aspect;
     const float sy = (1.0f - 2.0f * (float(y) + jy) / float(c.height)) * c.tan_half_fov_y;
     const float ut = rand01(pixel, sample, kDimTime, seed);

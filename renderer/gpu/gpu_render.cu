@@ -103,7 +103,7 @@ void dump_queue(const RenderSettings& s, const char* kind, uint32_t bounce, trav
 RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, const RenderSettings& settings,
                         const trav::DeviceStructure& structure, const trav::KernelInfo& kernel,
                         const trav::GpuTraceOptions& opts, const RenderProgress& progress) {
-    check_settings(settings);
+    check_settings(settings, camera);
     trav::check_kernel_fits(kernel, structure.layout(), structure.depth(), opts);
     using Clock = std::chrono::steady_clock;
     const auto t_start = Clock::now();
@@ -124,10 +124,33 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     DeviceBuffer<uint32_t> shadow_slot(cap), next_ray_counter(1);
     const size_t aov_slots = settings.aovs ? cap : 0, aov_pixels = settings.aovs ? npix : 0;
     DeviceBuffer<Vec3> albedo(aov_slots), normal(aov_slots), albedo_sum(aov_pixels), normal_sum(aov_pixels);
-    DeviceBuffer<unsigned long long> ext_stats(settings.max_depth), shadow_stats(settings.max_depth);
+    DeviceBuffer<unsigned long long> ext_stats(settings.max_depth), shadow_stats(settings.max_depth),
+        queue_stats(settings.max_depth);
     for (auto* b : {&radiance, &sum, &sum_sq, &albedo_sum, &normal_sum}) b->fill_bytes(0, stream);
-    ext_stats.fill_bytes(0, stream);
-    shadow_stats.fill_bytes(0, stream);
+    for (auto* b : {&ext_stats, &shadow_stats, &queue_stats}) b->fill_bytes(0, stream);
+    // Without compaction: the live paths and shadow rays each bounce leaves, counted apart
+    // from the queues (which keep every entry).
+    DeviceBuffer<uint32_t> live_counts(settings.compaction ? 0 : 4);
+    // The material sort's keys, orders and CUB scratch.
+    const size_t sort_n = settings.sort_by_material ? cap : 0;
+    DeviceBuffer<uint32_t> sort_keys[2] = {DeviceBuffer<uint32_t>(sort_n), DeviceBuffer<uint32_t>(sort_n)};
+    DeviceBuffer<uint32_t> sort_order[2] = {DeviceBuffer<uint32_t>(sort_n), DeviceBuffer<uint32_t>(sort_n)};
+    gpu::MaterialSortBuffers sort{};
+    DeviceBuffer<unsigned char> sort_temp;
+    if (settings.sort_by_material) {
+        sort.bits = gpu::material_sort_bits(scene.materials().size());
+        sort.temp_bytes = gpu::material_sort_temp_bytes(cap, sort.bits);
+        sort_temp = DeviceBuffer<unsigned char>(sort.temp_bytes);
+        sort = {sort_keys[0].data(),
+                sort_keys[1].data(),
+                sort_order[0].data(),
+                sort_order[1].data(),
+                sort_temp.data(),
+                sort.temp_bytes,
+                sort.bits};
+    }
+    // The first-hit cache: one hit per pixel, filled by pass 0's camera rays.
+    DeviceBuffer<trav::Hit> first_hits(settings.first_hit_cache ? npix : 0);
 
     Vec3* const slot_albedo = settings.aovs ? albedo.data() : nullptr;
     Vec3* const slot_normal = settings.aovs ? normal.data() : nullptr;
@@ -145,11 +168,12 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     RenderResult res;
     res.wave_samples = wave;
     auto read_bounces = [&] {
-        std::vector<unsigned long long> ec, sc;
+        std::vector<unsigned long long> ec, sc, qc;
         ext_stats.download(ec);
         shadow_stats.download(sc);
+        queue_stats.download(qc);
         res.bounces.assign(settings.max_depth, {});
-        for (uint32_t b = 0; b < settings.max_depth; ++b) res.bounces[b] = {ec[b], sc[b]};
+        for (uint32_t b = 0; b < settings.max_depth; ++b) res.bounces[b] = {ec[b], sc[b], qc[b]};
     };
     auto collect = [&](const Timeline& t, uint32_t samples) {
         t.wait(last);
@@ -180,18 +204,39 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         for (uint32_t b = 0; b < settings.max_depth; ++b) {
             const size_t e = 2 + per_bounce * b;
             const int nxt = 1 - cur;
-            gpu::launch_add_count(ext[cur].view().count, ext_stats.data() + b, stream);
+            uint32_t* const queue_count = ext[cur].view().count;
+            // The live paths: the queue's count, except without compaction after bounce 0.
+            const uint32_t* live = settings.compaction || b == 0 ? queue_count : live_counts.data() + 2 * cur;
+            gpu::launch_add_count(queue_count, queue_stats.data() + b, stream);
             if (pass == 0) dump_queue(settings, "extension", b, ext[cur], trav::Query::kClosest);
-            gpu::extend(structure, kernel, ext[cur], trav::Query::kClosest, next_ray_counter, opts, stream);
+            if (b == 0 && settings.first_hit_cache && pass > 0) {
+                gpu::launch_cached_hits(first_hits.data(), npix, ext[cur].view().hits, queue_count, cap, stream);
+                res.cached_hits += uint64_t(npix) * k;
+            } else {
+                gpu::launch_add_count(live, ext_stats.data() + b, stream);
+                gpu::extend(structure, kernel, ext[cur], trav::Query::kClosest, next_ray_counter, opts, stream);
+                if (b == 0 && settings.first_hit_cache)
+                    BVHLAB_CUDA_CHECK(cudaMemcpyAsync(first_hits.data(), ext[cur].view().hits, npix * sizeof(trav::Hit),
+                                                      cudaMemcpyDeviceToDevice, static_cast<cudaStream_t>(stream)));
+            }
             t.mark(e);
             trav::detail::fill_device_bytes(ext[nxt].view().count, 0, sizeof(uint32_t), stream);
             trav::detail::fill_device_bytes(shadow_q.view().count, 0, sizeof(uint32_t), stream);
+            uint32_t* const next_live = settings.compaction ? nullptr : live_counts.data() + 2 * nxt;
+            if (next_live) trav::detail::fill_device_bytes(next_live, 0, 2 * sizeof(uint32_t), stream);
+            const uint32_t* order = nullptr;
+            if (settings.sort_by_material) {
+                gpu::launch_material_sort(ext[cur].view().hits, ds.view.material_ids, queue_count, cap, sort, stream);
+                order = sort.order_out;
+            }
             const gpu::NextQueues q{path_set(nxt),     ext[nxt].view().count, shadow_q.view().rays,
-                                    shadow_rad.data(), shadow_slot.data(),    shadow_q.view().count};
-            gpu::launch_shade(b, ds.view, pp, path_set(cur), q, radiance.data(), slot_albedo, slot_normal,
-                              ext[cur].view().count, cap, stream);
+                                    shadow_rad.data(), shadow_slot.data(),    shadow_q.view().count,
+                                    next_live};
+            gpu::launch_shade(b, ds.view, pp, path_set(cur), order, q, radiance.data(), slot_albedo, slot_normal,
+                              queue_count, cap, stream);
             t.mark(e + 1);
-            gpu::launch_add_count(shadow_q.view().count, shadow_stats.data() + b, stream);
+            gpu::launch_add_count(settings.compaction ? shadow_q.view().count : next_live + 1, shadow_stats.data() + b,
+                                  stream);
             if (pass == 0) dump_queue(settings, "shadow", b, shadow_q, trav::Query::kAny);
             gpu::extend(structure, kernel, shadow_q, trav::Query::kAny, next_ray_counter, opts, stream);
             gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_slot.data(), shadow_rad.data(), radiance.data(),

@@ -25,11 +25,42 @@ struct NextQueues {
     Vec3* shadow_radiance;
     uint32_t* shadow_slot;
     uint32_t* shadow_count;
+    /// Null: compact (the default). Otherwise every entry keeps its place, dead ones as
+    /// placeholders, both queues keep the current count, and the live paths and shadow rays are
+    /// counted here instead ([0] and [1]).
+    uint32_t* live_counts;
 };
 
-/// shade.cu: shade() for i < *d_count, its results compacted into `q` (compact.cuh).
-void launch_shade(uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths, NextQueues q,
-                  Vec3* radiance, Vec3* albedo, Vec3* normal, const uint32_t* d_count, uint32_t capacity, void* stream);
+/// shade.cu: shade() for i < *d_count, path order[i] (or i when order is null), its results
+/// compacted into `q` (compact.cuh) or kept in place (q.live_counts).
+void launch_shade(uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths, const uint32_t* order,
+                  NextQueues q, Vec3* radiance, Vec3* albedo, Vec3* normal, const uint32_t* d_count, uint32_t capacity,
+                  void* stream);
+
+/// sort.cu: the buffers of the material sort, each of the wave's capacity, and CUB's scratch.
+struct MaterialSortBuffers {
+    uint32_t *keys_in, *keys_out, *order_in, *order_out;
+    void* temp;
+    size_t temp_bytes;
+    int bits;  ///< material_sort_bits
+};
+
+/// The key bits a sort over `materials` materials needs (misses, the default material, the
+/// mesh's, and the past-the-end key).
+int material_sort_bits(size_t materials);
+
+/// CUB's scratch bytes for a sort of `capacity` keys of `bits` bits.
+size_t material_sort_temp_bytes(uint32_t capacity, int bits);
+
+/// sort.cu: b.order_out = the entries i < *d_count ordered by the material of hits[i], stably
+/// (misses first), then the entries past the count.
+void launch_material_sort(const trav::Hit* hits, const int32_t* material_ids, const uint32_t* d_count,
+                          uint32_t capacity, const MaterialSortBuffers& b, void* stream);
+
+/// cache.cu: hits[i] = first_hits[i % npix] for i < *d_count (the first-hit cache at bounce 0,
+/// where entry i is slot i).
+void launch_cached_hits(const trav::Hit* first_hits, uint32_t npix, trav::Hit* hits, const uint32_t* d_count,
+                        uint32_t capacity, void* stream);
 
 /// shadow.cu: resolve_shadow for i < *d_count.
 void launch_resolve_shadow(const trav::Hit* occlusion, const uint32_t* slot, const Vec3* shadow_radiance,

@@ -55,12 +55,21 @@ RenderResult cpu_reference(const Scene& s, uint32_t w, uint32_t h, const RenderS
 }
 
 RenderResult gpu_render(const Scene& s, uint32_t w, uint32_t h, const RenderSettings& rs, const std::string& kernel,
-                        const SkyOption& sky = {}) {
+                        const SkyOption& sky = {}, const LensOptions& lens = {}) {
     const trav::KernelInfo& k = trav::find_kernel(kernel);
     const trav::Structure st = trav::make_structure(s.mesh, k.layout, accel::BuilderKind::kBinned);
     const trav::DeviceStructure device(st);
     const RenderScene scene(s.mesh, sky);
-    return render_gpu(scene, make_camera(s.camera, w, h, {}), rs, device, k);
+    return render_gpu(scene, make_camera(s.camera, w, h, lens), rs, device, k);
+}
+
+/// The same image, bit for bit (the switches reorder work, never a path's arithmetic).
+void expect_identical(const RenderResult& a, const RenderResult& b, const char* what) {
+    ASSERT_EQ(a.mean.pixels.size(), b.mean.pixels.size()) << what;
+    size_t differ = 0;
+    for (size_t i = 0; i < a.mean.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) differ += a.mean.pixels[i][c] != b.mean.pixels[i][c];
+    EXPECT_EQ(differ, 0u) << what << ": channels that differ";
 }
 
 // Independent seeds on the two devices, so the comparison is a real test of the means.
@@ -135,6 +144,93 @@ TEST(GpuRender, AlbedoAndNormalBuffersMatchTheCpu) {
         }
         EXPECT_LT(diff, 0.01 * total);
     }
+}
+
+// Material sorting, no compaction and the first-hit cache change the order and amount of work,
+// never the image; the counts show each switch did what it says.
+TEST(GpuRender, SortingCompactionAndTheFirstHitCacheLeaveTheImageUnchanged) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    const uint32_t w = 32, h = 24, npix = w * h;
+    LensOptions centres;
+    centres.pixel_centres = true;  // what the cache needs; the other runs use it too
+    for (const Scene& s : scenes(false)) {
+        SCOPED_TRACE(s.name);
+        RenderSettings rs;
+        rs.spp = 8;
+        rs.wave_samples = 4;
+        rs.max_depth = 6;
+        const RenderResult base = gpu_render(s, w, h, rs, "dynamic-speculative-fma", {}, centres);
+        ASSERT_GE(base.bounces.size(), 3u);
+        for (const BounceStats& b : base.bounces) EXPECT_EQ(b.queue_entries, b.extension_rays);
+
+        RenderSettings sorted = rs;
+        sorted.sort_by_material = true;
+        const RenderResult so = gpu_render(s, w, h, sorted, "dynamic-speculative-fma", {}, centres);
+        expect_identical(base, so, "sorted by material");
+
+        RenderSettings open = rs;
+        open.compaction = false;
+        const RenderResult oc = gpu_render(s, w, h, open, "dynamic-speculative-fma", {}, centres);
+        expect_identical(base, oc, "no compaction");
+        ASSERT_EQ(oc.bounces.size(), size_t(rs.max_depth));
+        for (size_t b = 0; b < oc.bounces.size(); ++b) {
+            const BounceStats want = b < base.bounces.size() ? base.bounces[b] : BounceStats{};
+            EXPECT_EQ(oc.bounces[b].extension_rays, want.extension_rays) << "bounce " << b;
+            EXPECT_EQ(oc.bounces[b].shadow_rays, want.shadow_rays) << "bounce " << b;
+            EXPECT_EQ(oc.bounces[b].queue_entries, uint64_t(npix) * rs.spp) << "bounce " << b;  // never shrinks
+        }
+
+        RenderSettings cached = rs;
+        cached.first_hit_cache = true;
+        const RenderResult ca = gpu_render(s, w, h, cached, "dynamic-speculative-fma", {}, centres);
+        expect_identical(base, ca, "first-hit cache");
+        EXPECT_EQ(ca.cached_hits, uint64_t(npix) * 4);                // the second pass's camera rays
+        EXPECT_EQ(ca.bounces[0].extension_rays, uint64_t(npix) * 4);  // only the first pass traced
+        for (size_t b = 1; b < base.bounces.size(); ++b)
+            EXPECT_EQ(ca.bounces[b].extension_rays, base.bounces[b].extension_rays);
+    }
+    // Jittered samples do not repeat: the cache refuses them.
+    RenderSettings rs;
+    rs.first_hit_cache = true;
+    EXPECT_THROW(gpu_render(scenes(false).at(0), w, h, rs, "dynamic-speculative-fma"), Error);
+}
+
+// A map_Kd texture on the GPU: the same albedo buffer as the CPU's and the same image within
+// noise (a quad with a 4 x 1 texture, framed exactly, under the white sky).
+TEST(GpuRender, TexturesAgreeWithTheCpu) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    test::TempFile tex("gpu_stripes.pfm");
+    Image img(4, 1);
+    img.pixels = {{0.8f, 0.1f, 0.1f}, {0.6f, 0.3f, 0.1f}, {0.1f, 0.8f, 0.1f}, {0.1f, 0.3f, 0.9f}};
+    write_image(img, tex.path());
+    Scene s;
+    s.name = "textured quad";
+    s.mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+    s.mesh.indices = {0, 1, 2, 0, 2, 3};
+    s.mesh.texcoords = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
+    s.mesh.material_ids = {0, 0};
+    accel::Material m;
+    m.name = "striped";
+    m.diffuse_texture = tex.path();
+    s.mesh.materials = {m};
+    s.camera.eye = {0.0f, 0.0f, 3.0f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_y_deg = float(2.0 * std::atan(1.0 / 3.0) * 180.0 / M_PI);
+    RenderSettings rs;
+    rs.spp = 256;
+    rs.max_depth = 3;
+    rs.aovs = true;
+    const RenderResult cpu = cpu_reference(s, 16, 8, rs);
+    rs.seed = 2;
+    const RenderResult gpu = gpu_render(s, 16, 8, rs, "dynamic-speculative-fma");
+    double diff = 0.0;
+    for (size_t i = 0; i < cpu.albedo.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) diff += std::fabs(gpu.albedo.pixels[i][c] - cpu.albedo.pixels[i][c]);
+    EXPECT_LT(diff / double(3 * cpu.albedo.pixels.size()), 0.01);  // other seeds: other jitter
+    EXPECT_GT(cpu.albedo.at(2, 4).x, 0.7f);                        // the texture, not the grey default
+    EXPECT_LT(cpu.albedo.at(2, 4).y, 0.2f);
+    const Comparison c = compare_renders(cpu, gpu);
+    EXPECT_TRUE(c.agree) << c.summary();
 }
 
 // The same comparison fails for a GPU render with a planted bug.

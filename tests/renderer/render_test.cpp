@@ -329,6 +329,49 @@ TEST(Render, AlbedoAndNormalBuffers) {
     EXPECT_TRUE(render(s.mesh, s.cam, 16, rs).albedo.pixels.empty());
 }
 
+// The first-hit cache: camera rays through pixel centres traced once, then reused; the image is
+// that of the same camera without the cache, bit for bit. A jittered camera is refused, and the
+// GPU-only switches are refused on the CPU.
+TEST(Render, FirstHitCacheReusesTheCameraRaysHits) {
+    const SceneSetup s = cornell();
+    const uint32_t size = 16, npix = size * size;
+    LensOptions centres;
+    centres.pixel_centres = true;
+    const RenderScene scene(s.mesh, {});
+    trav::EmbreeOracle oracle(s.mesh);
+    auto tracer = trav::make_embree_tracer(oracle, false);
+    RenderSettings rs;
+    rs.spp = 6;
+    const CameraData cam = make_camera(s.cam, size, size, centres);
+    const RenderResult plain = render_host(scene, cam, rs, *tracer, *tracer);
+    rs.first_hit_cache = true;
+    const RenderResult cached = render_host(scene, cam, rs, *tracer, *tracer);
+    for (size_t i = 0; i < npix; ++i)
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(plain.mean.pixels[i][c], cached.mean.pixels[i][c]) << "pixel " << i;
+    EXPECT_EQ(cached.cached_hits, uint64_t(npix) * 5);  // one sample per pass on the CPU: 5 passes cached
+    EXPECT_EQ(cached.bounces[0].extension_rays, npix);
+    EXPECT_EQ(cached.bounces[0].queue_entries, uint64_t(npix) * 6);
+    EXPECT_EQ(plain.bounces[0].extension_rays, uint64_t(npix) * 6);
+    EXPECT_EQ(cached.bounces[1].extension_rays, plain.bounces[1].extension_rays);
+    // The pixel-centre image is not the jittered one (the cache costs the anti-aliasing).
+    rs.first_hit_cache = false;
+    const RenderResult jittered = render_host(scene, make_camera(s.cam, size, size, {}), rs, *tracer, *tracer);
+    size_t differ = 0;
+    for (size_t i = 0; i < npix; ++i) differ += jittered.mean.pixels[i].x != plain.mean.pixels[i].x;
+    EXPECT_GT(differ, npix / 2);
+    rs.first_hit_cache = true;
+    EXPECT_THROW(render_host(scene, make_camera(s.cam, size, size, {}), rs, *tracer, *tracer), Error);
+    LensOptions lens = centres;
+    lens.aperture_radius = 5.0f;
+    EXPECT_THROW(render_host(scene, make_camera(s.cam, size, size, lens), rs, *tracer, *tracer), Error);
+    rs.first_hit_cache = false;
+    rs.sort_by_material = true;
+    EXPECT_THROW(render_host(scene, cam, rs, *tracer, *tracer), Error);
+    rs.sort_by_material = false;
+    rs.compaction = false;
+    EXPECT_THROW(render_host(scene, cam, rs, *tracer, *tracer), Error);
+}
+
 // A sky-lit scene with no emitters gets the white sky; one with emitters a black sky.
 TEST(Render, DefaultSkyRule) {
     accel::Material grey;

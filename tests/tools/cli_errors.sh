@@ -294,6 +294,9 @@ if "$bin" render "$tmp/texq/q.obj" --missing-textures warn --width 4 --height 4 
 else
     fail=$((fail + 1)); echo "FAIL render --missing-textures warn (texture)"; sed 's/^/    /' "$tmp/err" | head -3
 fi
+expect_error render-cache-lens "--first-hit-cache needs camera rays that repeat" render "$data/cornell_box.obj" --first-hit-cache --aperture 2 -o "$tmp/x.pfm"
+expect_error render-sort-cpu "--sort-materials and --no-compaction apply to --device gpu" render "$data/cornell_box.obj" --sort-materials -o "$tmp/x.pfm"
+expect_error render-no-compaction-cpu "--sort-materials and --no-compaction apply to --device gpu" render "$data/cornell_box.obj" --no-compaction -o "$tmp/x.pfm"
 expect_error render-missing-env "--env .*nope[.]exr: no such file" render "$data/cornell_box.obj" --env "$tmp/nope.exr" -o "$tmp/x.pfm"
 expect_error render-env-and-sky "excludes|--sky" render "$data/cornell_box.obj" --env "$tmp/nope.exr" --sky 1 1 1 -o "$tmp/x.pfm"
 printf 'PF\n2 1\n-1.0\n' >"$tmp/bad_env.pfm"

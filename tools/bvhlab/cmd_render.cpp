@@ -20,7 +20,7 @@ namespace {
 
 struct RenderOpts {
     std::string scene, out, dump_rays, strategy = "mis", cost_image, missing = "error";
-    bool aov = false;
+    bool aov = false, pixel_centres = false, no_compaction = false;
     BuildOptions build;
     TraceOptions trace;
     uint32_t width = 640, height = 480;
@@ -130,6 +130,16 @@ void register_render(CLI::App& app, Globals& g) {
         "--cost-image", o->cost_image,
         "write the primary rays' traversal cost per pixel (R: interior nodes visited, G: triangle tests, B: "
         "leaves), counted by the structure's shared CPU traversal");
+    sub->add_flag("--pixel-centres", o->pixel_centres,
+                  "every sample through its pixel's centre: no anti-aliasing (what --first-hit-cache implies)");
+    sub->add_flag("--first-hit-cache", o->rs.first_hit_cache,
+                  "trace the camera rays' hits once and reuse them in every later sample; implies --pixel-centres and "
+                  "needs a pinhole, still camera");
+    sub->add_flag("--sort-materials", o->rs.sort_by_material,
+                  "gpu: sort each bounce's paths by the material they hit (CUB radix sort) before shading");
+    sub->add_flag("--no-compaction", o->no_compaction,
+                  "gpu: keep dead paths in the queues instead of compacting them (the compaction experiment's "
+                  "baseline; the image is the same)");
     sub->add_option("--dump-rays", o->dump_rays,
                     "folder: write the first sample pass's extension and shadow rays of every bounce as ray files");
     sub->add_option("--strategy", o->strategy,
@@ -183,6 +193,8 @@ void register_render(CLI::App& app, Globals& g) {
             lens.shutter_open = o->shutter[0];
             lens.shutter_close = o->shutter[1];
         }
+        lens.pixel_centres = o->pixel_centres || o->rs.first_hit_cache;
+        o->rs.compaction = !o->no_compaction;
         const render::CameraData cd = render::make_camera(cam, o->width, o->height, lens);
         render::SkyOption sky;
         if (o->sky.size() == 3) {
@@ -266,7 +278,9 @@ void register_render(CLI::App& app, Globals& g) {
 
         nlohmann::json bounces = nlohmann::json::array();
         for (const render::BounceStats& b : res.bounces)
-            bounces.push_back({{"extension_rays", b.extension_rays}, {"shadow_rays", b.shadow_rays}});
+            bounces.push_back({{"extension_rays", b.extension_rays},
+                               {"shadow_rays", b.shadow_rays},
+                               {"queue_entries", b.queue_entries}});
         nlohmann::json j = base_record("render", s);
         if (reference) {
             j["device"] = "cpu";
@@ -283,6 +297,11 @@ void register_render(CLI::App& app, Globals& g) {
         j["seed"] = o->rs.seed;
         j["wave_samples"] = res.wave_samples;
         j["strategy"] = o->strategy;
+        j["pixel_centres"] = lens.pixel_centres;
+        j["first_hit_cache"] = o->rs.first_hit_cache;
+        j["cached_hits"] = res.cached_hits;
+        j["sort_materials"] = o->rs.sort_by_material;
+        j["compaction"] = o->rs.compaction;
         j["lighting"] = rscene.lighting();
         j["sky"] = vec_json(rscene.sky());
         if (rscene.env().width > 0)
