@@ -17,11 +17,13 @@
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
-#   render    the GPU path tracer on data/'s Cornell box and glass-and-mirror scene and the named
-#             scenes (640x480, RENDER_SPP, max depth 8; render.jsonl, images in renders.tar.xz),
-#             then the dumped rays of every bounce through `bvhlab bench` with the same kernel
-#             (render_bench.jsonl): the render's Mrays/s against the extend kernel's own; and
-#             compute-sanitizer memcheck of one small render
+#   render    the renderer's experiment on data/'s Cornell box (open and closed) and
+#             glass-and-mirror scene and the named scenes, 640x480, max depth 8: a timed render
+#             (RENDER_SPP, default 512; render.jsonl, images in renders.tar.xz); the first wave's
+#             dumped rays of every bounce through every kernel (render_bench.jsonl); the
+#             switches (SWITCH_SPP, default 128; render_switches.jsonl): material sorting, the
+#             first-hit cache, no compaction; and compute-sanitizer memcheck of small renders.
+#             experiments/render_report.py turns OUT into the README's renderer section
 # GPU_TESTS: a gtest filter for the tests phase (default: all). BENCH_KERNELS: the kernels of
 # bvhbench and cwbench (default: all).
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
@@ -164,32 +166,54 @@ if has sanitize; then
 fi
 
 if has render; then
+    # The renderer's experiment (issue 19), one run that experiments/render_report.py turns
+    # into the README's renderer section and its plots.
     kernel=${RENDER_KERNEL:-dynamic-speculative-fma}
+    switch_spp=${SWITCH_SPP:-128}
     mkdir -p /tmp/renders
-    for s in "$BVHLAB_DATA/cornell_box.obj" "$BVHLAB_DATA/glass_mirror.obj" "${names[@]}"; do
+    rm -f /tmp/renders/*
+    run_render() {  # OUTPUT.jsonl SCENE IMAGE ARGS...: one render, its JSON line appended
+        local o=$1 s=$2 img=$3
+        shift 3
+        "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 --max-depth 8 \
+            -o "$img" --json "$@" >>"$o" 2>>"$out/render.err" || status=1
+    }
+    for s in "$BVHLAB_DATA/cornell_box.obj" "$BVHLAB_DATA/cornell_closed.obj" "$BVHLAB_DATA/glass_mirror.obj" \
+        "${names[@]}"; do
         n=$(basename "$s" .obj)
         log "render $n"
         d=$rays/render-$n
         rm -rf "$d"
-        # Timed without --dump-rays (dumping copies every queue back and writes files inside
-        # the pass); then the first wave again, dumped, for the kernel-only figure.
-        "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 \
-            --spp "${RENDER_SPP:-64}" --max-depth 8 -o "/tmp/renders/$n.pfm" --json \
-            >>"$out/render.jsonl" 2>>"$out/render.err" || status=1
+        # 1. Overhead: timed without --dump-rays (dumping copies every queue back and writes
+        #    files inside the pass); then the first wave again, dumped, for the kernel-only figure.
+        run_render "$out/render.jsonl" "$s" "/tmp/renders/$n.pfm" --spp "${RENDER_SPP:-512}"
         "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 \
             --spp 6 --wave 6 --max-depth 8 --dump-rays "$d" -o "/tmp/renders/$n-dump.pfm" \
             >>"$out/render.err" 2>&1 || status=1
+        # 2. Every bounce's rays through every BVH2 kernel and the CWBVH one (the coherence
+        #    report on real path-tracer rays); each record names its ray file.
         for f in "$d"/*.rays; do
-            # Each record names its ray file (ray_file): the bounce and extension or shadow.
-            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel "$kernel" --runs 5 --json \
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel all --runs 3 --json \
+                >>"$out/render_bench.jsonl" || status=1
+            "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel dynamic-cwbvh --runs 3 --json \
                 >>"$out/render_bench.jsonl" || status=1
         done
+        # 3. The switches, all through pixel centres so that the first-hit cache compares
+        #    like with like: plain, material sorting, the first-hit cache, both, no compaction.
+        for v in "" "--sort-materials" "--first-hit-cache" "--sort-materials --first-hit-cache" "--no-compaction"; do
+            # shellcheck disable=SC2086
+            run_render "$out/render_switches.jsonl" "$s" /tmp/renders/switch.pfm --spp "$switch_spp" --pixel-centres $v
+        done
     done
-    rm -f /tmp/renders/*-dump.pfm
+    rm -f /tmp/renders/*-dump.pfm /tmp/renders/switch.pfm
     tar cJf "$out/renders.tar.xz" -C /tmp/renders . || status=1
     log "render compute-sanitizer memcheck"
     compute-sanitizer --tool memcheck --error-exitcode 3 "$bin/bvhlab" -q render "$BVHLAB_DATA/glass_mirror.obj" \
-        --device gpu --width 64 --height 48 --spp 4 -o /tmp/renders/sanitized.pfm >>"$out/render.err" 2>&1 || status=1
+        --device gpu --width 64 --height 48 --spp 4 --sort-materials -o /tmp/renders/sanitized.pfm \
+        >>"$out/render.err" 2>&1 || status=1
+    compute-sanitizer --tool memcheck --error-exitcode 3 "$bin/bvhlab" -q render "$BVHLAB_DATA/cornell_box.obj" \
+        --device gpu --width 64 --height 48 --spp 4 --no-compaction --first-hit-cache -o /tmp/renders/sanitized.pfm \
+        >>"$out/render.err" 2>&1 || status=1
     grep -E "ERROR SUMMARY" "$out/render.err" | tee -a "$out/summary.txt"
 fi
 

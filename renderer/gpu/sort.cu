@@ -35,10 +35,9 @@ int material_sort_bits(size_t materials) {
 
 size_t material_sort_temp_bytes(uint32_t capacity, int bits) {
     size_t bytes = 0;
-    BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, static_cast<const uint32_t*>(nullptr),
-                                                      static_cast<uint32_t*>(nullptr),
-                                                      static_cast<const uint32_t*>(nullptr),
-                                                      static_cast<uint32_t*>(nullptr), capacity, 0, bits));
+    BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(
+        nullptr, bytes, static_cast<const uint32_t*>(nullptr), static_cast<uint32_t*>(nullptr),
+        static_cast<const uint32_t*>(nullptr), static_cast<uint32_t*>(nullptr), capacity, 0, bits));
     return bytes;
 }
 

@@ -46,6 +46,12 @@ std::vector<Scene> scenes(bool with_benchmarks) {
     return out;
 }
 
+Scene scene_named(const std::string& name) {
+    for (Scene& s : scenes(false))
+        if (s.name == name) return std::move(s);
+    throw Error("no scene " + name + " in data/scenes.json");
+}
+
 RenderResult cpu_reference(const Scene& s, uint32_t w, uint32_t h, const RenderSettings& rs,
                            const SkyOption& sky = {}) {
     const RenderScene scene(s.mesh, sky);
@@ -111,7 +117,7 @@ TEST(GpuRender, AgreesUnderAnEnvironmentMap) {
     write_image(map, file.path());
     SkyOption sky;
     sky.env_file = file.path();
-    const Scene s = scenes(false).at(1);  // the glass-and-mirror scene: open at the front
+    const Scene s = scene_named("glass-mirror");  // open at the front
     RenderSettings rs;
     rs.spp = 256;
     const RenderResult cpu = cpu_reference(s, 32, 24, rs, sky);
@@ -192,7 +198,7 @@ TEST(GpuRender, SortingCompactionAndTheFirstHitCacheLeaveTheImageUnchanged) {
     // Jittered samples do not repeat: the cache refuses them.
     RenderSettings rs;
     rs.first_hit_cache = true;
-    EXPECT_THROW(gpu_render(scenes(false).at(0), w, h, rs, "dynamic-speculative-fma"), Error);
+    EXPECT_THROW(gpu_render(scene_named("cornell-box"), w, h, rs, "dynamic-speculative-fma"), Error);
 }
 
 // A map_Kd texture on the GPU: the same albedo buffer as the CPU's and the same image within
@@ -236,7 +242,7 @@ TEST(GpuRender, TexturesAgreeWithTheCpu) {
 // The same comparison fails for a GPU render with a planted bug.
 TEST(GpuRender, APlantedBugFailsTheComparison) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    const Scene s = scenes(false).at(0);
+    const Scene s = scene_named("cornell-box");
     RenderSettings rs;
     rs.spp = 256;
     const RenderResult cpu = cpu_reference(s, 32, 24, rs);
