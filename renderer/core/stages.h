@@ -102,7 +102,7 @@ BVHLAB_HD inline uint32_t sample_of(const PathParams& p, uint32_t slot) { return
 
 /// Stage "generate": slot i's camera ray.
 BVHLAB_HD inline void generate_path(uint32_t i, const CameraData& cam, const PathParams& p, PathView paths) {
-    paths.ray[i] = camera_ray(cam, pixel_of(p, i), sample_of(p, i), p.seed);
+    trav::store_ray(paths.ray, i, camera_ray(cam, pixel_of(p, i), sample_of(p, i), p.seed));
     paths.throughput[i] = splat(1.0f);
     paths.slot[i] = i;
     paths.prev_pdf[i] = 0.0f;
@@ -133,8 +133,8 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     ShadeResult out;
     out.alive = false;
     out.shadow = false;
-    const trav::Ray ray = paths.ray[i];
-    const trav::Hit hit = paths.hit[i];
+    const trav::Ray ray = trav::load_ray(paths.ray, i);
+    const trav::Hit hit = trav::load_hit(paths.hit, i);
     Vec3 beta = paths.throughput[i];
     const uint32_t px = paths.slot[i];
     const float prev_pdf = paths.prev_pdf[i];
@@ -254,12 +254,12 @@ BVHLAB_HD inline void shade_path(uint32_t i, uint32_t bounce, const SceneView& s
     out.alive[i] = r.alive;
     out.shadow[i] = r.shadow;
     if (r.alive) {
-        out.next_ray[i] = r.next_ray;
+        trav::store_ray(out.next_ray, i, r.next_ray);
         out.next_throughput[i] = r.next_throughput;
         out.next_pdf[i] = r.next_pdf;
     }
     if (r.shadow) {
-        out.shadow_ray[i] = r.shadow_ray;
+        trav::store_ray(out.shadow_ray, i, r.shadow_ray);
         out.shadow_radiance[i] = r.shadow_radiance;
     }
 }

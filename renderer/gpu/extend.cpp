@@ -5,10 +5,8 @@
 namespace bvhlab::render::gpu {
 
 void extend(const trav::DeviceStructure& structure, const trav::KernelInfo& kernel, trav::RayQueue& queue,
-            trav::Query query, trav::DeviceBuffer<uint32_t>& next_ray, const trav::GpuTraceOptions& opts,
-            void* stream) {
-    next_ray.fill_bytes(0, stream);  // persistent kernels fetch rays from this counter
-    trav::launch_on_queue(structure, kernel, queue, query, next_ray.data(), opts, stream);
+            trav::Query query, uint32_t* next_ray, const trav::GpuTraceOptions& opts, void* stream) {
+    trav::launch_on_queue(structure, kernel, queue, query, next_ray, opts, stream);
 }
 
 }  // namespace bvhlab::render::gpu

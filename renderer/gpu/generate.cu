@@ -6,8 +6,10 @@
 namespace bvhlab::render::gpu {
 namespace {
 
-__global__ void generate_kernel(CameraData cam, PathParams p, PathView paths, uint32_t n, uint32_t* count) {
+__global__ void generate_kernel(CameraData cam, PathParams p, PathView paths, uint32_t n, uint32_t* count,
+                                Chores chores) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    do_chores(chores);
     if (i == 0) *count = n;
     if (i < n) generate_path(i, cam, p, paths);
 }
@@ -15,8 +17,9 @@ __global__ void generate_kernel(CameraData cam, PathParams p, PathView paths, ui
 }  // namespace
 
 void launch_generate(const CameraData& cam, const PathParams& p, PathView paths, uint32_t paths_n, uint32_t* d_count,
-                     void* stream) {
-    generate_kernel<<<stage_blocks(paths_n), kStageBlock, 0, as_stream(stream)>>>(cam, p, paths, paths_n, d_count);
+                     const Chores& chores, void* stream) {
+    generate_kernel<<<stage_blocks(paths_n), kStageBlock, 0, as_stream(stream)>>>(cam, p, paths, paths_n, d_count,
+                                                                                  chores);
     BVHLAB_CHECK_LAUNCH();
 }
 

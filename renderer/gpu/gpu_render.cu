@@ -116,12 +116,15 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     // Path state in two sets: the shade stage reads set `cur` and writes the survivors into
     // the other, compacted (compact.cuh).
     trav::RayQueue ext[2] = {trav::RayQueue(cap), trav::RayQueue(cap)};
-    trav::RayQueue shadow_q(cap);
+    // Two shadow queues, by bounce parity, so that the resolve stage can zero the next
+    // bounce's count while its own is still read.
+    trav::RayQueue shadow_q[2] = {trav::RayQueue(cap), trav::RayQueue(cap)};
     DeviceBuffer<Vec3> tp[2] = {DeviceBuffer<Vec3>(cap), DeviceBuffer<Vec3>(cap)};
     DeviceBuffer<float> pdf[2] = {DeviceBuffer<float>(cap), DeviceBuffer<float>(cap)};
     DeviceBuffer<uint32_t> slot[2] = {DeviceBuffer<uint32_t>(cap), DeviceBuffer<uint32_t>(cap)};
     DeviceBuffer<Vec3> shadow_rad(cap), radiance(cap), sum(npix), sum_sq(npix);
-    DeviceBuffer<uint32_t> shadow_slot(cap), next_ray_counter(1);
+    // The persistent kernels' fetch counters, one per trace of a pass, zeroed by generate.
+    DeviceBuffer<uint32_t> shadow_slot(cap), trace_counters(2 * settings.max_depth);
     const size_t aov_slots = settings.aovs ? cap : 0, aov_pixels = settings.aovs ? npix : 0;
     DeviceBuffer<Vec3> albedo(aov_slots), normal(aov_slots), albedo_sum(aov_pixels), normal_sum(aov_pixels);
     DeviceBuffer<unsigned long long> ext_stats(settings.max_depth), shadow_stats(settings.max_depth),
@@ -199,29 +202,37 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         const uint32_t k = std::min(wave, settings.spp - enqueued);
         int cur = 0;
         t.mark(0);
-        gpu::launch_generate(camera, pp, path_set(cur), npix * k, ext[cur].view().count, stream);
+        gpu::Chores gen;  // the counts bounce 0 needs at zero, and every trace's fetch counter
+        gen.zero[0] = ext[1].view().count;
+        gen.zero[1] = shadow_q[0].view().count;
+        gen.zero_run = trace_counters.data();
+        gen.zero_run_n = 2 * settings.max_depth;
+        gpu::launch_generate(camera, pp, path_set(cur), npix * k, ext[cur].view().count, gen, stream);
         t.mark(1);
         for (uint32_t b = 0; b < settings.max_depth; ++b) {
             const size_t e = 2 + per_bounce * b;
-            const int nxt = 1 - cur;
+            const int nxt = 1 - cur, sq = int(b % 2);
+            trav::RayQueue& shadows = shadow_q[sq];
             uint32_t* const queue_count = ext[cur].view().count;
             // The live paths: the queue's count, except without compaction after bounce 0.
             const uint32_t* live = settings.compaction || b == 0 ? queue_count : live_counts.data() + 2 * cur;
-            gpu::launch_add_count(queue_count, queue_stats.data() + b, stream);
+            gpu::Chores shade_chores;  // the bounce's totals, added by the shade kernel
+            shade_chores.total[0] = queue_stats.data() + b;
+            shade_chores.count[0] = queue_count;
             if (pass == 0) dump_queue(settings, "extension", b, ext[cur], trav::Query::kClosest);
             if (b == 0 && settings.first_hit_cache && pass > 0) {
                 gpu::launch_cached_hits(first_hits.data(), npix, ext[cur].view().hits, queue_count, cap, stream);
                 res.cached_hits += uint64_t(npix) * k;
             } else {
-                gpu::launch_add_count(live, ext_stats.data() + b, stream);
-                gpu::extend(structure, kernel, ext[cur], trav::Query::kClosest, next_ray_counter, opts, stream);
+                shade_chores.total[1] = ext_stats.data() + b;
+                shade_chores.count[1] = live;
+                gpu::extend(structure, kernel, ext[cur], trav::Query::kClosest, trace_counters.data() + 2 * b, opts,
+                            stream);
                 if (b == 0 && settings.first_hit_cache)
                     BVHLAB_CUDA_CHECK(cudaMemcpyAsync(first_hits.data(), ext[cur].view().hits, npix * sizeof(trav::Hit),
                                                       cudaMemcpyDeviceToDevice, static_cast<cudaStream_t>(stream)));
             }
             t.mark(e);
-            trav::detail::fill_device_bytes(ext[nxt].view().count, 0, sizeof(uint32_t), stream);
-            trav::detail::fill_device_bytes(shadow_q.view().count, 0, sizeof(uint32_t), stream);
             uint32_t* const next_live = settings.compaction ? nullptr : live_counts.data() + 2 * nxt;
             if (next_live) trav::detail::fill_device_bytes(next_live, 0, 2 * sizeof(uint32_t), stream);
             const uint32_t* order = nullptr;
@@ -229,18 +240,21 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
                 gpu::launch_material_sort(ext[cur].view().hits, ds.view.material_ids, queue_count, cap, sort, stream);
                 order = sort.order_out;
             }
-            const gpu::NextQueues q{path_set(nxt),     ext[nxt].view().count, shadow_q.view().rays,
-                                    shadow_rad.data(), shadow_slot.data(),    shadow_q.view().count,
+            const gpu::NextQueues q{path_set(nxt),     ext[nxt].view().count, shadows.view().rays,
+                                    shadow_rad.data(), shadow_slot.data(),    shadows.view().count,
                                     next_live};
             gpu::launch_shade(b, ds.view, pp, path_set(cur), order, q, radiance.data(), slot_albedo, slot_normal,
-                              queue_count, cap, stream);
+                              queue_count, cap, shade_chores, stream);
             t.mark(e + 1);
-            gpu::launch_add_count(settings.compaction ? shadow_q.view().count : next_live + 1, shadow_stats.data() + b,
-                                  stream);
-            if (pass == 0) dump_queue(settings, "shadow", b, shadow_q, trav::Query::kAny);
-            gpu::extend(structure, kernel, shadow_q, trav::Query::kAny, next_ray_counter, opts, stream);
-            gpu::launch_resolve_shadow(shadow_q.view().hits, shadow_slot.data(), shadow_rad.data(), radiance.data(),
-                                       shadow_q.view().count, cap, stream);
+            if (pass == 0) dump_queue(settings, "shadow", b, shadows, trav::Query::kAny);
+            gpu::extend(structure, kernel, shadows, trav::Query::kAny, trace_counters.data() + 2 * b + 1, opts, stream);
+            gpu::Chores resolve_chores;  // the shadow total; the counts the next bounce fills, zeroed
+            resolve_chores.total[0] = shadow_stats.data() + b;
+            resolve_chores.count[0] = settings.compaction ? shadows.view().count : next_live + 1;
+            resolve_chores.zero[0] = queue_count;
+            resolve_chores.zero[1] = shadow_q[1 - sq].view().count;
+            gpu::launch_resolve_shadow(shadows.view().hits, shadow_slot.data(), shadow_rad.data(), radiance.data(),
+                                       shadows.view().count, cap, resolve_chores, stream);
             t.mark(e + 2);
             cur = nxt;
         }

@@ -12,9 +12,21 @@
 
 namespace bvhlab::render::gpu {
 
-/// generate.cu: the camera rays of the pass's first `paths_n` slots; sets *d_count to paths_n.
+/// Bookkeeping that the first thread of a stage kernel does besides the stage: per-bounce
+/// totals and the counters later stages need at zero. Each is a launch saved (a 1-thread kernel
+/// or a memset costs 2-3 us of GPU time between dependent kernels; NOTES.md, session 16).
+struct Chores {
+    unsigned long long* total[2] = {nullptr, nullptr};  ///< total[k] += *count[k] where both are set
+    const uint32_t* count[2] = {nullptr, nullptr};
+    uint32_t* zero[2] = {nullptr, nullptr};  ///< set to 0 where set
+    uint32_t* zero_run = nullptr;            ///< zero_run[0 .. zero_run_n) set to 0
+    uint32_t zero_run_n = 0;
+};
+
+/// generate.cu: the camera rays of the pass's first `paths_n` slots; sets *d_count to paths_n
+/// and does `chores`.
 void launch_generate(const CameraData& cam, const PathParams& p, PathView paths, uint32_t paths_n, uint32_t* d_count,
-                     void* stream);
+                     const Chores& chores, void* stream);
 
 /// Where the shade stage writes: the next bounce's paths and the shadow rays, each queue with
 /// its device count (zeroed before the launch; the kernel reserves places with atomics).
@@ -35,7 +47,7 @@ struct NextQueues {
 /// compacted into `q` (compact.cuh) or kept in place (q.live_counts).
 void launch_shade(uint32_t bounce, const SceneView& s, const PathParams& p, PathView paths, const uint32_t* order,
                   NextQueues q, Vec3* radiance, Vec3* albedo, Vec3* normal, const uint32_t* d_count, uint32_t capacity,
-                  void* stream);
+                  const Chores& chores, void* stream);
 
 /// sort.cu: the buffers of the material sort, each of the wave's capacity, and CUB's scratch.
 struct MaterialSortBuffers {
@@ -64,13 +76,11 @@ void launch_cached_hits(const trav::Hit* first_hits, uint32_t npix, trav::Hit* h
 
 /// shadow.cu: resolve_shadow for i < *d_count.
 void launch_resolve_shadow(const trav::Hit* occlusion, const uint32_t* slot, const Vec3* shadow_radiance,
-                           Vec3* radiance, const uint32_t* d_count, uint32_t capacity, void* stream);
+                           Vec3* radiance, const uint32_t* d_count, uint32_t capacity, const Chores& chores,
+                           void* stream);
 
 /// accumulate.cu: accumulate_pixel for every pixel, over the pass's `samples` slots of each.
 void launch_accumulate(Vec3* radiance, const Vec3* albedo, const Vec3* normal, const PixelSums& sums, uint32_t npix,
                        uint32_t samples, void* stream);
-
-/// counts.cu: *d_total += *d_count (per-bounce ray counts, read once at the end).
-void launch_add_count(const uint32_t* d_count, unsigned long long* d_total, void* stream);
 
 }  // namespace bvhlab::render::gpu

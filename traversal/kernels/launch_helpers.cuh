@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// What every trace kernel shares: 16-byte ray loads and hit stores, the one-thread-per-ray
+// What every trace kernel shares: 16-byte ray loads and hit stores (traversal/device/ray.h), the one-thread-per-ray
 // launch and the persistent-threads wrapper (Aila & Laine 2009, section 4), each around any
 // per-ray functor `Hit f(const Ray&)`. A kernel file only picks a functor and registers it.
 #pragma once
@@ -14,18 +14,6 @@
 #include "traversal/gpu/registry.h"
 
 namespace bvhlab::trav {
-
-/// A 32-byte ray as two 16-byte loads through the read-only path.
-__device__ __forceinline__ Ray load_ray(const Ray* rays, uint32_t i) {
-    const float4* p = reinterpret_cast<const float4*>(rays + i);
-    const float4 a = __ldg(p), b = __ldg(p + 1);
-    return {{a.x, a.y, a.z}, a.w, {b.x, b.y, b.z}, b.w};
-}
-
-/// A 16-byte hit as one 16-byte store.
-__device__ __forceinline__ void store_hit(Hit* hits, uint32_t i, const Hit& h) {
-    reinterpret_cast<float4*>(hits)[i] = make_float4(__int_as_float(h.tri), h.t, h.u, h.v);
-}
 
 /// One thread per ray; threads past the device-side count return at once.
 template <class PerRay>
