@@ -21,8 +21,9 @@
 #             glass-and-mirror scene and the named scenes, 640x480, max depth 8: a timed render
 #             (RENDER_SPP, default 512; render.jsonl, images in renders.tar.xz); the first wave's
 #             dumped rays of every bounce through every kernel (render_bench.jsonl); the
-#             switches (SWITCH_SPP, default 128; render_switches.jsonl): material sorting, the
-#             first-hit cache, no compaction; and compute-sanitizer memcheck of small renders.
+#             switches (SWITCH_SPP, default 256, three rounds; render_switches.jsonl): material
+#             sorting, the first-hit cache, no compaction; and compute-sanitizer memcheck of
+#             small renders.
 #             experiments/render_report.py turns OUT into the README's renderer section
 # GPU_TESTS: a gtest filter for the tests phase (default: all). BENCH_KERNELS: the kernels of
 # bvhbench and cwbench (default: all).
@@ -169,7 +170,7 @@ if has render; then
     # The renderer's experiment (issue 19), one run that experiments/render_report.py turns
     # into the README's renderer section and its plots.
     kernel=${RENDER_KERNEL:-dynamic-speculative-fma}
-    switch_spp=${SWITCH_SPP:-128}
+    switch_spp=${SWITCH_SPP:-256}
     mkdir -p /tmp/renders
     rm -f /tmp/renders/*
     run_render() {  # OUTPUT.jsonl SCENE IMAGE ARGS...: one render, its JSON line appended
@@ -199,10 +200,14 @@ if has render; then
                 >>"$out/render_bench.jsonl" || status=1
         done
         # 3. The switches, all through pixel centres so that the first-hit cache compares
-        #    like with like: plain, material sorting, the first-hit cache, both, no compaction.
-        for v in "" "--sort-materials" "--first-hit-cache" "--sort-materials --first-hit-cache" "--no-compaction"; do
-            # shellcheck disable=SC2086
-            run_render "$out/render_switches.jsonl" "$s" /tmp/renders/switch.pfm --spp "$switch_spp" --pixel-centres $v
+        #    like with like: plain, material sorting, the first-hit cache, both, no compaction;
+        #    three rounds, interleaved (the report takes each variant's median).
+        for round in 1 2 3; do
+            for v in "" "--sort-materials" "--first-hit-cache" "--sort-materials --first-hit-cache" "--no-compaction"; do
+                # shellcheck disable=SC2086
+                run_render "$out/render_switches.jsonl" "$s" /tmp/renders/switch.pfm --spp "$switch_spp" \
+                    --pixel-centres $v
+            done
         done
     done
     rm -f /tmp/renders/*-dump.pfm /tmp/renders/switch.pfm
