@@ -278,22 +278,23 @@ expect_error render-bad-strategy "strategy" render "$data/cornell_box.obj" --str
 expect_error render-cost-bad-ext "cannot write .*cost[.]xyz" render "$data/cornell_box.obj" --cost-image "$tmp/cost.xyz" -o "$tmp/x.pfm"
 printf 'mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n' >"$tmp/nomtl.obj"
 expect_error render-missing-mtl "material file .*gone[.]mtl does not exist" render "$tmp/nomtl.obj" -o "$tmp/x.pfm"
-if "$bin" render "$tmp/nomtl.obj" --missing-textures warn --width 4 --height 4 --spp 1 -o "$tmp/warn.pfm" \
-    2>"$tmp/err" >/dev/null && grep -q "warning: material file .*gone.mtl" "$tmp/err" && [ -s "$tmp/warn.pfm" ]; then
-    pass=$((pass + 1))
-else
-    fail=$((fail + 1)); echo "FAIL render --missing-textures warn"; sed 's/^/    /' "$tmp/err" | head -3
-fi
+# A render that warns about a missing file and still writes its image.
+expect_warned_render() {
+    local name=$1 pattern=$2 scene=$3 image=$4
+    if "$bin" render "$scene" --missing-textures warn --width 4 --height 4 --spp 1 -o "$image" \
+        2>"$tmp/err" >/dev/null && grep -q -- "$pattern" "$tmp/err" && [ -s "$image" ]; then
+        pass=$((pass + 1))
+    else
+        fail=$((fail + 1)); echo "FAIL $name"; sed 's/^/    /' "$tmp/err" | head -3
+    fi
+}
+expect_warned_render render-missing-mtl-warn "warning: material file .*gone.mtl" "$tmp/nomtl.obj" "$tmp/warn.pfm"
 mkdir -p "$tmp/texq"
 printf 'newmtl t\nKd 0.5 0.5 0.5\nmap_Kd maps\\gone.png\n' >"$tmp/texq/q.mtl"
 printf 'mtllib q.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl t\nf 1/1 2/1 3/1\n' >"$tmp/texq/q.obj"
 expect_error render-missing-texture "texture .*texq/maps/gone[.]png .*does not exist" render "$tmp/texq/q.obj" -o "$tmp/x.pfm"
-if "$bin" render "$tmp/texq/q.obj" --missing-textures warn --width 4 --height 4 --spp 1 -o "$tmp/warn_tex.pfm" \
-    2>"$tmp/err" >/dev/null && grep -q "warning: texture .*maps/gone.png does not exist" "$tmp/err" && [ -s "$tmp/warn_tex.pfm" ]; then
-    pass=$((pass + 1))
-else
-    fail=$((fail + 1)); echo "FAIL render --missing-textures warn (texture)"; sed 's/^/    /' "$tmp/err" | head -3
-fi
+expect_warned_render render-missing-texture-warn "warning: texture .*maps/gone.png does not exist" "$tmp/texq/q.obj" \
+    "$tmp/warn_tex.pfm"
 expect_error render-cache-lens "--first-hit-cache needs camera rays that repeat" render "$data/cornell_box.obj" --first-hit-cache --aperture 2 -o "$tmp/x.pfm"
 expect_error render-sort-cpu "--sort-materials and --no-compaction apply to --device gpu" render "$data/cornell_box.obj" --sort-materials -o "$tmp/x.pfm"
 expect_error render-no-compaction-cpu "--sort-materials and --no-compaction apply to --device gpu" render "$data/cornell_box.obj" --no-compaction -o "$tmp/x.pfm"
