@@ -146,12 +146,10 @@ class Report:
         self.md("| scene | triangles | spp | render Mrays/s | kernel Mrays/s, same rays | ratio (goal ≥ 0.75) "
                 "| ms per sample | ms: extend / shade+compact / shadow / generate / accumulate / set-up |")
         self.md("|---|---:|---:|---:|---:|---:|---:|---|")
-        self.ratios = {}
         for r in self.renders:
             stem = render_stem(r)
             k = rays_k[stem] / (ms_k[stem] * 1e3) if ms_k[stem] else float("nan")
             ratio = r["mrays_per_s"] / k
-            self.ratios[r["scene"]] = ratio
             ms = r["ms"]
             bold = "**" if ratio >= 0.75 else ""
             self.md(f"| {label(r['scene'])} | {r['triangles']:,} | {r['spp']} | {r['mrays_per_s']:,.0f} | {k:,.0f} | "

@@ -119,7 +119,7 @@ void RenderScene::load_textures(const TextureOptions& opts) {
     }
     if (textures_.empty()) return;
     if (mesh_.texcoords.size() == 6 * mesh_.triangle_count())
-        texcoords_ = mesh_.texcoords;
+        textured_ = true;
     else if (opts.warnings)
         opts.warnings->push_back("the scene has map_Kd textures but no texture coordinates (vt): they render with Kd");
 }
@@ -232,7 +232,7 @@ SceneView RenderScene::view() const {
         v.lights.env = {env_.pixels.data(),  env_row_cdf_.data(), env_col_cdf_.data(), env_row_pdf_.data(),
                         env_col_pdf_.data(), env_.width,          env_.height};
     }
-    v.textures = {texels_.data(), textures_.data(), texcoords_.empty() ? nullptr : texcoords_.data()};
+    v.textures = {texels_.data(), textures_.data(), textured_ ? mesh_.texcoords.data() : nullptr};
     v.offset = offset_;
     return v;
 }

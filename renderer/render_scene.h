@@ -52,7 +52,7 @@ public:
     const std::vector<Vec3>& texels() const { return texels_; }
     const std::vector<TextureInfo>& textures() const { return textures_; }
     /// The mesh's texture coordinates when some material has a texture, else empty.
-    const std::vector<float>& texcoords() const { return texcoords_; }
+    const std::vector<float>& texcoords() const { return textured_ ? mesh_.texcoords : no_texcoords_; }
     Vec3 sky() const { return sky_; }
     float sky_pick() const { return sky_pick_; }
     float offset() const { return offset_; }
@@ -74,7 +74,8 @@ private:
     std::vector<int32_t> material_ids_;
     std::vector<Vec3> texels_;
     std::vector<TextureInfo> textures_;
-    std::vector<float> texcoords_;
+    bool textured_ = false;  // some material has a texture and the mesh has texture coordinates
+    std::vector<float> no_texcoords_;
     std::vector<uint32_t> light_tris_;
     std::vector<AliasEntry> alias_;
     std::vector<float> pick_pdf_;

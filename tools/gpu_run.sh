@@ -188,9 +188,7 @@ if has render; then
         # 1. Overhead: timed without --dump-rays (dumping copies every queue back and writes
         #    files inside the pass); then the first wave again, dumped, for the kernel-only figure.
         run_render "$out/render.jsonl" "$s" "/tmp/renders/$n.pfm" --spp "${RENDER_SPP:-512}"
-        "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 \
-            --spp 6 --wave 6 --max-depth 8 --dump-rays "$d" -o "/tmp/renders/$n-dump.pfm" \
-            >>"$out/render.err" 2>&1 || status=1
+        run_render /dev/null "$s" "/tmp/renders/$n-dump.pfm" --spp 6 --wave 6 --dump-rays "$d"
         # 2. Every bounce's rays through every BVH2 kernel and the CWBVH one (the coherence
         #    report on real path-tracer rays); each record names its ray file.
         for f in "$d"/*.rays; do

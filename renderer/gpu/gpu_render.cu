@@ -138,20 +138,16 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     const size_t sort_n = settings.sort_by_material ? cap : 0;
     DeviceBuffer<uint32_t> sort_keys[2] = {DeviceBuffer<uint32_t>(sort_n), DeviceBuffer<uint32_t>(sort_n)};
     DeviceBuffer<uint32_t> sort_order[2] = {DeviceBuffer<uint32_t>(sort_n), DeviceBuffer<uint32_t>(sort_n)};
-    gpu::MaterialSortBuffers sort{};
-    DeviceBuffer<unsigned char> sort_temp;
-    if (settings.sort_by_material) {
-        sort.bits = gpu::material_sort_bits(scene.materials().size());
-        sort.temp_bytes = gpu::material_sort_temp_bytes(cap, sort.bits);
-        sort_temp = DeviceBuffer<unsigned char>(sort.temp_bytes);
-        sort = {sort_keys[0].data(),
-                sort_keys[1].data(),
-                sort_order[0].data(),
-                sort_order[1].data(),
-                sort_temp.data(),
-                sort.temp_bytes,
-                sort.bits};
-    }
+    const int sort_bits = settings.sort_by_material ? gpu::material_sort_bits(scene.materials().size()) : 0;
+    DeviceBuffer<unsigned char> sort_temp(settings.sort_by_material ? gpu::material_sort_temp_bytes(cap, sort_bits)
+                                                                    : 0);
+    const gpu::MaterialSortBuffers sort{sort_keys[0].data(),
+                                        sort_keys[1].data(),
+                                        sort_order[0].data(),
+                                        sort_order[1].data(),
+                                        sort_temp.data(),
+                                        sort_temp.size(),
+                                        sort_bits};
     // The first-hit cache: one hit per pixel, filled by pass 0's camera rays.
     DeviceBuffer<trav::Hit> first_hits(settings.first_hit_cache ? npix : 0);
 

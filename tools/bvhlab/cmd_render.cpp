@@ -220,9 +220,10 @@ void register_render(CLI::App& app, Globals& g) {
         std::vector<std::string> texture_warnings;
         topts.warnings = &texture_warnings;
         render::RenderScene rscene(s.mesh, sky, topts);
-        if (!g.quiet)
+        if (!g.quiet) {
             for (const std::string& w : texture_warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
-        if (!g.quiet) std::fprintf(stderr, "[bvhlab] lighting: %s\n", rscene.lighting().c_str());
+            std::fprintf(stderr, "[bvhlab] lighting: %s\n", rscene.lighting().c_str());
+        }
         o->rs.strategy = o->strategy == "mis"    ? render::Strategy::kMis
                          : o->strategy == "bsdf" ? render::Strategy::kBsdfOnly
                                                  : render::Strategy::kLightOnly;
