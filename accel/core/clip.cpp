@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 
 namespace bvhlab::accel {
 namespace {
@@ -59,7 +62,34 @@ int clip_to_box(Vec3 a, Vec3 b, Vec3 c, const AABB& box, P3 (&buf)[2][12], const
     return n;
 }
 
-Vec3 to_float(const P3& p) { return Vec3{float(p.v[0]), float(p.v[1]), float(p.v[2])}; }
+/// The next float below (dir < 0) or above (dir > 0) a finite f.
+inline float float_step(float f, int dir) {
+    if (f == 0.0f)
+        return dir < 0 ? -std::numeric_limits<float>::denorm_min() : std::numeric_limits<float>::denorm_min();
+    uint32_t u;
+    std::memcpy(&u, &f, sizeof u);
+    u = (f > 0.0f) == (dir > 0) ? u + 1 : u - 1;  // away from zero: +1; towards it: -1
+    std::memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/// Grows b by the float box of polygon vertex p, rounded outwards: a coordinate that is a
+/// float (a triangle corner, or a crossing on its clip plane) as it is, any other between the
+/// floats on either side of it. Rounding a crossing to the nearest float could move it into
+/// the box by half an ulp, and a split plane placed at that bound would then leave the sliver
+/// of the triangle beyond it out of the cell that holds it. (What is left is the error of the
+/// double-precision crossing itself, about 1e-16 relative: far below a float kernel's own.)
+inline void extend_outwards(AABB& b, const P3& p) {
+    for (int k = 0; k < 3; ++k) {
+        const double x = p.v[k];
+        const float f = float(x);
+        float lo = f, hi = f;
+        if (double(f) > x) lo = float_step(f, -1);
+        if (double(f) < x) hi = float_step(f, 1);
+        b.lo[k] = std::min(b.lo[k], lo);
+        b.hi[k] = std::max(b.hi[k], hi);
+    }
+}
 
 }  // namespace
 
@@ -69,7 +99,7 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
     const int n = clip_to_box(a, b, c, box, buf, &poly);
     ClipResult r;
     if (n < 3) {
-        for (int i = 0; i < n; ++i) r.bounds.extend(to_float(poly[i]));
+        for (int i = 0; i < n; ++i) extend_outwards(r.bounds, poly[i]);
         return r;
     }
     // Area of a planar polygon: half the norm of the summed fan cross products.
@@ -86,8 +116,8 @@ ClipResult clip_triangle(Vec3 a, Vec3 b, Vec3 c, const AABB& box) {
         s[2] += e1[0] * e2[1] - e1[1] * e2[0];
     }
     r.area = 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    for (int i = 0; i < n; ++i) r.bounds.extend(to_float(p[i]));
-    // Rounding to float may step outside the box by an ulp; clamp back in.
+    for (int i = 0; i < n; ++i) extend_outwards(r.bounds, p[i]);
+    // Rounding outwards may step outside the box by an ulp, where no part of the triangle is.
     r.bounds = intersect(r.bounds, box);
     return r;
 }
@@ -106,25 +136,23 @@ std::pair<AABB, AABB> split_pass(const P3* poly, int n, const AABB& box, int axi
         const P3& p = poly[i];
         const P3& q = poly[i + 1 == n ? 0 : i + 1];
         const double dp = p.v[axis] - double(pos), dq = q.v[axis] - double(pos);
-        const Vec3 fp = to_float(p);
         if (dp <= 0) {
-            side[0].extend(fp);
+            extend_outwards(side[0], p);
             if (kParts) below[m[0]++] = p;
         }
         if (dp >= 0) {
-            side[1].extend(fp);
+            extend_outwards(side[1], p);
             if (kParts) above[m[1]++] = p;
         }
         if (crosses(dp, dq)) {
             const P3 r = crossing(p, q, dp, dq, axis, pos);
-            const Vec3 fr = to_float(r);
-            side[0].extend(fr);
-            side[1].extend(fr);
+            extend_outwards(side[0], r);
+            extend_outwards(side[1], r);
             if (kParts) below[m[0]++] = above[m[1]++] = r;
         }
     }
     if (kParts) *n_below = m[0], *n_above = m[1];
-    // Rounding to float may step outside a side's box by an ulp; clamp back in.
+    // Rounding outwards may step outside a side's box by an ulp; clamp back in.
     AABB cell[2] = {box, box};
     cell[0].hi[axis] = pos;
     cell[1].lo[axis] = pos;

@@ -238,6 +238,39 @@ expect_error damaged-rays "damaged.rays' is damaged: its checksum does not match
 "$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null
 edit_records "$tmp/small.hits" "$tmp/foreign.hits" ifff $((5 * 16)) 999999 1.0 0.1 0.1  # hit 5: a triangle the scene lacks
 expect_error foreign-hits "hit 5 names triangle 999999" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/foreign.hits"
+# Made-up hits never pass as ties: "triangle 5, t = 0" in records 0-5 (once 2,065 of 3,072 such
+# records passed as interval-end ties), and a real hit file still passes.
+cp "$tmp/small.hits" "$tmp/fake.hits"
+for r in 0 1 2 3 4 5; do
+    edit_records "$tmp/fake.hits" "$tmp/fake2.hits" ifff $((r * 16)) 5 0.0 0.0 0.0 && mv "$tmp/fake2.hits" "$tmp/fake.hits"
+done
+if "$bin" -q verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/fake.hits" --json >"$tmp/out" 2>"$tmp/err"; then
+    fail=$((fail + 1)); echo "FAIL fake-hits: verify passed a hit file with made-up hits"
+elif grep -q "MISMATCH.*wrong-t: the ray meets triangle 5's plane" "$tmp/err" &&
+    python3 -c 'import json,sys; r=json.loads(open(sys.argv[1]).readline()); k=r["mismatch_kinds"]; assert r["mismatches"]==6 and k["wrong-t"]+k["off-triangle"]+k["outside-interval"]==6, r' "$tmp/out" &&
+    tail -1 "$tmp/err" | grep -q "real mismatches against Embree"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL fake-hits: expected 6 made-up hits named as such:"; sed 's/^/    /' "$tmp/err" | head -8
+fi
+if "$bin" -q verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/small.hits" >/dev/null 2>"$tmp/err"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL real-hits: verify refused the hits bench wrote:"; sed 's/^/    /' "$tmp/err" | head -5
+fi
+# --structure all: every structure in one table (8 structures x 1 ray type), and its refusals.
+if [ "$("$bin" -q verify "$tmp/cb_in.obj" --structure all --types primary --width 32 --height 24 --json 2>/dev/null |
+    python3 -c 'import json,sys; print(sorted({(r["structure"], r["kernel"]) for r in map(json.loads, sys.stdin) if r["mismatches"] == 0}))')" = \
+    "[('bvh2/binned', 'cpu-bvh2-stack'), ('bvh2/sbvh', 'cpu-bvh2-stack'), ('bvh2/sweep', 'cpu-bvh2-stack'), ('cwbvh/binned', 'cpu-cwbvh'), ('cwbvh/sbvh', 'cpu-cwbvh'), ('cwbvh/sweep', 'cpu-cwbvh'), ('kdtree', 'cpu-kd-shortstack-2'), ('kdtree', 'cpu-kd-stack')]" ]; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL structure-all: not every structure and tracer verified"
+fi
+expect_error structure-all-one-flag "--bins sets up one structure; --structure all checks every structure" verify "$tmp/cb_in.obj" --structure all --bins 8
+expect_error structure-all-layout "--layout sets up one structure" verify "$tmp/cb_in.obj" --structure all --layout cwbvh
+expect_error structure-all-kernel "--kernel plain traces one layout; --structure all" verify "$tmp/cb_in.obj" --structure all --kernel plain
+expect_error structure-all-hits "--hits checks a hit file; --structure all" verify "$tmp/cb_in.obj" --structure all --rays "$tmp/small.rays" --hits "$tmp/small.hits"
+expect_error structure-all-bench "--structure all applies to .bvhlab verify. only" bench "$tmp/cb_in.obj" --structure all
 
 # Every command's --json lines carry the identifying fields of the schema (README, "JSON lines").
 check_schema() {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support/test_support.h"
+#include "traversal/reference/ref_intersect.h"
 
 namespace bvhlab::trav {
 namespace {
@@ -85,8 +86,11 @@ TEST(CompareHits, AnyHitUsesLookupAndIntervalEnd) {
     Ray in{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, 5.0f};
     rep = one(m, in, Query::kAny, Hit::miss(), {0, 0, 0, 0}, {0, 1.0f, 0.3f, 0.2f});
     EXPECT_EQ(rep.mismatches, 1u);
-    rep = one(m, in, Query::kAny, {1, 3.0f, 0.1f, 0.1f}, {0, 0, 0, 0});
-    EXPECT_EQ(rep.agree, 1u);  // any-hit: which triangle does not matter
+    rep = one(m, in, Query::kAny, {0, 1.0f, 0.3f, 0.2f}, {0, 0, 0, 0});
+    EXPECT_EQ(rep.agree, 1u);  // any-hit: Embree's record is only "occluded"
+    // ... but the hit claimed must still be real: triangle 1 does not cover (0.5, 0.2).
+    rep = one(m, in, Query::kAny, {1, 1.0f, 0.1f, 0.1f}, {0, 0, 0, 0});
+    EXPECT_EQ(rep.mismatches_by_kind[size_t(MismatchKind::kOffTriangle)], 1u);
 }
 
 TEST(CompareHits, HitAtTminZeroIsTie) {
@@ -99,6 +103,76 @@ TEST(CompareHits, HitAtTminZeroIsTie) {
     Ray away{{0.5f, 0.2f, 0.5f}, 0.0f, {0, 0, -1}, INFINITY};
     rep = one(m, away, Query::kClosest, Hit::miss(), {0, 0.5f, 0.3f, 0.2f});
     EXPECT_EQ(rep.mismatches, 1u);
+}
+
+}  // namespace bvhlab::trav
+
+namespace bvhlab::trav {
+
+TEST(CompareHits, EveryKindOfMadeUpHitIsARealMismatch) {
+    // Two stacked unit squares: z = 0 (triangles 0, 1) and z = -1 (triangles 2, 3); a ray
+    // straight down through (0.5, 0.2) meets triangle 0 at t = 1 and triangle 2 at t = 2.
+    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0},
+                                           {1, 0, 0, 2, 0, 0, 1, 1, 0},
+                                           {0, 0, -1, 1, 0, -1, 1, 1, -1},
+                                           {1, 0, -1, 2, 0, -1, 1, 1, -1}});
+    const Ray r{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
+    const Hit truth{0, 1.0f, 0.3f, 0.2f}, below{2, 2.0f, 0.3f, 0.2f};
+    auto kind_of = [&](const Hit& ours, const Hit& oracle,
+                       const Ray& ray = Ray{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY}) {
+        const CompareReport rep = one(m, ray, Query::kClosest, ours, oracle);
+        EXPECT_EQ(rep.mismatches, 1u);
+        EXPECT_EQ(rep.ties, 0u);
+        for (int k = 0; k < kMismatchKinds; ++k)
+            if (rep.mismatches_by_kind[size_t(k)]) return MismatchKind(k);
+        return MismatchKind(-1);
+    };
+    EXPECT_EQ(one(m, r, Query::kClosest, truth, truth).agree, 1u);                   // the real answer passes
+    EXPECT_EQ(kind_of({7, 1.0f, 0.3f, 0.2f}, truth), MismatchKind::kInvalidRecord);  // no such triangle
+    EXPECT_EQ(kind_of({0, NAN, 0.3f, 0.2f}, truth), MismatchKind::kInvalidRecord);
+    // "Triangle 0, t = 0": the ray's origin, at tmin = 0 (once excused as an interval-end tie).
+    EXPECT_EQ(kind_of({0, 0.0f, 0.0f, 0.0f}, truth), MismatchKind::kWrongT);
+    EXPECT_EQ(kind_of({0, 1.5f, 0.3f, 0.2f}, truth), MismatchKind::kWrongT);
+    // The right t on a neighbour sharing an edge with the right triangle (once a shared-edge
+    // tie): the ray passes 0.5 away from it.
+    EXPECT_EQ(kind_of({1, 1.0f, 0.0f, 0.2f}, truth), MismatchKind::kOffTriangle);
+    EXPECT_EQ(kind_of({0, 1.0f, 0.9f, 0.05f}, truth), MismatchKind::kWrongUv);
+    const Ray short_ray{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, 0.5f};
+    EXPECT_EQ(kind_of({0, 1.0f, 0.3f, 0.2f}, Hit::miss(), short_ray), MismatchKind::kOutsideInterval);
+    // Real hits that disagree with Embree, each named.
+    EXPECT_EQ(kind_of(truth, Hit::miss()), MismatchKind::kExtraHit);
+    EXPECT_EQ(kind_of(Hit::miss(), truth), MismatchKind::kMissedHit);
+    EXPECT_EQ(kind_of(below, truth), MismatchKind::kFartherHit);
+    EXPECT_EQ(kind_of(truth, below), MismatchKind::kCloserHit);
+    // The same lies in an any-hit set.
+    const CompareReport any = compare_hits(m, {r, r}, Query::kAny, {{0, 0.0f, 0.0f, 0.0f}, {1, 1.0f, 0.0f, 0.2f}},
+                                           {{0, 0, 0, 0}, {0, 0, 0, 0}}, [&](const Ray&) { return truth; });
+    EXPECT_EQ(any.mismatches, 2u);
+    EXPECT_EQ(any.mismatches_by_kind[size_t(MismatchKind::kWrongT)], 1u);
+    EXPECT_EQ(any.mismatches_by_kind[size_t(MismatchKind::kOffTriangle)], 1u);
+    std::string why;
+    EXPECT_EQ(check_claimed_hit(m, r, truth, &why), -1) << why;
+    EXPECT_EQ(check_claimed_hit(m, r, {1, 1.0f, 0.0f, 0.2f}, &why), int(MismatchKind::kOffTriangle));
+    EXPECT_NE(why.find("outside triangle 1"), std::string::npos) << why;
+    EXPECT_STREQ(mismatch_kind_name(MismatchKind::kFartherHit), "farther-hit");
+}
+
+}  // namespace bvhlab::trav
+
+namespace bvhlab::trav {
+
+TEST(CompareHits, OverlappingTrianglesSharingAVertexAreCoincidentNotASeam) {
+    // Two coplanar triangles sharing vertex (0, 0, 0) and overlapping (a duplicate-like pair, as
+    // in architectural models): a ray through the middle of both hits each well inside.
+    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 4, 0, 0, 0, 4, 0}, {0, 0, 0, 4, 1, 0, 1, 4, 0}});
+    const Ray r{{1.0f, 1.0f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
+    double t, u0, v0, u1, v1;
+    ASSERT_TRUE(plane_hit_reference(r, m.vertex(0, 0), m.vertex(0, 1), m.vertex(0, 2), t, u0, v0));
+    ASSERT_TRUE(plane_hit_reference(r, m.vertex(1, 0), m.vertex(1, 1), m.vertex(1, 2), t, u1, v1));
+    const CompareReport rep =
+        one(m, r, Query::kClosest, {0, 1.0f, float(u0), float(v0)}, {1, 1.0f, float(u1), float(v1)});
+    EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kCoincident)], 1u);
+    EXPECT_EQ(rep.mismatches, 0u);
 }
 
 }  // namespace bvhlab::trav

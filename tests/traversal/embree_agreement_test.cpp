@@ -46,8 +46,10 @@ void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, f
             ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
                           << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
         EXPECT_GT(set.rays.size(), 0u);
-        // Ties are rare: a large share means the tie rules are hiding a bug.
-        EXPECT_LE(rep.ties, set.rays.size() / 1000 + 5);
+        // Ties that excuse float error are rare: a large share means the tie rules are hiding a
+        // bug. Coincident ties are proven instead (both triangles hit inside at the same t in
+        // double precision: duplicate and overlapping triangles, as in sibenik) and not capped.
+        EXPECT_LE(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)], set.rays.size() / 1000 + 5);
         EXPECT_EQ(rep.agree + rep.ties + rep.mismatches, rep.rays);
     }
 }

@@ -14,6 +14,7 @@
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
+#include "tests/support/adversarial.h"
 #include "tests/support/gpu_support.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/device_buffer.h"
@@ -110,6 +111,51 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
                                                            [&](const Ray& r) { return oracle.intersect(r); });
                     EXPECT_EQ(rep.mismatches, 0u);
                     EXPECT_LE(rep.ties, set.rays.size() / 1000 + 1);
+                }
+            }
+        }
+    }
+}
+
+TEST_P(GpuKernel, AgreesWithEmbreeOnAdversarialScenes) {
+    // tests/support/adversarial.h: near-flat tiles, faces on shared planes, slivers, T-junctions,
+    // huge beside tiny triangles, offsets up to 1e6. The CPU tracers run them in
+    // Adversarial.* (tests/traversal/adversarial_test.cpp), over more structures.
+    BVHLAB_SKIP_WITHOUT_GPU();
+    const KernelInfo& kernel = find_kernel(GetParam());
+    for (const test::AdversarialScene& scene : test::adversarial_scenes()) {
+        SCOPED_TRACE(scene.name);
+        EmbreeOracle oracle(scene.mesh);
+        ProtocolConfig cfg;
+        cfg.camera = scene.camera;
+        cfg.primary = {96, 64, 1, 0};
+        cfg.ao_length = scene.ao_length;
+        RayProtocol proto(scene.mesh, oracle, cfg);
+        std::vector<accel::BuilderKind> builders{accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh};
+        if (kernel.layout == Layout::kKd) builders = {accel::BuilderKind::kBinned};  // one kd-tree
+        for (const accel::BuilderKind builder : builders) {
+            const Structure s = make_structure(scene.mesh, kernel.layout, builder);
+            SCOPED_TRACE(s.name);
+            auto device = std::make_shared<const DeviceStructure>(s);
+            std::vector<GpuTraceOptions> options{{}};
+            if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
+            for (const GpuTraceOptions& opt : options) {
+                SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
+                auto tracer = make_gpu_tracer(device, kernel, opt);
+                for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
+                    SCOPED_TRACE(ray_type_name(t));
+                    const RaySet set = proto.make(t);
+                    std::vector<Hit> ours, ref;
+                    tracer->trace(set, ours);
+                    ASSERT_EQ(ours.size(), set.rays.size());
+                    oracle.trace(set.rays, set.query, ref);
+                    const CompareReport rep = compare_hits(scene.mesh, set.rays, set.query, ours, ref,
+                                                           [&](const Ray& r) { return oracle.intersect(r); });
+                    EXPECT_EQ(rep.mismatches, 0u);
+                    for (const auto& d : rep.first_mismatches)
+                        ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
+                                      << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
+                    EXPECT_LE(double(rep.ties), double(set.rays.size()) * scene.max_tie_fraction + 5.0);
                 }
             }
         }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// `bvhlab verify`: every hit against Embree, ray by ray, for one tracer or every GPU kernel
-// (--kernel all); exit 1 on any real mismatch.
+// `bvhlab verify`: every hit against Embree, ray by ray, for one tracer, every GPU kernel
+// (--kernel all), or every structure with its tracers (--structure all); exit 1 on any real
+// mismatch.
 #include <cstdio>
 #include <memory>
 
@@ -12,17 +13,42 @@
 namespace bvhlab::cli {
 
 void print_verify_header() {
-    std::printf("%-10s %-24s %12s %12s %8s %10s   %s\n", "rays", "kernel", "count", "agree", "ties", "mismatches",
-                "ties: shared-edge/near-edge/interval-end/coincident");
+    std::printf("%-10s %-22s %-24s %12s %12s %8s %10s   %s\n", "rays", "structure", "kernel", "count", "agree", "ties",
+                "mismatches", "ties: shared-edge/near-edge/interval-end/coincident");
 }
 
 void print_verify_row(const nlohmann::json& j) {
-    std::printf("%-10s %-24s %12zu %12zu %8zu %10zu   %zu/%zu/%zu/%zu\n", j["ray_type"].get<std::string>().c_str(),
-                j["kernel"].get<std::string>().c_str(), j["rays"].get<size_t>(), j["agree"].get<size_t>(),
-                j["ties"].get<size_t>(), j["mismatches"].get<size_t>(), j["ties_shared_edge"].get<size_t>(),
-                j["ties_near_edge"].get<size_t>(), j["ties_interval_end"].get<size_t>(),
-                j["ties_coincident"].get<size_t>());
+    std::string structure = j.value("structure", nlohmann::json("")).is_string() ? j.value("structure", "") : "";
+    std::printf("%-10s %-22s %-24s %12zu %12zu %8zu %10zu   %zu/%zu/%zu/%zu", j["ray_type"].get<std::string>().c_str(),
+                structure.c_str(), j["kernel"].get<std::string>().c_str(), j["rays"].get<size_t>(),
+                j["agree"].get<size_t>(), j["ties"].get<size_t>(), j["mismatches"].get<size_t>(),
+                j["ties_shared_edge"].get<size_t>(), j["ties_near_edge"].get<size_t>(),
+                j["ties_interval_end"].get<size_t>(), j["ties_coincident"].get<size_t>());
+    // Mismatches by kind (check_claimed_hit's and the disagreements'), when there are any.
+    if (j.contains("mismatch_kinds"))
+        for (const auto& [kind, n] : j["mismatch_kinds"].items())
+            if (n.get<size_t>() > 0) std::printf("  %s %zu", kind.c_str(), n.get<size_t>());
+    std::printf("\n");
 }
+
+namespace {
+
+/// What --structure all checks: each BVH builder in both layouts, then the kd-tree with its
+/// full stack and with the short stack of --kd-stack (2 unless given).
+struct StructureSpec {
+    std::string structure, layout;
+    int kd_stack;
+};
+std::vector<StructureSpec> every_structure(int short_stack) {
+    std::vector<StructureSpec> out;
+    for (const char* b : {"binned", "sweep", "sbvh"})
+        for (const char* layout : {"bvh2", "cwbvh"}) out.push_back({b, layout, 64});
+    out.push_back({"kdtree", "bvh2", 64});
+    out.push_back({"kdtree", "bvh2", short_stack});
+    return out;
+}
+
+}  // namespace
 
 void register_verify(CLI::App& app, Globals& g) {
     struct Opts {
@@ -48,6 +74,21 @@ void register_verify(CLI::App& app, Globals& g) {
     add_compare_options(*sub, o->cc);
     o->trace.add_to(*sub);
     sub->callback([o, &g, file, hits] {
+        if (o->build.structure == "all") {
+            // Every structure: options that choose one are refused, not silently ignored.
+            std::vector<const CLI::Option*> one{o->build.builder_flag, o->build.layout_flag, o->build.collapse_flag,
+                                                o->build.cw_tris_flag};
+            one.insert(one.end(), o->build.config_flags.begin(), o->build.config_flags.end());
+            one.insert(one.end(), o->build.kd_flags.begin(), o->build.kd_flags.end());
+            for (const CLI::Option* f : one)
+                if (f->count())
+                    throw Error(f->get_name() +
+                                " sets up one structure; --structure all checks every structure with its defaults");
+            if (o->trace.kernel_flag->count() && o->trace.kernel != "all")
+                throw Error("--kernel " + o->trace.kernel +
+                            " traces one layout; --structure all checks every structure (use --kernel all)");
+            if (hits->count()) throw Error("--hits checks a hit file; --structure all builds structures to check");
+        }
         o->trace.validate(o->build);
         if (hits->count() && (o->trace.kernel_flag->count() || o->trace.device != "cpu"))
             throw Error("--hits checks a hit file; --device and --kernel choose a tracer, which it does not use");
@@ -73,22 +114,44 @@ void register_verify(CLI::App& app, Globals& g) {
                       {{"device", "file"}, {"structure", "hit-file"}, {"layout", nullptr}, {"kernel", "hit-file"}});
         } else {
             o->build.epo = false;
-            Built b = build_scene(s, o->build, g);
-            auto tracers = make_tracers(b, o->trace, o->build, nullptr);
-            auto verify_set = [&](const trav::RaySet& set, const std::string& type) {
-                const CheckedSet cs = check_set(oracle, set, type);
-                for (auto& t : tracers) {
-                    std::vector<trav::Hit> ours;
-                    t->trace(set, ours);
-                    check_one(cs, ours, tracer_fields(b, *t));
-                    if (!file->count()) rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
+            // One structure, or with --structure all each of every_structure() in turn.
+            std::vector<BuildOptions> builds;
+            if (o->build.structure == "all") {
+                const int short_stack =
+                    o->build.kd_stack_flag->count() && o->build.kd_stack != trav::kKdFullStack ? o->build.kd_stack : 2;
+                for (const StructureSpec& spec : every_structure(short_stack)) {
+                    BuildOptions b = o->build;
+                    b.structure = spec.structure;
+                    b.builder = spec.structure == "kdtree" ? b.builder : spec.structure;
+                    b.layout = spec.layout;
+                    b.kd_stack = spec.kd_stack;
+                    builds.push_back(std::move(b));
                 }
-            };
+            } else {
+                builds.push_back(o->build);
+            }
+            // The ray sets (and Embree's answers) are made once and shared by every structure.
+            std::vector<std::pair<trav::RaySet, std::string>> sets;
             if (file->count()) {
-                verify_set(trav::read_ray_file(o->rays_file), "file");
+                sets.emplace_back(trav::read_ray_file(o->rays_file), "file");
             } else {
                 trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
-                for (trav::RayType t : parse_ray_types(o->types)) verify_set(proto.make(t), trav::ray_type_name(t));
+                for (trav::RayType t : parse_ray_types(o->types))
+                    sets.emplace_back(proto.make(t), trav::ray_type_name(t));
+            }
+            std::vector<CheckedSet> checked;
+            for (const auto& [set, type] : sets) checked.push_back(check_set(oracle, set, type));
+            for (BuildOptions& bo : builds) {
+                Built b = build_scene(s, bo, g);
+                auto tracers = make_tracers(b, o->trace, bo, nullptr);
+                for (const CheckedSet& cs : checked) {
+                    for (auto& t : tracers) {
+                        std::vector<trav::Hit> ours;
+                        t->trace(cs.set, ours);
+                        check_one(cs, ours, tracer_fields(b, *t));
+                        if (!file->count()) rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
+                    }
+                }
             }
         }
         if (!g.json) print_verify_header();

@@ -246,7 +246,8 @@ void BuildOptions::add_to(CLI::App& app) {
                        ->capture_default_str();
     auto* st = structure_flag = app.add_option(
         "--structure", structure,
-        "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building");
+        "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building "
+        "(verify also takes all: every structure and its tracers)");
     st->excludes(builder_flag);
     config_flags = {
         app.add_option("--bins", opts.num_bins, "bins per axis (binned builder, SBVH object splits)")
@@ -321,12 +322,13 @@ void BuildOptions::add_to(CLI::App& app) {
 
 std::string BuildOptions::structure_file() const {
     if (structure.empty() || structure == "bvh" || structure == "binned" || structure == "sweep" ||
-        structure == "sbvh" || structure == "kdtree")
+        structure == "sbvh" || structure == "kdtree" || structure == "all")
         return {};
     return structure;
 }
 
 void BuildOptions::check_applicable() const {
+    if (structure == "all") throw Error("--structure all applies to `bvhlab verify` only");
     if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
     if (cw_tris_flag->count() && !is_cwbvh()) throw Error("--cw-tris applies to --layout cwbvh");
     if (!structure_file().empty()) return;

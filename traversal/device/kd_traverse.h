@@ -20,6 +20,11 @@ namespace bvhlab::trav {
 constexpr int kKdFullStack = int(accel::kMaxTreeDepth);
 static_assert(kKdFullStack >= int(accel::kMaxTreeDepth), "the kd full stack must hold the deepest kd-tree");
 constexpr int kKdMaxShortStack = 8;
+/// Factors that widen a split plane's distance t = (split - o) * (1 / d) by its rounding bound
+/// (3 roundings: 3 x 2^-24 relative) plus the rounding of the product itself: 1 + 3 x 2^-23
+/// and 1 - 7 x 2^-24, about +-4e-7 (the widening of slab_entry's exit, Ize 2013).
+constexpr float kKdSplitHi = 1.0000004f;
+constexpr float kKdSplitLo = 0.9999996f;
 
 /// A kd-tree as traversal sees it. `tris` holds one Woop triangle per mesh triangle id.
 struct KdView {
@@ -45,6 +50,8 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
         const float a = (kd.bounds.lo[k] - o[k]) * inv[k], b = (kd.bounds.hi[k] - o[k]) * inv[k];
         t_exit = min_f(t_exit, max_f(a, b) * 1.0000004f);
     }
+    // A short stack restarts; a full one never does, and keeps no restart state.
+    constexpr bool kRestarts = kCap <= kKdMaxShortStack;
     struct Entry {
         uint32_t node;
         float tmin, tmax;
@@ -52,8 +59,8 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
     Entry stack[kCap];
     int top = -1, count = 0;
     bool dropped = false;            // a push overwrote an entry since the last (re)start
-    float restarted_at = -INFINITY;  // guards against restarts that make no progress
-    uint32_t node = 0;
+    float restarted_at = -INFINITY;  // the farthest leaf exit a restart has resumed after
+    uint32_t node = 0, last_leaf = ~0u;
     float tn = t_enter, tf = t_exit;
     while (true) {
         while (!kd.nodes[node].is_leaf()) {
@@ -64,24 +71,39 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             const float t_split = (split - o[k]) * inv[k];
             const bool below_first = o[k] < split || (o[k] == split && d[k] <= 0.0f);
             const uint32_t near = n.child() + (below_first ? 0u : 1u), far = n.child() + (below_first ? 1u : 0u);
-            if (t_split > tf || t_split <= 0.0f) {
+            // The ray is on the near side for t < t_split and on the far side after it, but
+            // t_split is rounded (a subtraction, a reciprocal and a product: at most 3 ulps)
+            // and so is every cell boundary before it. A cell one or two ulps thick, such as the
+            // cell between the two planes of a triangle that is flat to an ulp, has entry and
+            // exit distances that round to the same float: an exact test would skip it and the
+            // triangles that only it holds. So each side's interval is widened by the rounding
+            // bound, [tn, t_split+] for the near side and [t_split-, tf] for the far side, and
+            // a side is entered when its widened interval has length: near when tn < t_split+,
+            // far when t_split- < tf. A restart at a plane (tn = t_split+ of that plane, the
+            // widened exit of the last leaf) then goes on past it instead of entering the
+            // near side again. Computed in this order, t_split has the sign of the true
+            // distance, so a plane behind the origin (t_split <= 0) is never crossed.
+            const float t_hi = t_split * kKdSplitHi, t_lo = t_split * kKdSplitLo;
+            if (t_split <= 0.0f || !(t_lo < tf)) {
                 node = near;
-            } else if (t_split <= tn) {
-                // Also when equal: the near side would be the single point tn, which after a
-                // restart at a plane sends short-stack traversal into zero-length leaves.
+            } else if (!(tn < t_hi)) {
                 node = far;
             } else {
                 top = (top + 1) % stack_limit;  // overwrites the oldest entry when full
-                stack[top] = {far, t_split, tf};
+                stack[top] = {far, max_f(t_lo, tn), tf};
                 dropped = dropped || count == stack_limit;
                 count = count < stack_limit ? count + 1 : stack_limit;
                 node = near;
-                tf = t_split;
+                tf = min_f(t_hi, tf);
             }
         }
         const accel::KdNode& leaf = kd.nodes[node];
         if (counters) ++counters->leaves;
-        for (uint32_t i = leaf.first(); i < leaf.first() + leaf.count(); ++i) {
+        // After a restart the ray may reach the leaf it left last again (below): its
+        // triangles were tested then.
+        const uint32_t n_tris = kRestarts && node == last_leaf ? 0u : leaf.count();
+        if (kRestarts) last_leaf = node;
+        for (uint32_t i = leaf.first(); i < leaf.first() + n_tris; ++i) {
             if (counters) ++counters->tri_tests;
             const uint32_t id = kd.prims[i];
             float t, u, v;
@@ -101,12 +123,26 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             node = e.node;
             tn = e.tmin;
             tf = e.tmax;
-        } else if (dropped && tf < t_exit && tf < best && tf > restarted_at) {
+        } else if (kRestarts && dropped && tf < t_exit && tf < best) {
             // Entries were dropped (short stack): restart from the root past this leaf. The
             // dropped entries were the oldest, i.e. the farthest, so nothing before tf is lost.
+            // tf is the widened exit t_split+ of some plane; a cell beyond it thinner than the
+            // rounding window (between planes an ulp apart) ends before t_split+ as computed,
+            // and planes within rounding of each other need not be in their true order. So the
+            // ray first resumes where a pushed far side would have begun, at t_split- (and
+            // passes through the leaf it left, without testing it again). If that reaches no
+            // leaf ending past the farthest exit resumed after so far, it resumes exactly at
+            // that exit instead, where every leaf it reaches ends later (near sides need
+            // tn < t_split+). Each conservative restart moves restarted_at forward, and at most
+            // one exact one comes between two of them, so restarts end.
             if (counters) ++counters->restarts;
+            if (tf > restarted_at) {
+                restarted_at = tf;
+                tn = tf * (kKdSplitLo * kKdSplitLo);
+            } else {
+                tn = restarted_at;
+            }
             node = 0;
-            tn = restarted_at = tf;
             tf = t_exit;
             dropped = false;
         } else {
