@@ -6,6 +6,9 @@
 #   bench     the anchors' ray files (bvhlab rays at the default seed: 480x320x16 4x4-tiled
 #             primary, protocol diffuse), every kernel on binned, SBVH and kd-trees, checked
 #             against Embree before timing, and Embree on every core on the same rays
+#   kdbench   the bench phase for the kd-tree kernels alone (kd-full-stack, kd-short-stack with a
+#             4-entry stack), with the kd-tree's build figures (kdbuild.jsonl): run it with two
+#             installs, interleaved, to compare kd-trees and traversals
 #   bvhbench  the bench phase for the BVH2 kernels alone (binned and SBVH; no kd-tree, no Embree)
 #   cwbench   the CWBVH kernels (--layout cwbvh) on binned and SBVH trees, with Woop and with vertex
 #             leaf triangles (--cw-tris), beside the bvh2 bench
@@ -70,6 +73,19 @@ if has bench; then
             "$bin/bvhlab" -q bench "$s" --rays "$f" --device gpu --kernel all --structure kdtree --kd-stack 4 --json \
                 >>"$out/bench.jsonl" || status=1
             "$bin/bvhlab" -q bench "$s" --rays "$f" --device embree --json >>"$out/bench.jsonl" || status=1
+        done
+    done
+fi
+
+if has kdbench; then
+    for s in "${names[@]}"; do
+        make_rays "$s"
+        log "kd build $s"
+        "$bin/bvhlab" -q build "$s" --structure kdtree --json >>"$out/kdbuild.jsonl" || status=1
+        for r in primary diffuse; do
+            log "kd bench $s $r"
+            "$bin/bvhlab" -q bench "$s" --rays "$rays/$s-$r.rays" --device gpu --kernel all --structure kdtree \
+                --kd-stack 4 --json >>"$out/kdbench.jsonl" || status=1
         done
     done
 fi
