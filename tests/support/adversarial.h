@@ -41,7 +41,8 @@ struct AdversarialScene {
     accel::TriangleMesh mesh;
     trav::Camera camera;
     float ao_length = 1.0f;
-    /// The share of a ray set that may be ties. The oracle's tie windows grow with the
+    /// The share of a ray set that may be ties excusing float error (shared edge, near edge,
+    /// interval end; coincident ties are proven, not excused). The oracle's windows grow with the
     /// coordinates' magnitude (float error does), and far from the origin many hits on a room
     /// quantised to the float grid (1/128 at 1e5, 1/16 at 1e6) lie within them: 1% at the
     /// origin, 3% at 1e4, 40% beyond (measured: up to 33% of primary rays, 15% of diffuse).

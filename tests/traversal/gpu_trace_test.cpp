@@ -155,7 +155,10 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnAdversarialScenes) {
                     for (const auto& d : rep.first_mismatches)
                         ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
                                       << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
-                    EXPECT_LE(double(rep.ties), double(set.rays.size()) * scene.max_tie_fraction + 5.0);
+                    // Coincident ties are proven (the rooms overlap coplanar triangles on purpose); the
+                    // ties that excuse float error are capped.
+                    EXPECT_LE(double(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)]),
+                              double(set.rays.size()) * scene.max_tie_fraction + 5.0);
                 }
             }
         }
