@@ -62,6 +62,11 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
     float restarted_at = -INFINITY;  // the farthest leaf exit a restart has resumed after
     uint32_t node = 0, last_leaf = ~0u;
     float tn = t_enter, tf = t_exit;
+    // The widened tests below, t_split- < tf and tn < t_split+, as thresholds on t_split that
+    // change only with the interval (at a push, pop or restart), not at every node:
+    // t_split < tf_c = tf x Hi and tn_c = tn x Lo < t_split (each as conservative as the
+    // product form, to within an ulp of the widening's 2x margin).
+    float tn_c = tn * kKdSplitLo, tf_c = tf * kKdSplitHi;
     while (true) {
         while (!kd.nodes[node].is_leaf()) {
             const accel::KdNode& n = kd.nodes[node];
@@ -83,18 +88,18 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             // widened exit of the last leaf) then goes on past it instead of entering the
             // near side again. Computed in this order, t_split has the sign of the true
             // distance, so a plane behind the origin (t_split <= 0) is never crossed.
-            const float t_hi = t_split * kKdSplitHi, t_lo = t_split * kKdSplitLo;
-            if (t_split <= 0.0f || !(t_lo < tf)) {
+            if (t_split <= 0.0f || !(t_split < tf_c)) {
                 node = near;
-            } else if (!(tn < t_hi)) {
+            } else if (!(tn_c < t_split)) {
                 node = far;
             } else {
                 top = (top + 1) % stack_limit;  // overwrites the oldest entry when full
-                stack[top] = {far, max_f(t_lo, tn), tf};
+                stack[top] = {far, max_f(t_split * kKdSplitLo, tn), tf};
                 dropped = dropped || count == stack_limit;
                 count = count < stack_limit ? count + 1 : stack_limit;
                 node = near;
-                tf = min_f(t_hi, tf);
+                tf = min_f(t_split * kKdSplitHi, tf);
+                tf_c = tf * kKdSplitHi;
             }
         }
         const accel::KdNode& leaf = kd.nodes[node];
@@ -123,6 +128,8 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             node = e.node;
             tn = e.tmin;
             tf = e.tmax;
+            tn_c = tn * kKdSplitLo;
+            tf_c = tf * kKdSplitHi;
         } else if (kRestarts && dropped && tf < t_exit && tf < best) {
             // Entries were dropped (short stack): restart from the root past this leaf. The
             // dropped entries were the oldest, i.e. the farthest, so nothing before tf is lost.
@@ -139,11 +146,13 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             if (tf > restarted_at) {
                 restarted_at = tf;
                 tn = tf * (kKdSplitLo * kKdSplitLo);
+                tn_c = tn * kKdSplitLo;
             } else {
-                tn = restarted_at;
+                tn = tn_c = restarted_at;  // exact: near sides need t_split > tn
             }
             node = 0;
             tf = t_exit;
+            tf_c = tf * kKdSplitHi;
             dropped = false;
         } else {
             return hit;
