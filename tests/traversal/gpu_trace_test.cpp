@@ -6,6 +6,8 @@
 // launch). Each test skips with the reason when there is no device.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
 #include "accel/core/check.h"
@@ -72,48 +74,67 @@ std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
 class GpuKernel : public ::testing::TestWithParam<std::string> {};
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(GpuKernel);
 
+namespace {
+
+using Variant = std::pair<accel::BuilderKind, accel::CwTris>;
+
+/// `kernel` on a structure of each variant (a short-stack kernel with 1, 2 and 8 entries), on
+/// the four protocol ray types of `cfg`: every hit written, 0 real mismatches (the first ones
+/// printed), and counted_ties(report) at most max_tie_fraction x rays + slack.
+void expect_kernel_agrees(const KernelInfo& kernel, const accel::TriangleMesh& mesh, const ProtocolConfig& cfg,
+                          const std::vector<Variant>& variants,
+                          const std::function<double(const CompareReport&)>& counted_ties, double max_tie_fraction,
+                          double slack) {
+    EmbreeOracle oracle(mesh);
+    RayProtocol proto(mesh, oracle, cfg);
+    for (const auto& [builder, tris] : variants) {
+        const Structure s = make_structure(mesh, kernel.layout, builder, tris);
+        SCOPED_TRACE(s.name);
+        auto device = std::make_shared<const DeviceStructure>(s);
+        std::vector<GpuTraceOptions> options{{}};
+        if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
+        for (const GpuTraceOptions& opt : options) {
+            SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
+            auto tracer = make_gpu_tracer(device, kernel, opt);
+            // primary and diffuse are closest-hit queries, AO and shadow any-hit ones.
+            for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
+                SCOPED_TRACE(ray_type_name(t));
+                const RaySet set = proto.make(t);
+                std::vector<Hit> ours, ref;
+                tracer->trace(set, ours);
+                ASSERT_EQ(ours.size(), set.rays.size());
+                EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
+                oracle.trace(set.rays, set.query, ref);
+                const CompareReport rep = compare_hits(mesh, set.rays, set.query, ours, ref,
+                                                       [&](const Ray& r) { return oracle.intersect(r); });
+                EXPECT_EQ(rep.mismatches, 0u);
+                for (const auto& d : rep.first_mismatches)
+                    ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
+                                  << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
+                EXPECT_LE(counted_ties(rep), double(set.rays.size()) * max_tie_fraction + slack);
+            }
+        }
+    }
+}
+
+}  // namespace
+
 TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
     BVHLAB_SKIP_WITHOUT_GPU();
     const KernelInfo& kernel = find_kernel(GetParam());
     for (const TestScene& scene : test_scenes()) {
         SCOPED_TRACE(scene.name);
-        EmbreeOracle oracle(scene.mesh);
         ProtocolConfig cfg;
         cfg.camera = scene.camera;
         cfg.primary = {scene.width, scene.height, 1, 0};
-        RayProtocol proto(scene.mesh, oracle, cfg);
-        using Variant = std::pair<accel::BuilderKind, accel::CwTris>;
         std::vector<Variant> variants{{accel::BuilderKind::kBinned, accel::CwTris::kWoop},
                                       {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
         if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
         // A CWBVH's vertex-triple leaves (--cw-tris vertices) are a second kernel instance.
         if (kernel.layout == Layout::kCwbvh)
             variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
-        for (const auto& [builder, tris] : variants) {
-            const Structure s = make_structure(scene.mesh, kernel.layout, builder, tris);
-            SCOPED_TRACE(s.name);
-            auto device = std::make_shared<const DeviceStructure>(s);
-            std::vector<GpuTraceOptions> options{{}};
-            if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
-            for (const GpuTraceOptions& opt : options) {
-                SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
-                auto tracer = make_gpu_tracer(device, kernel, opt);
-                // primary and diffuse are closest-hit queries, AO and shadow any-hit ones.
-                for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
-                    SCOPED_TRACE(ray_type_name(t));
-                    const RaySet set = proto.make(t);
-                    std::vector<Hit> ours, ref;
-                    tracer->trace(set, ours);
-                    ASSERT_EQ(ours.size(), set.rays.size());
-                    EXPECT_EQ(unwritten_or_invalid(ours, scene.mesh.triangle_count()), 0u);
-                    oracle.trace(set.rays, set.query, ref);
-                    const CompareReport rep = compare_hits(scene.mesh, set.rays, set.query, ours, ref,
-                                                           [&](const Ray& r) { return oracle.intersect(r); });
-                    EXPECT_EQ(rep.mismatches, 0u);
-                    EXPECT_LE(rep.ties, set.rays.size() / 1000 + 1);
-                }
-            }
-        }
+        expect_kernel_agrees(
+            kernel, scene.mesh, cfg, variants, [](const CompareReport& rep) { return double(rep.ties); }, 0.001, 1.0);
     }
 }
 
@@ -125,43 +146,19 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnAdversarialScenes) {
     const KernelInfo& kernel = find_kernel(GetParam());
     for (const test::AdversarialScene& scene : test::adversarial_scenes()) {
         SCOPED_TRACE(scene.name);
-        EmbreeOracle oracle(scene.mesh);
         ProtocolConfig cfg;
         cfg.camera = scene.camera;
         cfg.primary = {96, 64, 1, 0};
         cfg.ao_length = scene.ao_length;
-        RayProtocol proto(scene.mesh, oracle, cfg);
-        std::vector<accel::BuilderKind> builders{accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh};
-        if (kernel.layout == Layout::kKd) builders = {accel::BuilderKind::kBinned};  // one kd-tree
-        for (const accel::BuilderKind builder : builders) {
-            const Structure s = make_structure(scene.mesh, kernel.layout, builder);
-            SCOPED_TRACE(s.name);
-            auto device = std::make_shared<const DeviceStructure>(s);
-            std::vector<GpuTraceOptions> options{{}};
-            if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
-            for (const GpuTraceOptions& opt : options) {
-                SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
-                auto tracer = make_gpu_tracer(device, kernel, opt);
-                for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
-                    SCOPED_TRACE(ray_type_name(t));
-                    const RaySet set = proto.make(t);
-                    std::vector<Hit> ours, ref;
-                    tracer->trace(set, ours);
-                    ASSERT_EQ(ours.size(), set.rays.size());
-                    oracle.trace(set.rays, set.query, ref);
-                    const CompareReport rep = compare_hits(scene.mesh, set.rays, set.query, ours, ref,
-                                                           [&](const Ray& r) { return oracle.intersect(r); });
-                    EXPECT_EQ(rep.mismatches, 0u);
-                    for (const auto& d : rep.first_mismatches)
-                        ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
-                                      << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
-                    // Coincident ties are proven (the rooms overlap coplanar triangles on purpose); the
-                    // ties that excuse float error are capped.
-                    EXPECT_LE(double(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)]),
-                              double(set.rays.size()) * scene.max_tie_fraction + 5.0);
-                }
-            }
-        }
+        std::vector<Variant> variants{{accel::BuilderKind::kBinned, accel::CwTris::kWoop},
+                                      {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
+        if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
+        // Coincident ties are proven (the rooms overlap coplanar triangles on purpose); the ties
+        // that excuse float error are capped.
+        expect_kernel_agrees(
+            kernel, scene.mesh, cfg, variants,
+            [](const CompareReport& rep) { return double(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)]); },
+            scene.max_tie_fraction, 5.0);
     }
 }
 
