@@ -1,11 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "accel/core/clip.h"
 
+#include "accel/core/round.h"
+
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
-#include <limits>
 
 namespace bvhlab::accel {
 namespace {
@@ -62,30 +61,11 @@ int clip_to_box(Vec3 a, Vec3 b, Vec3 c, const AABB& box, P3 (&buf)[2][12], const
     return n;
 }
 
-/// The next float below (dir < 0) or above (dir > 0) a finite f.
-inline float float_step(float f, int dir) {
-    if (f == 0.0f)
-        return dir < 0 ? -std::numeric_limits<float>::denorm_min() : std::numeric_limits<float>::denorm_min();
-    uint32_t u;
-    std::memcpy(&u, &f, sizeof u);
-    u = (f > 0.0f) == (dir > 0) ? u + 1 : u - 1;  // away from zero: +1; towards it: -1
-    std::memcpy(&f, &u, sizeof f);
-    return f;
-}
-
-/// Grows b by the float box of polygon vertex p, rounded outwards: a coordinate that is a
-/// float (a triangle corner, or a crossing on its clip plane) as it is, any other between the
-/// floats on either side of it. Rounding a crossing to the nearest float could move it into
-/// the box by half an ulp, and a split plane placed at that bound would then leave the sliver
-/// of the triangle beyond it out of the cell that holds it. (What is left is the error of the
-/// double-precision crossing itself, about 1e-16 relative: far below a float kernel's own.)
+/// Grows b by the float box of polygon vertex p, rounded outwards (round_outwards).
 inline void extend_outwards(AABB& b, const P3& p) {
     for (int k = 0; k < 3; ++k) {
-        const double x = p.v[k];
-        const float f = float(x);
-        float lo = f, hi = f;
-        if (double(f) > x) lo = float_step(f, -1);
-        if (double(f) < x) hi = float_step(f, 1);
+        float lo, hi;
+        round_outwards(p.v[k], lo, hi);
         b.lo[k] = std::min(b.lo[k], lo);
         b.hi[k] = std::max(b.hi[k], hi);
     }

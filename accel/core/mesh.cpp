@@ -55,6 +55,9 @@ bool count_drop(TriangleCheck check, DropCounts& drops) {
 }
 
 bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t material) {
+    a = flush_denormals(a);
+    b = flush_denormals(b);
+    c = flush_denormals(c);
     if (!count_drop(check_triangle(a, b, c), mesh.dropped)) return false;
     auto base = uint32_t(mesh.vertices.size());
     mesh.vertices.push_back(a);

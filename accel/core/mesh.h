@@ -2,6 +2,7 @@
 // Indexed triangle mesh: the input of every builder and of the Embree oracle.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -66,8 +67,19 @@ TriangleCheck check_triangle(Vec3 a, Vec3 b, Vec3 c);
 /// Counts a failed check in `drops`; returns true when the triangle is kept.
 bool count_drop(TriangleCheck check, DropCounts& drops);
 
+/// A coordinate below FLT_MIN in magnitude (a denormal) as +0, anything else as it is. Meshes
+/// never hold denormals: Embree's TBB workers run with denormals-are-zero, and a builder whose
+/// tasks read the same coordinate as 0 on some threads and as itself on others builds bounds
+/// that do not hold the triangle (the adversarial tests' rooms, tiles jittered around 0, found
+/// it). Moving a point by under 1.2e-38 is far below any float tolerance.
+inline Vec3 flush_denormals(Vec3 v) {
+    auto f = [](float x) { return std::fabs(x) < 1.17549435e-38f ? 0.0f : x; };  // FLT_MIN
+    return {f(v.x), f(v.y), f(v.z)};
+}
+
 /// Appends a triangle unless it has a non-finite vertex or zero area, which it counts in
-/// mesh.dropped instead. Returns true when the triangle was kept.
+/// mesh.dropped instead; denormal coordinates become 0 (flush_denormals). Returns true when
+/// the triangle was kept.
 bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t material);
 
 /// 64-bit FNV-1a over the triangles' vertex coordinates in triangle order, as 16 hex digits.

@@ -5,9 +5,11 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 #include "accel/core/binning.h"
 #include "accel/core/prim_ref.h"
+#include "accel/core/round.h"
 
 namespace bvhlab::accel {
 
@@ -21,8 +23,9 @@ inline AABB clamp_box(AABB box, int axis, float pos, bool keep_left) {
 }
 
 /// The box of the points where the triangle's edges cross the plane x[axis] = pos strictly
-/// (empty if none), computed in `Real` and rounded. Reference bounds that leaves keep use
-/// double; bin estimates use float, which makes the SBVH build about 9% faster.
+/// (empty if none). Reference bounds that leaves keep are computed in double and rounded
+/// outwards (round_outwards), so they contain the triangle's part; bin estimates use float
+/// rounded to nearest, which makes the SBVH build about 9% faster.
 template <typename Real>
 inline AABB plane_crossings(const Vec3 (&v)[3], int axis, float pos) {
     AABB c = AABB::empty();
@@ -30,10 +33,19 @@ inline AABB plane_crossings(const Vec3 (&v)[3], int axis, float pos) {
         const Vec3 a = v[i], b = v[i == 2 ? 0 : i + 1];
         if (!((a[axis] < pos && b[axis] > pos) || (a[axis] > pos && b[axis] < pos))) continue;
         const Real t = (Real(pos) - a[axis]) / (Real(b[axis]) - a[axis]);
-        Vec3 x;
-        for (int k = 0; k < 3; ++k) x[k] = float(Real(a[k]) + t * (Real(b[k]) - a[k]));
-        x[axis] = pos;
-        c.extend(x);
+        if constexpr (std::is_same_v<Real, double>) {
+            for (int k = 0; k < 3; ++k) {
+                float lo = pos, hi = pos;
+                if (k != axis) round_outwards(double(a[k]) + t * (double(b[k]) - a[k]), lo, hi);
+                c.lo[k] = min_f(c.lo[k], lo);
+                c.hi[k] = max_f(c.hi[k], hi);
+            }
+        } else {
+            Vec3 x;
+            for (int k = 0; k < 3; ++k) x[k] = float(Real(a[k]) + t * (Real(b[k]) - a[k]));
+            x[axis] = pos;
+            c.extend(x);
+        }
     }
     return c;
 }

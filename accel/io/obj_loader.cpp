@@ -321,6 +321,7 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     const size_t nv = attrib.vertices.size() / 3;
     mesh.vertices.resize(nv);
     if (nv) std::memcpy(mesh.vertices.data(), attrib.vertices.data(), nv * sizeof(Vec3));  // (null when empty)
+    for (Vec3& v : mesh.vertices) v = flush_denormals(v);
     for (size_t v : non_finite)
         if (v < nv) mesh.vertices[v] = {NAN, NAN, NAN};
     const size_t nt = attrib.texcoords.size() / 2;

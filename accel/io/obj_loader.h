@@ -27,7 +27,8 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
 
 /// The loader's version: part of every scene-cache key, bumped whenever the same OBJ would load
 /// differently (scene_cache.h).
-constexpr uint32_t kObjLoaderVersion = 3;  // 2: materials keep Ks, Ns, Ni, d, illum, map_Kd; 3: texcoords
+// 2: materials keep Ks, Ns, Ni, d, illum, map_Kd; 3: texcoords; 4: denormal coordinates as 0
+constexpr uint32_t kObjLoaderVersion = 4;
 
 /// Writes `mesh` as OBJ (v and f lines, usemtl per material run). Throws on I/O errors.
 void write_obj(const TriangleMesh& mesh, const std::string& path);

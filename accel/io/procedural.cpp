@@ -33,7 +33,7 @@ TriangleMesh soup(uint64_t n, uint64_t seed) {
                                    size;
                 if (check_triangle(v[0], v[1], v[2]) != TriangleCheck::kOk) continue;
                 for (int k = 0; k < 3; ++k) {
-                    m.vertices[3 * i + k] = v[k];
+                    m.vertices[3 * i + k] = flush_denormals(v[k]);
                     m.indices[3 * i + k] = uint32_t(3 * i + k);
                 }
                 break;

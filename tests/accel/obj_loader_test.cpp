@@ -184,3 +184,25 @@ TEST(ObjLoader, WriteThenLoadIsExact) {
 }
 
 }  // namespace bvhlab
+
+namespace bvhlab::accel {
+
+TEST(ObjLoader, DenormalCoordinatesBecomeZero) {
+    // Embree's threads read denormals as 0 (DAZ); a mesh holds none, so every thread and
+    // library sees the same triangle.
+    test::TempFile f("denormal.obj", "v 1e-45 0 0\nv 1 -3e-39 0\nv 0 1 1.2e-38\nf 1 2 3\n");
+    const TriangleMesh m = load_obj(f.path());
+    ASSERT_EQ(m.triangle_count(), 1u);
+    EXPECT_EQ(m.vertex(0, 0).x, 0.0f);
+    EXPECT_FALSE(std::signbit(m.vertex(0, 1).y));
+    EXPECT_EQ(m.vertex(0, 1).y, 0.0f);
+    EXPECT_EQ(m.vertex(0, 2).z, 1.2e-38f);  // FLT_MIN and above stay
+    TriangleMesh g;
+    ASSERT_TRUE(add_triangle_checked(g, {0, 0, 1e-40f}, {1, 0, 0}, {0, 1, -1e-41f}, -1));
+    EXPECT_EQ(g.vertex(0, 0).z, 0.0f);
+    EXPECT_EQ(g.vertex(0, 2).z, 0.0f);
+    EXPECT_EQ(flush_denormals({1e-30f, -2e-45f, 5.0f}).y, 0.0f);
+    EXPECT_EQ(flush_denormals({1e-30f, -2e-45f, 5.0f}).x, 1e-30f);
+}
+
+}  // namespace bvhlab::accel

@@ -84,24 +84,25 @@ TEST(Adversarial, GeneratorMakesWhatItPromises) {
         SCOPED_TRACE(s.name);
         const accel::TriangleMesh& m = s.mesh;
         ASSERT_GT(m.triangle_count(), 600u);
-        size_t near_flat = 0, on_plane = 0;
+        size_t near_flat = 0, axis_aligned = 0;
         float lo = INFINITY, hi = -INFINITY;
         for (size_t t = 0; t < m.triangle_count(); ++t) {
             const Vec3 a = m.vertex(t, 0), b = m.vertex(t, 1), c = m.vertex(t, 2);
+            bool flat = false;  // in some axis, exactly or to 4 ulps
             for (int k = 0; k < 3; ++k) {
                 const float mn = std::min({a[k], b[k], c[k]}), mx = std::max({a[k], b[k], c[k]});
                 lo = std::min(lo, mn);
                 hi = std::max(hi, mx);
+                float up = mn;
+                for (int u = 0; u < 4; ++u) up = std::nextafter(up, INFINITY);
                 // Flat to 1-4 ulps in one axis: the kd-tree's thin cells.
-                if (mn < mx &&
-                    std::nextafter(std::nextafter(std::nextafter(std::nextafter(mn, INFINITY), INFINITY), INFINITY),
-                                   INFINITY) >= mx)
-                    ++near_flat;
-                on_plane += mn == mx;
+                if (mn < mx && up >= mx) ++near_flat;
+                flat = flat || up >= mx;
             }
+            axis_aligned += flat;
         }
         EXPECT_GT(near_flat, 20u);
-        EXPECT_GT(on_plane, m.triangle_count() / 3);  // many axis-aligned faces
+        EXPECT_GT(axis_aligned, m.triangle_count() / 2);  // mostly axis-aligned faces
         // Offset scenes lie far from the origin.
         if (s.name.find("offset") != std::string::npos) {
             EXPECT_GT(lo, 9000.0f);
@@ -177,14 +178,10 @@ TEST(Adversarial, EveryKdTreeAndStackAgreesWithEmbree) {
         for (const Variant& v : variants) {
             const accel::KdLayout kd =
                 accel::convert_to_kd_layout(accel::KdTreeBuilder(v.config).build(s.mesh), s.mesh);
-            // Known gap, kept visible: a one-entry short stack on the Ct = 2 tree (every thin
-            // cell split again) loses 2-18 rays per set (of 3k-12k) on room-seed1, where the floor's planes
-            // lie denormals apart and a restart's re-descent drops the thin cells' entries
-            // (experiments/NOTES.md). Stacks of 2 and more, and every stack on the other trees,
-            // have no mismatch.
-            const std::vector<int> stacks =
-                v.name == "ct2" ? std::vector<int>{64, 2, 8} : std::vector<int>{64, 1, 2, 8};
-            for (int stack : stacks) {
+            // Stack 1 on the Ct = 2 tree is the hardest case: room-seed1's floor planes lie
+            // denormals apart, and a restart's re-descent drops the thin cells' entries (it lost
+            // 2-18 rays per set until a stalled restart retried with the ring's full 8 entries).
+            for (int stack : {64, 1, 2, 8}) {
                 cs.expect_agreement(
                     "kdtree " + v.name + " stack " + std::to_string(stack),
                     [&](const RaySet& set, std::vector<Hit>& h) { trace_kd_cpu(kd, stack, set.rays, set.query, h); });

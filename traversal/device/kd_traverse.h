@@ -34,7 +34,8 @@ struct KdView {
     AABB bounds;
 };
 
-/// Closest or any hit with a stack of `stack_limit` entries (1 .. kCap).
+/// Closest or any hit with a stack of `stack_limit` entries (1 .. kCap). A short stack whose
+/// restart stalls (below) retries with all kCap entries for the rest of the ray.
 template <bool kAnyHit, int kCap>
 BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_limit,
                                  TraversalCounters* counters = nullptr) {
@@ -57,7 +58,7 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
         float tmin, tmax;
     };
     Entry stack[kCap];
-    int top = -1, count = 0;
+    int top = -1, count = 0, limit = stack_limit;
     bool dropped = false;            // a push overwrote an entry since the last (re)start
     float restarted_at = -INFINITY;  // the farthest leaf exit a restart has resumed after
     uint32_t node = 0, last_leaf = ~0u;
@@ -93,10 +94,10 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             } else if (!(tn_c < t_split)) {
                 node = far;
             } else {
-                top = (top + 1) % stack_limit;  // overwrites the oldest entry when full
+                top = (top + 1) % limit;  // overwrites the oldest entry when full
                 stack[top] = {far, max_f(t_split * kKdSplitLo, tn), tf};
-                dropped = dropped || count == stack_limit;
-                count = count < stack_limit ? count + 1 : stack_limit;
+                dropped = dropped || count == limit;
+                count = count < limit ? count + 1 : limit;
                 node = near;
                 tf = min_f(t_split * kKdSplitHi, tf);
                 tf_c = tf * kKdSplitHi;
@@ -122,7 +123,7 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
         if (hit.is_hit() && best <= tf) return hit;
         if (count > 0) {
             const Entry e = stack[top];
-            top = (top - 1 + stack_limit) % stack_limit;
+            top = (top - 1 + limit) % limit;
             --count;
             if (e.tmin > best) return hit;
             node = e.node;
@@ -140,12 +141,21 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             // passes through the leaf it left, without testing it again). If that reaches no
             // leaf ending past the farthest exit resumed after so far, it resumes exactly at
             // that exit instead, where every leaf it reaches ends later (near sides need
-            // tn < t_split+). Each conservative restart moves restarted_at forward, and at most
-            // one exact one comes between two of them, so restarts end.
+            // tn < t_split+); but first, once per ray, it retries conservatively with the whole
+            // ring of kCap entries. Each conservative restart moves restarted_at forward, and
+            // at most two others come between two of them, so restarts end.
             if (counters) ++counters->restarts;
             if (tf > restarted_at) {
                 restarted_at = tf;
                 tn = tf * (kKdSplitLo * kKdSplitLo);
+                tn_c = tn * kKdSplitLo;
+            } else if (limit < kCap) {
+                // The re-descent dropped the entries of the cells it had to reach (many cells
+                // within rounding of one another, a deep tree, a tiny stack): the stack is
+                // empty now, so retry from the same place with all kCap entries.
+                limit = kCap;
+                top = -1;
+                tn = restarted_at * (kKdSplitLo * kKdSplitLo);
                 tn_c = tn * kKdSplitLo;
             } else {
                 tn = tn_c = restarted_at;  // exact: near sides need t_split > tn
