@@ -67,13 +67,14 @@ TriangleCheck check_triangle(Vec3 a, Vec3 b, Vec3 c);
 /// Counts a failed check in `drops`; returns true when the triangle is kept.
 bool count_drop(TriangleCheck check, DropCounts& drops);
 
-/// A coordinate below FLT_MIN in magnitude (a denormal) as +0, anything else as it is. Meshes
+/// A denormal coordinate (nonzero, below FLT_MIN in magnitude) as +0, anything else (-0
+/// too, so that scene hashes of meshes without denormals do not change) as it is. Meshes
 /// never hold denormals: Embree's TBB workers run with denormals-are-zero, and a builder whose
 /// tasks read the same coordinate as 0 on some threads and as itself on others builds bounds
 /// that do not hold the triangle (the adversarial tests' rooms, tiles jittered around 0, found
 /// it). Moving a point by under 1.2e-38 is far below any float tolerance.
 inline Vec3 flush_denormals(Vec3 v) {
-    auto f = [](float x) { return std::fabs(x) < 1.17549435e-38f ? 0.0f : x; };  // FLT_MIN
+    auto f = [](float x) { return x != 0.0f && std::fabs(x) < 1.17549435e-38f ? 0.0f : x; };  // FLT_MIN; -0 stays
     return {f(v.x), f(v.y), f(v.z)};
 }
 

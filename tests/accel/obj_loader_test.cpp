@@ -203,6 +203,7 @@ TEST(ObjLoader, DenormalCoordinatesBecomeZero) {
     EXPECT_EQ(g.vertex(0, 2).z, 0.0f);
     EXPECT_EQ(flush_denormals({1e-30f, -2e-45f, 5.0f}).y, 0.0f);
     EXPECT_EQ(flush_denormals({1e-30f, -2e-45f, 5.0f}).x, 1e-30f);
+    EXPECT_TRUE(std::signbit(flush_denormals({-0.0f, 0.0f, 0.0f}).x));  // -0 is not a denormal
 }
 
 }  // namespace bvhlab::accel
