@@ -85,10 +85,10 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             // triangles that only it holds. So each side's interval is widened by the rounding
             // bound, [tn, t_split+] for the near side and [t_split-, tf] for the far side, and
             // a side is entered when its widened interval has length: near when tn < t_split+,
-            // far when t_split- < tf. A restart at a plane (tn = t_split+ of that plane, the
-            // widened exit of the last leaf) then goes on past it instead of entering the
-            // near side again. Computed in this order, t_split has the sign of the true
-            // distance, so a plane behind the origin (t_split <= 0) is never crossed.
+            // far when t_split- < tf. (After an exact restart, below, the near test is
+            // tn < t_split, so a restart at a plane's t_split+ goes on past that plane.)
+            // Computed in this order, t_split has the sign of the true distance, so a plane
+            // behind the origin (t_split <= 0) is never crossed.
             if (t_split <= 0.0f || !(t_split < tf_c)) {
                 node = near;
             } else if (!(tn_c < t_split)) {
@@ -140,8 +140,8 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             // ray first resumes where a pushed far side would have begun, at t_split- (and
             // passes through the leaf it left, without testing it again). If that reaches no
             // leaf ending past the farthest exit resumed after so far, it resumes exactly at
-            // that exit instead, where every leaf it reaches ends later (near sides need
-            // tn < t_split+); but first, once per ray, it retries conservatively with the whole
+            // that exit instead, where every leaf it reaches ends later (near sides then need
+            // tn < t_split); but first, once per ray, it retries conservatively with the whole
             // ring of kCap entries. Each conservative restart moves restarted_at forward, and
             // at most two others come between two of them, so restarts end.
             if (counters) ++counters->restarts;
