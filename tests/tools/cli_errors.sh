@@ -270,7 +270,9 @@ expect_error structure-all-one-flag "--bins sets up one structure; --structure a
 expect_error structure-all-layout "--layout sets up one structure" verify "$tmp/cb_in.obj" --structure all --layout cwbvh
 expect_error structure-all-kernel "--kernel plain traces one layout; --structure all" verify "$tmp/cb_in.obj" --structure all --kernel plain
 expect_error structure-all-hits "--hits checks a hit file; --structure all" verify "$tmp/cb_in.obj" --structure all --rays "$tmp/small.rays" --hits "$tmp/small.hits"
-expect_error structure-all-bench "--structure all applies to .bvhlab verify. only" bench "$tmp/cb_in.obj" --structure all
+expect_error structure-all-bench "--structure: all applies to .bvhlab verify. only" bench "$tmp/cb_in.obj" --structure all
+expect_error structure-all-render "--structure: all applies to .bvhlab verify. only" render "$tmp/cb_in.obj" --structure all -o "$tmp/x.pfm"
+expect_error structure-all-build "--structure: all applies to .bvhlab verify. only" build "$tmp/cb_in.obj" --structure all
 
 # Every command's --json lines carry the identifying fields of the schema (README, "JSON lines").
 check_schema() {

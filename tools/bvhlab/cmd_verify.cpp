@@ -18,7 +18,8 @@ void print_verify_header() {
 }
 
 void print_verify_row(const nlohmann::json& j) {
-    std::string structure = j.value("structure", nlohmann::json("")).is_string() ? j.value("structure", "") : "";
+    const nlohmann::json& st = j.contains("structure") ? j["structure"] : nlohmann::json();
+    const std::string structure = st.is_string() ? st.get<std::string>() : "";
     std::printf("%-10s %-22s %-24s %12zu %12zu %8zu %10zu   %zu/%zu/%zu/%zu", j["ray_type"].get<std::string>().c_str(),
                 structure.c_str(), j["kernel"].get<std::string>().c_str(), j["rays"].get<size_t>(),
                 j["agree"].get<size_t>(), j["ties"].get<size_t>(), j["mismatches"].get<size_t>(),
@@ -69,6 +70,7 @@ void register_verify(CLI::App& app, Globals& g) {
                                  "check this hit file (e.g. from another tool) instead of bvhlab's tracer")
                      ->check(CLI::ExistingFile)
                      ->needs(file);
+    o->build.accepts_all = true;
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
@@ -141,6 +143,7 @@ void register_verify(CLI::App& app, Globals& g) {
             }
             std::vector<CheckedSet> checked;
             for (const auto& [set, type] : sets) checked.push_back(check_set(oracle, set, type));
+            const nlohmann::json protocol = file->count() ? nlohmann::json() : protocol_json(o->rays.for_scene(s));
             for (BuildOptions& bo : builds) {
                 Built b = build_scene(s, bo, g);
                 auto tracers = make_tracers(b, o->trace, bo, nullptr);
@@ -149,7 +152,7 @@ void register_verify(CLI::App& app, Globals& g) {
                         std::vector<trav::Hit> ours;
                         t->trace(cs.set, ours);
                         check_one(cs, ours, tracer_fields(b, *t));
-                        if (!file->count()) rows.back()["protocol"] = protocol_json(o->rays.for_scene(s));
+                        if (!file->count()) rows.back()["protocol"] = protocol;
                     }
                 }
             }

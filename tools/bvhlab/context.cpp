@@ -249,6 +249,11 @@ void BuildOptions::add_to(CLI::App& app) {
         "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building "
         "(verify also takes all: every structure and its tracers)");
     st->excludes(builder_flag);
+    st->check(CLI::Validator(
+        [this](std::string& v) -> std::string {
+            return v == "all" && !accepts_all ? "all applies to `bvhlab verify` only" : std::string();
+        },
+        "", "not all"));
     config_flags = {
         app.add_option("--bins", opts.num_bins, "bins per axis (binned builder, SBVH object splits)")
             ->check(CLI::Range(2, 256))
@@ -328,7 +333,6 @@ std::string BuildOptions::structure_file() const {
 }
 
 void BuildOptions::check_applicable() const {
-    if (structure == "all") throw Error("--structure all applies to `bvhlab verify` only");
     if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
     if (cw_tris_flag->count() && !is_cwbvh()) throw Error("--cw-tris applies to --layout cwbvh");
     if (!structure_file().empty()) return;

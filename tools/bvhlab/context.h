@@ -94,6 +94,9 @@ struct BuildOptions {
     std::string structure;
     accel::BuilderOptions opts;
     bool epo = true;
+    /// --structure all (every structure): set by `verify`, the one command that takes it,
+    /// before add_to(); elsewhere the option refuses it.
+    bool accepts_all = false;
     int kd_stack = 64;                       ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
     accel::KdTreeBuilder::Config kd;         ///< kd-tree build constants (--kd-*)
     std::vector<CLI::Option*> kd_flags;      ///< kd flags whose explicit values a cache must match
