@@ -17,6 +17,8 @@
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
 #include "tests/support/adversarial.h"
+#include "tests/support/agreement.h"
+#include "tests/support/edge_rays.h"
 #include "tests/support/gpu_support.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/device_buffer.h"
@@ -105,12 +107,7 @@ void expect_kernel_agrees(const KernelInfo& kernel, const accel::TriangleMesh& m
                 ASSERT_EQ(ours.size(), set.rays.size());
                 EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
                 oracle.trace(set.rays, set.query, ref);
-                const CompareReport rep = compare_hits(mesh, set.rays, set.query, ours, ref,
-                                                       [&](const Ray& r) { return oracle.intersect(r); });
-                EXPECT_EQ(rep.mismatches, 0u);
-                for (const auto& d : rep.first_mismatches)
-                    ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
-                                  << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
+                const CompareReport rep = test::expect_no_real_mismatch(mesh, oracle, set.rays, set.query, ours, ref);
                 EXPECT_LE(counted_ties(rep), double(set.rays.size()) * max_tie_fraction + slack);
             }
         }
@@ -159,6 +156,43 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnAdversarialScenes) {
             kernel, scene.mesh, cfg, variants,
             [](const CompareReport& rep) { return double(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)]); },
             scene.max_tie_fraction, 5.0);
+    }
+}
+
+TEST_P(GpuKernel, AgreesWithEmbreeOnEdgeAndPlaneRays) {
+    // tests/support/edge_rays.h: rays along the faces and edges of the structure's own boxes,
+    // through and from corners, from faces, with tmin = tmax, across and along flat boxes, in
+    // a scene on the split planes. The CPU tracers run them in EdgeRays.*.
+    BVHLAB_SKIP_WITHOUT_GPU();
+    const KernelInfo& kernel = find_kernel(GetParam());
+    for (uint32_t seed : {1u, 2u}) {
+        SCOPED_TRACE("lattice " + std::to_string(seed));
+        const accel::TriangleMesh mesh = test::make_lattice_scene(seed);
+        const EmbreeOracle oracle(mesh);
+        std::vector<Variant> variants{{accel::BuilderKind::kBinned, accel::CwTris::kWoop},
+                                      {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
+        if (kernel.layout == Layout::kCwbvh) variants.push_back({accel::BuilderKind::kSbvh, accel::CwTris::kVertices});
+        if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
+        for (const auto& [builder, tris] : variants) {
+            const Structure s = make_structure(mesh, kernel.layout, builder, tris);
+            SCOPED_TRACE(s.name);
+            const std::vector<Ray> rays = test::edge_rays(test::structure_boxes(s), mesh.bounds(), seed + 6, 400);
+            auto device = std::make_shared<const DeviceStructure>(s);
+            std::vector<GpuTraceOptions> options{{}};
+            if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
+            for (const GpuTraceOptions& opt : options) {
+                SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
+                auto tracer = make_gpu_tracer(device, kernel, opt);
+                for (Query q : {Query::kClosest, Query::kAny}) {
+                    std::vector<Hit> ours, ref;
+                    tracer->trace({rays, q}, ours);
+                    ASSERT_EQ(ours.size(), rays.size());
+                    EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
+                    oracle.trace(rays, q, ref);
+                    test::expect_no_real_mismatch(mesh, oracle, rays, q, ours, ref);
+                }
+            }
+        }
     }
 }
 

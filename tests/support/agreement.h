@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: MIT
+// The agreement check of the CPU and GPU tests: a tracer's hits against Embree's on the same
+// rays under the strict oracle, with the first real mismatches printed.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "traversal/oracle/compare.h"
+#include "traversal/oracle/embree_oracle.h"
+
+namespace bvhlab::test {
+
+/// Compares `ours` with `reference` (Embree's hits of the same rays) and expects 0 real
+/// mismatches, printing the first ones with their rays. Returns the report (ties by kind).
+inline trav::CompareReport expect_no_real_mismatch(const accel::TriangleMesh& mesh, const trav::EmbreeOracle& oracle,
+                                                   const std::vector<trav::Ray>& rays, trav::Query query,
+                                                   const std::vector<trav::Hit>& ours,
+                                                   const std::vector<trav::Hit>& reference) {
+    const trav::CompareReport rep = trav::compare_hits(mesh, rays, query, ours, reference,
+                                                       [&](const trav::Ray& r) { return oracle.intersect(r); });
+    EXPECT_EQ(rep.mismatches, 0u);
+    for (const auto& d : rep.first_mismatches) {
+        const trav::Ray& r = rays[d.ray];
+        ADD_FAILURE() << "ray " << d.ray << " (" << r.org.x << ", " << r.org.y << ", " << r.org.z << ") dir ("
+                      << r.dir.x << ", " << r.dir.y << ", " << r.dir.z << ") [" << r.tmin << ", " << r.tmax
+                      << "]: ours " << d.ours.tri << " t=" << d.ours.t << ", embree " << d.oracle.tri
+                      << " t=" << d.oracle.t << ": " << d.reason;
+    }
+    EXPECT_EQ(rep.agree + rep.ties + rep.mismatches, rep.rays);
+    return rep;
+}
+
+}  // namespace bvhlab::test

@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: MIT
+// Rays on the edges and planes of each structure (tests/support/edge_rays.h) through every CPU
+// tracer: along box faces and edges, through and from corners, from faces, with tmin = tmax,
+// across and along flat boxes, in a scene whose triangles and vertices lie on the split
+// planes. Each agrees with Embree with 0 real mismatches under the strict oracle, closest and
+// any hit. The GPU kernels run the same rays in GpuKernel.AgreesWithEmbreeOnEdgeAndPlaneRays.
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "accel/builders/builder.h"
+#include "accel/builders/kdtree.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/cwbvh_convert.h"
+#include "accel/layouts/kd_convert.h"
+#include "accel/passes/collapse_wide.h"
+#include "tests/support/agreement.h"
+#include "tests/support/edge_rays.h"
+#include "traversal/cpu/cpu_trace.h"
+#include "traversal/cpu/kd_trace.h"
+
+namespace bvhlab::trav {
+namespace {
+
+using Tracer = std::function<void(const std::vector<Ray>&, Query, std::vector<Hit>&)>;
+
+/// The structure's edge rays, closest and any hit, through `trace`: 0 real mismatches.
+void expect_edge_rays_agree(const accel::TriangleMesh& mesh, const EmbreeOracle& oracle, const Structure& s,
+                            const Tracer& trace, uint32_t seed) {
+    const std::vector<Ray> rays = test::edge_rays(test::structure_boxes(s), mesh.bounds(), seed, 400);
+    ASSERT_GT(rays.size(), 2000u);
+    for (Query q : {Query::kClosest, Query::kAny}) {
+        SCOPED_TRACE(q == Query::kClosest ? "closest" : "any");
+        std::vector<Hit> ours, ref;
+        trace(rays, q, ours);
+        oracle.trace(rays, q, ref);
+        test::expect_no_real_mismatch(mesh, oracle, rays, q, ours, ref);
+    }
+}
+
+const std::vector<accel::TriangleMesh>& lattices() {
+    static const std::vector<accel::TriangleMesh> m{test::make_lattice_scene(1), test::make_lattice_scene(2)};
+    return m;
+}
+
+}  // namespace
+
+TEST(EdgeRays, SceneAndRaysAreWhatTheyPromise) {
+    const accel::TriangleMesh& m = lattices()[0];
+    const AABB b = m.bounds();
+    EXPECT_EQ(b.lo.x, 0.0f);
+    EXPECT_EQ(b.hi.z, 32.0f);
+    size_t flat_on_plane = 0, vertex_on_lattice = 0;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        for (int k = 0; k < 3; ++k) {
+            const float a = m.vertex(t, 0)[k];
+            flat_on_plane += a == std::floor(a) && a == m.vertex(t, 1)[k] && a == m.vertex(t, 2)[k];
+        }
+        const Vec3 v = m.vertex(t, 0);
+        vertex_on_lattice += v.x == std::floor(v.x) && v.y == std::floor(v.y) && v.z == std::floor(v.z);
+    }
+    EXPECT_GT(flat_on_plane, 500u);
+    EXPECT_EQ(vertex_on_lattice, m.triangle_count());
+    // The SBVH cut triangles (references beyond the triangle count), and the kd-tree split on
+    // planes that hold flat triangles.
+    const accel::BuildTree sbvh = accel::run_builder(accel::BuilderKind::kSbvh, m, {}).tree;
+    EXPECT_GT(sbvh.prim_indices.size(), m.triangle_count());
+    Structure kd;
+    kd.layout = Layout::kKd;
+    kd.kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(m), m);
+    size_t integer_splits = 0, interior = 0;
+    for (const accel::KdNode& n : kd.kd.tree.nodes) {
+        if (n.is_leaf()) continue;
+        ++interior;
+        integer_splits += n.split() == std::floor(n.split());
+    }
+    EXPECT_GT(integer_splits, interior / 2);
+    // The rays: in a box's plane with a zero component (both signs), along edges, and with
+    // tmin = tmax.
+    const std::vector<AABB> boxes = test::structure_boxes(kd);
+    const std::vector<Ray> rays = test::edge_rays(boxes, b, 1, 400);
+    size_t zero_component = 0, negative_zero = 0, two_zeros = 0, empty_interval = 0, flat_boxes = 0;
+    for (const Ray& r : rays) {
+        const int zeros = (r.dir.x == 0.0f) + (r.dir.y == 0.0f) + (r.dir.z == 0.0f);
+        zero_component += zeros >= 1;
+        two_zeros += zeros == 2;
+        negative_zero += std::signbit(r.dir.x) && r.dir.x == 0.0f;
+        empty_interval += r.tmin == r.tmax;
+    }
+    // Leaves of one flat quad make flat BVH boxes (kd cells are never flat).
+    Structure bvh;
+    bvh.bvh2 = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree, m);
+    for (const AABB& x : test::structure_boxes(bvh))
+        flat_boxes += x.lo.x == x.hi.x || x.lo.y == x.hi.y || x.lo.z == x.hi.z;
+    EXPECT_GT(zero_component, rays.size() / 4);
+    EXPECT_GT(two_zeros, 200u);
+    EXPECT_GT(negative_zero, 20u);
+    EXPECT_GT(empty_interval, 200u);
+    EXPECT_GT(flat_boxes, 20u);
+}
+
+TEST(EdgeRays, EveryBvhAndCwbvhAgreesWithEmbree) {
+    for (size_t i = 0; i < lattices().size(); ++i) {
+        const accel::TriangleMesh& mesh = lattices()[i];
+        SCOPED_TRACE("lattice " + std::to_string(i + 1));
+        const EmbreeOracle oracle(mesh);
+        struct Variant {
+            accel::BuilderKind kind;
+            int reinsertion;
+        };
+        for (const Variant v : {Variant{accel::BuilderKind::kBinned, -1}, Variant{accel::BuilderKind::kSweep, -1},
+                                Variant{accel::BuilderKind::kSbvh, 0}, Variant{accel::BuilderKind::kSbvh, -1}}) {
+            accel::BuilderOptions opts;
+            opts.reinsertion_passes = v.reinsertion;
+            const accel::BuildTree tree = accel::run_builder(v.kind, mesh, opts).tree;
+            SCOPED_TRACE(std::string(accel::builder_name(v.kind)) + (v.reinsertion == 0 ? " without reinsertion" : ""));
+            Structure bvh;
+            bvh.bvh2 = accel::convert_to_bvh2(tree, mesh);
+            expect_edge_rays_agree(
+                mesh, oracle, bvh,
+                [&](const std::vector<Ray>& r, Query q, std::vector<Hit>& h) { trace_cpu(bvh.bvh2, r, q, h); }, 7);
+            for (auto tris : {accel::CwTris::kWoop, accel::CwTris::kVertices}) {
+                SCOPED_TRACE(tris == accel::CwTris::kWoop ? "cwbvh woop" : "cwbvh vertices");
+                Structure cw;
+                cw.layout = Layout::kCwbvh;
+                cw.cwbvh = accel::convert_to_cwbvh(
+                    accel::collapse_to_wide(tree, mesh, accel::CollapseMethod::kSahOptimal), mesh, tris);
+                expect_edge_rays_agree(
+                    mesh, oracle, cw,
+                    [&](const std::vector<Ray>& r, Query q, std::vector<Hit>& h) { trace_cpu(cw.cwbvh, r, q, h); }, 8);
+            }
+        }
+    }
+}
+
+TEST(EdgeRays, EveryKdTreeAndStackAgreesWithEmbree) {
+    accel::KdTreeBuilder::Config wh;  // Wald & Havran's constants: deeper trees, more flat cells
+    wh.traversal_cost = 15.0f;
+    wh.intersection_cost = 20.0f;
+    wh.empty_bonus = 0.2f;
+    for (size_t i = 0; i < lattices().size(); ++i) {
+        const accel::TriangleMesh& mesh = lattices()[i];
+        SCOPED_TRACE("lattice " + std::to_string(i + 1));
+        const EmbreeOracle oracle(mesh);
+        for (const auto& config : {accel::KdTreeBuilder::Config{}, wh}) {
+            Structure kd;
+            kd.layout = Layout::kKd;
+            kd.kd = accel::convert_to_kd_layout(accel::KdTreeBuilder(config).build(mesh), mesh);
+            for (int stack : {64, 1, 2, 8}) {
+                SCOPED_TRACE("kd stack " + std::to_string(stack));
+                expect_edge_rays_agree(
+                    mesh, oracle, kd,
+                    [&](const std::vector<Ray>& r, Query q, std::vector<Hit>& h) {
+                        trace_kd_cpu(kd.kd, stack, r, q, h);
+                    },
+                    9);
+            }
+        }
+    }
+}
+
+}  // namespace bvhlab::trav
