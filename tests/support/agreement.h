@@ -18,8 +18,8 @@ inline trav::CompareReport expect_no_real_mismatch(const accel::TriangleMesh& me
                                                    const std::vector<trav::Ray>& rays, trav::Query query,
                                                    const std::vector<trav::Hit>& ours,
                                                    const std::vector<trav::Hit>& reference) {
-    const trav::CompareReport rep = trav::compare_hits(mesh, rays, query, ours, reference,
-                                                       [&](const trav::Ray& r) { return oracle.intersect(r); });
+    const trav::CompareReport rep =
+        trav::compare_hits(mesh, rays, query, ours, reference, [&](const trav::Ray& r) { return oracle.intersect(r); });
     EXPECT_EQ(rep.mismatches, 0u);
     for (const auto& d : rep.first_mismatches) {
         const trav::Ray& r = rays[d.ray];

@@ -16,10 +16,10 @@ namespace bvhlab::trav {
 namespace {
 
 // The documented defaults (compare.h).
-constexpr double kTRel = 1e-4;       // t window, relative to t
-constexpr double kTAbsRel = 1e-6;    // t window, relative to |o| + |p| over |d| cos
-constexpr double kEdgeEps = 1e-4;    // barycentric window, fixed part
-constexpr double kEdgeFloatK = 32;   // barycentric window, float part: k x 2^-24 (|o| + |p|) / (h_min cos)
+constexpr double kTRel = 1e-4;          // t window, relative to t
+constexpr double kTAbsRel = 1e-6;       // t window, relative to |o| + |p| over |d| cos
+constexpr double kEdgeEps = 1e-4;       // barycentric window, fixed part
+constexpr double kEdgeFloatK = 32;      // barycentric window, float part: k x 2^-24 (|o| + |p|) / (h_min cos)
 constexpr double kUlp1 = 5.9604645e-8;  // 2^-24
 
 /// The unit right triangle (0,0,0) (1,0,0) (0,1,0) moved by `offset`; u and v of a point
@@ -42,8 +42,8 @@ int claim(const accel::TriangleMesh& m, const Ray& r, const Hit& h, const Compar
 
 /// Ties and mismatches of one closest-hit ray where we miss and the oracle reports `oracle`.
 CompareReport one_missed(const accel::TriangleMesh& m, const Ray& r, const Hit& oracle, const CompareConfig& cfg = {}) {
-    return compare_hits(m, {r}, Query::kClosest, {Hit::miss()}, {oracle}, [](const Ray&) { return Hit::miss(); },
-                        cfg);
+    return compare_hits(
+        m, {r}, Query::kClosest, {Hit::miss()}, {oracle}, [](const Ray&) { return Hit::miss(); }, cfg);
 }
 
 double altitude_of_unit_triangle() { return 1.0 / std::sqrt(2.0); }  // h_min of the unit right triangle
@@ -62,7 +62,8 @@ TEST(OracleBounds, RelativeTWindow) {
     // Against the oracle's own hit: the same windows decide agreement.
     const Hit truth{0, 1000.0f, 0.3f, 0.2f};
     auto compare = [&](const Hit& ours, const CompareConfig& cfg = {}) {
-        return compare_hits(m, {r}, Query::kClosest, {ours}, {truth}, [](const Ray&) { return Hit::miss(); }, cfg);
+        return compare_hits(
+            m, {r}, Query::kClosest, {ours}, {truth}, [](const Ray&) { return Hit::miss(); }, cfg);
     };
     EXPECT_EQ(compare(inside).agree, 1u);
     EXPECT_EQ(compare(outside).mismatches_by_kind[size_t(MismatchKind::kWrongT)], 1u);
