@@ -2,8 +2,7 @@
 // kd-tree traversal, host and device: a full stack, or a short stack with restart (Horn,
 // Sugerman, Houston & Hanrahan 2007, "Interactive k-d tree GPU raytracing"). The stack is a
 // ring of `stack_limit` entries; when pushes overflow it, the oldest entries are dropped, and
-// once it runs dry the ray restarts with tmin moved to the last leaf's exit, at the root or at
-// the deepest node its remaining interval lies wholly within (push-down).
+// once it runs dry the ray restarts at the root with tmin moved to the last leaf's exit.
 #pragma once
 
 #include <cstdint>
@@ -64,19 +63,11 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
     float restarted_at = -INFINITY;  // the farthest leaf exit a restart has resumed after
     uint32_t node = 0, last_leaf = ~0u;
     float tn = t_enter, tf = t_exit;
-    // Push-down (Horn et al. 2007): while a descent from the restart node has entered one
-    // child at every node, the rest of the ray lies in the cell reached, so a restart may begin
-    // there instead of at the root. The one-child choices hold for every later interval whose
-    // near threshold tn_c is at least the one they were made with (root_tn_c); tf is t_exit
-    // throughout such a descent.
-    uint32_t root = 0;
-    bool push_down = true;
     // The widened tests below, t_split- < tf and tn < t_split+, as thresholds on t_split that
     // change only with the interval (at a push, pop or restart), not at every node:
     // t_split < tf_c = tf x Hi and tn_c = tn x Lo < t_split (each as conservative as the
     // product form, to within an ulp of the widening's 2x margin).
     float tn_c = tn * kKdSplitLo, tf_c = tf * kKdSplitHi;
-    float root_tn_c = tn_c;
     while (true) {
         while (!kd.nodes[node].is_leaf()) {
             const accel::KdNode& n = kd.nodes[node];
@@ -100,12 +91,9 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             // behind the origin (t_split <= 0) is never crossed.
             if (t_split <= 0.0f || !(t_split < tf_c)) {
                 node = near;
-                if (kRestarts && push_down) root = node;
             } else if (!(tn_c < t_split)) {
                 node = far;
-                if (kRestarts && push_down) root = node;
             } else {
-                if (kRestarts) push_down = false;
                 top = (top + 1) % limit;  // overwrites the oldest entry when full
                 stack[top] = {far, max_f(t_split * kKdSplitLo, tn), tf};
                 dropped = dropped || count == limit;
@@ -172,10 +160,7 @@ BVHLAB_HD inline Hit traverse_kd(const KdView& kd, const Ray& ray, int stack_lim
             } else {
                 tn = tn_c = restarted_at;  // exact: near sides need t_split > tn
             }
-            if (tn_c < root_tn_c) root = 0;  // the one-child choices above root may not hold
-            root_tn_c = tn_c;
-            node = root;
-            push_down = true;
+            node = 0;
             tf = t_exit;
             tf_c = tf * kKdSplitHi;
             dropped = false;
