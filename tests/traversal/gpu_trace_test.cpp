@@ -20,6 +20,7 @@
 #include "tests/support/agreement.h"
 #include "tests/support/edge_rays.h"
 #include "tests/support/gpu_support.h"
+#include "tests/support/pinned_work.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/device_buffer.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -190,6 +191,60 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEdgeAndPlaneRays) {
                     EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
                     oracle.trace(rays, q, ref);
                     test::expect_no_real_mismatch(mesh, oracle, rays, q, ours, ref);
+                }
+            }
+        }
+    }
+}
+
+TEST_P(GpuKernel, CountersEqualTheCpuReferences) {
+    // A kernel that runs a shared traversal counts its work (trace_gpu_counted); on the pinned
+    // scenes and rays (tests/support/pinned_work.h) its nodes, leaves, triangle tests and
+    // restarts equal the CPU traversal's ray by ray. Kernels that traverse in another order do
+    // not count, and say so.
+    BVHLAB_SKIP_WITHOUT_GPU();
+    const KernelInfo& kernel = find_kernel(GetParam());
+    for (const test::PinnedScene& scene : test::pinned_scenes()) {
+        SCOPED_TRACE(scene.name);
+        const test::PinnedRays rays(scene);
+        std::vector<accel::CwTris> formats{accel::CwTris::kWoop};
+        if (kernel.layout == Layout::kCwbvh) formats.push_back(accel::CwTris::kVertices);
+        for (accel::CwTris tris : formats) {
+            const Structure s = make_structure(scene.mesh, kernel.layout, accel::BuilderKind::kBinned, tris);
+            SCOPED_TRACE(s.name);
+            const DeviceStructure device(s);
+            std::vector<Hit> hits;
+            std::vector<TraversalCounters> gpu;
+            if (!kernel.counts) {
+                EXPECT_THROW(trace_gpu_counted(device, kernel, rays.sets[0].second, hits, gpu), Error);
+                return;
+            }
+            const std::vector<int> stacks = kernel.short_stack ? std::vector<int>{1, 2, 8} : std::vector<int>{64};
+            for (int stack : stacks) {
+                for (const auto& [type, set] : rays.sets) {
+                    SCOPED_TRACE(type + " stack " + std::to_string(stack));
+                    GpuTraceOptions opts;
+                    if (kernel.short_stack) opts.kd_stack = stack;
+                    trace_gpu_counted(device, kernel, set, hits, gpu, opts);
+                    std::vector<Hit> cpu_hits;
+                    std::vector<TraversalCounters> cpu;
+                    trace_cpu_counted(s, stack, set, cpu_hits, &cpu);
+                    ASSERT_EQ(gpu.size(), cpu.size());
+                    size_t differ = 0, first = 0;
+                    uint64_t gpu_nodes = 0, cpu_nodes = 0;
+                    for (size_t i = 0; i < cpu.size(); ++i) {
+                        const bool same = gpu[i].nodes == cpu[i].nodes && gpu[i].leaves == cpu[i].leaves &&
+                                          gpu[i].tri_tests == cpu[i].tri_tests && gpu[i].restarts == cpu[i].restarts;
+                        if (!same && differ++ == 0) first = i;
+                        gpu_nodes += gpu[i].nodes;
+                        cpu_nodes += cpu[i].nodes;
+                    }
+                    EXPECT_EQ(differ, 0u)
+                        << "first at ray " << first << ": gpu nodes " << gpu[first].nodes << " leaves "
+                        << gpu[first].leaves << " tests " << gpu[first].tri_tests << ", cpu " << cpu[first].nodes << " "
+                        << cpu[first].leaves << " " << cpu[first].tri_tests;
+                    EXPECT_EQ(gpu_nodes, cpu_nodes);
+                    EXPECT_GT(cpu_nodes, cpu.size());  // real work was counted
                 }
             }
         }

@@ -93,6 +93,25 @@ std::unique_ptr<Tracer> make_gpu_tracer(std::shared_ptr<const DeviceStructure> s
     return std::make_unique<GpuTracer>(std::move(structure), kernel, opts);
 }
 
+void trace_gpu_counted(const DeviceStructure& structure, const KernelInfo& kernel, const RaySet& set,
+                       std::vector<Hit>& hits, std::vector<TraversalCounters>& counters, const GpuTraceOptions& opts) {
+    if (!kernel.counts) throw Error(std::string("kernel '") + kernel.name + "' does not count its work");
+    check_kernel_fits(kernel, structure.layout(), structure.depth(), opts);
+    hits.clear();
+    counters.clear();
+    if (set.rays.empty()) return;
+    RayQueue queue;
+    queue.upload(set.rays);
+    queue.poison_hits();
+    DeviceBuffer<TraversalCounters> c(set.rays.size());
+    c.fill_bytes(0xFF);  // poisoned: a ray the kernel skips shows
+    LaunchArgs a = make_args(structure, queue, set.query, nullptr, opts, nullptr);
+    a.counters = c.data();
+    kernel.launch(a);
+    queue.download_hits(hits, set.rays.size());
+    c.download(counters);
+}
+
 void launch_on_queue(const DeviceStructure& structure, const KernelInfo& kernel, RayQueue& queue, Query query,
                      uint32_t* d_next_ray, const GpuTraceOptions& opts, void* stream) {
     check_kernel_fits(kernel, structure.layout(), structure.depth(), opts);

@@ -27,6 +27,14 @@ std::unique_ptr<Tracer> make_gpu_tracer(std::shared_ptr<const DeviceStructure> s
 /// Traces the first `count` rays of a queue that already lives on the device with `kernel`
 /// (no host copies): the entry point of a wavefront renderer. Asynchronous on `stream`.
 /// `d_next_ray` is a device counter the caller zeroes before each launch (persistent kernels).
+/// Traces `set` once with `kernel`, a kernel that counts (KernelInfo::counts: it runs a shared
+/// traversal), and records each ray's work (nodes, leaves, triangle tests, restarts) in
+/// `counters`, as the CPU tracers do. Runs the kernel's counting instance, not the timed one.
+/// Throws bvhlab::Error for a kernel that does not count.
+void trace_gpu_counted(const DeviceStructure& structure, const KernelInfo& kernel, const RaySet& set,
+                       std::vector<Hit>& hits, std::vector<TraversalCounters>& counters,
+                       const GpuTraceOptions& opts = {});
+
 void launch_on_queue(const DeviceStructure& structure, const KernelInfo& kernel, RayQueue& queue, Query query,
                      uint32_t* d_next_ray, const GpuTraceOptions& opts = {}, void* stream = nullptr);
 

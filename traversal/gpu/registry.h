@@ -30,6 +30,9 @@ struct LaunchArgs {
     uint32_t* d_next_ray = nullptr;  ///< a device counter zeroed before each launch (persistent kernels)
     uint32_t fetch_threshold = 0;    ///< idle lanes that trigger a dynamic fetch; 0 = the kernel's default
     void* stream = nullptr;          ///< cudaStream_t; null = the default stream
+    /// Non-null: one entry per ray slot, where a kernel that counts (KernelInfo::counts) writes
+    /// each ray's work; such a launch runs the counting instance of the kernel, not the timed one.
+    TraversalCounters* counters = nullptr;
 };
 
 /// Idle lanes of a warp that start new rays in the dynamic-fetch kernels unless asked otherwise.
@@ -48,6 +51,7 @@ struct KernelInfo {
     void (*launch)(const LaunchArgs&);  ///< asynchronous on args.stream; throws CudaError
     int max_block = 1024;               ///< the largest block it launches (its __launch_bounds__)
     bool dynamic_fetch = false;         ///< takes a fetch threshold (--fetch-threshold 1..32)
+    bool counts = false;                ///< runs a shared traversal and can count its work (LaunchArgs::counters)
 };
 
 /// Adds a kernel; throws bvhlab::Error on a duplicate name. Returns true (for static init).

@@ -10,8 +10,8 @@ namespace {
 template <bool kAnyHit, bool kVertexTris>
 struct CwbvhTrace {
     CwbvhView view;
-    __device__ __forceinline__ Hit operator()(const Ray& r) const {
-        return traverse_cwbvh<kAnyHit, kVertexTris>(view, r);
+    __device__ __forceinline__ Hit operator()(const Ray& r, TraversalCounters* c = nullptr) const {
+        return traverse_cwbvh<kAnyHit, kVertexTris>(view, r, c);
     }
 };
 
@@ -26,6 +26,6 @@ void launch(const LaunchArgs& a) {
 BVHLAB_REGISTER_KERNEL({"cwbvh", Layout::kCwbvh,
                         "compressed 8-wide BVH: one thread per ray, the traversal the CPU reference runs "
                         "(octant-ordered node groups, quantised boxes)",
-                        uint32_t(kCwbvhStackSize), false, 128, launch});
+                        uint32_t(kCwbvhStackSize), false, 128, launch, 1024, false, true});
 
 }  // namespace bvhlab::trav

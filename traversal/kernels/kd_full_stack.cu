@@ -10,8 +10,8 @@ namespace {
 template <bool kAnyHit>
 struct KdFullTrace {
     KdView view;
-    __device__ __forceinline__ Hit operator()(const Ray& r) const {
-        return traverse_kd<kAnyHit, kKdFullStack>(view, r, kKdFullStack);
+    __device__ __forceinline__ Hit operator()(const Ray& r, TraversalCounters* c = nullptr) const {
+        return traverse_kd<kAnyHit, kKdFullStack>(view, r, kKdFullStack, c);
     }
 };
 
@@ -23,6 +23,6 @@ void launch(const LaunchArgs& a) {
 
 BVHLAB_REGISTER_KERNEL({"kd-full-stack", Layout::kKd,
                         "kd-tree, one thread per ray, full stack of 64 (tmin, tmax, node) entries: the reference",
-                        kKdFullStack, false, 128, launch});
+                        kKdFullStack, false, 128, launch, 1024, false, true});
 
 }  // namespace bvhlab::trav

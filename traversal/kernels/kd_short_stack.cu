@@ -12,8 +12,8 @@ template <bool kAnyHit>
 struct KdShortTrace {
     KdView view;
     int entries;
-    __device__ __forceinline__ Hit operator()(const Ray& r) const {
-        return traverse_kd<kAnyHit, kKdMaxShortStack>(view, r, entries);
+    __device__ __forceinline__ Hit operator()(const Ray& r, TraversalCounters* c = nullptr) const {
+        return traverse_kd<kAnyHit, kKdMaxShortStack>(view, r, entries, c);
     }
 };
 
@@ -26,6 +26,6 @@ void launch(const LaunchArgs& a) {
 BVHLAB_REGISTER_KERNEL(
     {"kd-short-stack", Layout::kKd,
      "kd-tree, one thread per ray, short stack of 1-8 entries (--kd-stack) with restart (Horn et al. 2007)",
-     kNoStackLimit, true, 128, launch});
+     kNoStackLimit, true, 128, launch, 1024, false, true});
 
 }  // namespace bvhlab::trav

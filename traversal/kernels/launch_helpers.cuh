@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <type_traits>
 
+#include "accel/core/check.h"
 #include "traversal/cuda_check.h"
 #include "traversal/gpu/device_buffer.h"
 #include "traversal/gpu/registry.h"
@@ -36,6 +37,17 @@ __global__ void per_ray_kernel(RayQueueView q, PerRay f) {
 template <class PerRay, int kMaxThreads, int kMinBlocks>
 __global__ void __launch_bounds__(kMaxThreads, kMinBlocks) per_ray_kernel_bounded(RayQueueView q, PerRay f) {
     trace_one_per_thread(q, f);
+}
+
+/// One thread per ray that also writes the ray's work: f(ray, &counters) runs a shared
+/// traversal with its counters (the timed kernels call f(ray), which counts nothing).
+template <class PerRay>
+__global__ void per_ray_counted_kernel(RayQueueView q, TraversalCounters* counters, PerRay f) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= __ldg(q.count)) return;
+    TraversalCounters c{};
+    store_hit(q.hits, i, f(load_ray(q.rays, i), &c));
+    counters[i] = c;
 }
 
 /// Persistent threads with dynamic ray fetch: a grid that just fills the GPU, where each warp
@@ -116,6 +128,16 @@ void launch_per_ray(const LaunchArgs& a, int default_block, const PerRay& f, uin
     const int block = block_of(a, default_block);
     const uint32_t grid = (a.capacity + uint32_t(block) - 1) / uint32_t(block);
     if (grid == 0) return;
+    if (a.counters) {  // the counting instance (KernelInfo::counts), for tests and work figures
+        if constexpr (std::is_invocable_v<const PerRay&, const Ray&, TraversalCounters*>) {
+            per_ray_counted_kernel<PerRay>
+                <<<grid, block, 0, static_cast<cudaStream_t>(a.stream)>>>(a.queue, a.counters, f);
+            BVHLAB_CHECK_LAUNCH();
+            return;
+        } else {
+            throw Error("this kernel does not count its work");
+        }
+    }
     auto launch = [&](auto* kernel) {
         const size_t smem = shared_bytes(kernel, block, smem_per_thread);
         kernel<<<grid, block, smem, static_cast<cudaStream_t>(a.stream)>>>(a.queue, f);

@@ -9,7 +9,9 @@ namespace {
 template <bool kAnyHit>
 struct PlainTrace {
     Bvh2View view;
-    __device__ __forceinline__ Hit operator()(const Ray& r) const { return traverse_bvh2<kAnyHit>(view, r); }
+    __device__ __forceinline__ Hit operator()(const Ray& r, TraversalCounters* c = nullptr) const {
+        return traverse_bvh2<kAnyHit>(view, r, c);
+    }
 };
 
 void launch(const LaunchArgs& a) {
@@ -21,6 +23,6 @@ void launch(const LaunchArgs& a) {
 BVHLAB_REGISTER_KERNEL(
     {"plain", Layout::kBvh2,
      "baseline: one thread per ray, the traversal the CPU tracer runs (near child first, generic loads)",
-     kBvh2StackSize, false, 128, launch});
+     kBvh2StackSize, false, 128, launch, 1024, false, true});
 
 }  // namespace bvhlab::trav
