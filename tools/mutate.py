@@ -1,0 +1,373 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Mutation campaign over bvhlab's core sources (run through tools/mutate.sh).
+
+universalmutator (PyPI) writes the mutants: one-line changes of operators, constants,
+conditions and statements. This driver runs them, because universalmutator's own runner
+(analyze_mutants) counts a mutant that does not compile as killed: here such a mutant is
+"stillborn" and counts for nothing. For each mutant, one at a time: the mutant replaces its
+source file in a CPU-only Release build (build-mutate/), an incremental build runs, then the
+CPU tests (ctest -LE gpu) until the first failure; the original file is always restored.
+A mutant is killed when a test fails or the tests run past the time limit (a hang), and
+survives when every test passes. Survivors that cannot change behaviour are listed, with the
+reason, in tests/mutation/equivalent.txt and are not run.
+
+The report (Markdown and JSON) gives the score per file, killed / (killed + survived), and
+every survivor by file and line. docs/mutation.md tells how to read and act on it.
+"""
+
+import argparse
+import datetime
+import difflib
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+CORE_DIRS = ["accel/core", "accel/builders", "accel/layouts", "traversal/reference", "traversal/device",
+             "traversal/oracle"]
+# .cuh files hold device-only code: a CPU-only build does not compile them.
+EXTENSIONS = (".h", ".cpp")
+
+
+def die(msg, code=2):
+    print(f"mutate: {msg}", file=sys.stderr)
+    sys.exit(code)
+
+
+def sh(cmd, cwd, timeout=None, env=None):
+    """Runs cmd; returns (returncode or None on timeout, output)."""
+    try:
+        p = subprocess.run(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                           timeout=timeout, env=env)
+        return p.returncode, p.stdout
+    except subprocess.TimeoutExpired as e:
+        out = e.stdout.decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
+        return None, out
+
+
+def core_files(root):
+    files = []
+    for d in CORE_DIRS:
+        for name in sorted(os.listdir(os.path.join(root, d))):
+            if name.endswith(EXTENSIONS):
+                files.append(f"{d}/{name}")
+    return files
+
+
+def changed_files(root, rev):
+    rc, out = sh(["git", "diff", "--name-only", rev, "--"], root)
+    if rc != 0:
+        die(f"--changed {rev}: git diff failed: {out.strip().splitlines()[-1] if out.strip() else rc}")
+    core = set(core_files(root))
+    return [f for f in out.split() if f in core]
+
+
+def load_equivalents(path):
+    """tests/mutation/equivalent.txt: file<TAB>original line<TAB>mutated line<TAB>reason."""
+    eq = {}
+    if not os.path.exists(path):
+        return eq
+    with open(path) as f:
+        for n, line in enumerate(f, 1):
+            if not line.strip() or line.startswith("#"):
+                continue
+            parts = line.rstrip("\n").split("\t")
+            if len(parts) != 4 or not parts[3].strip():
+                die(f"{path}:{n}: expected 4 tab-separated fields (file, original, mutant, reason)")
+            eq[(parts[0], parts[1].strip(), parts[2].strip())] = parts[3].strip()
+    return eq
+
+
+def make_mutants(root, rel, out_dir):
+    """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped)."""
+    src = os.path.join(root, rel)
+    d = os.path.join(out_dir, rel.replace("/", "__"))
+    os.makedirs(d, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:  # universalmutator leaves files in its cwd
+        rc, out = sh(["mutate", src, "cpp", "--noCheck", "--mutantDir", d], tmp)
+    if rc != 0:
+        die(f"universalmutator failed on {rel}: {out.strip()[-300:]}")
+    with open(src) as f:
+        original = f.read().splitlines()
+    mutants = []
+    for name in sorted(os.listdir(d), key=lambda n: int(n.split(".mutant.")[1].split(".")[0])):
+        with open(os.path.join(d, name)) as f:
+            lines = f.read().splitlines()
+        sm = difflib.SequenceMatcher(a=original, b=lines, autojunk=False)
+        ops = [op for op in sm.get_opcodes() if op[0] != "equal"]
+        if len(ops) != 1:
+            continue
+        tag, i1, i2, j1, j2 = ops[0]
+        text = " ".join(x.strip() for x in original[i1:i2])
+        if text.startswith(("//", "/*", "*", "#")):
+            continue  # comments and preprocessor lines: nothing a test could see
+        mutants.append({
+            "file": rel,
+            "path": os.path.join(d, name),
+            "line": i1 + 1,
+            "original": " ".join(x.strip() for x in original[i1:i2]),
+            "mutant": " ".join(x.strip() for x in lines[j1:j2]),
+        })
+    return mutants
+
+
+class Restorer:
+    """Keeps the original of the file being mutated and puts it back on exit or signal."""
+
+    def __init__(self, root, backup_dir):
+        self.root = root
+        self.backup_dir = backup_dir
+        self.current = None
+        os.makedirs(backup_dir, exist_ok=True)
+        self.recover()
+        signal.signal(signal.SIGINT, self.on_signal)
+        signal.signal(signal.SIGTERM, self.on_signal)
+
+    def manifest(self):
+        return os.path.join(self.backup_dir, "mutated-file")
+
+    def recover(self):
+        """A campaign killed mid-mutant left its original here: put it back first."""
+        if os.path.exists(self.manifest()):
+            with open(self.manifest()) as f:
+                rel = f.read().strip()
+            shutil.copyfile(os.path.join(self.backup_dir, "original"), os.path.join(self.root, rel))
+            os.remove(self.manifest())
+            print(f"mutate: restored {rel} from an interrupted campaign", file=sys.stderr)
+
+    def apply(self, rel, mutant_path):
+        shutil.copyfile(os.path.join(self.root, rel), os.path.join(self.backup_dir, "original"))
+        with open(self.manifest(), "w") as f:
+            f.write(rel)
+        self.current = rel
+        shutil.copyfile(mutant_path, os.path.join(self.root, rel))
+
+    def restore(self):
+        if self.current is None:
+            return
+        dst = os.path.join(self.root, self.current)
+        shutil.copyfile(os.path.join(self.backup_dir, "original"), dst)
+        os.utime(dst)  # newer than the mutant's objects, so the next build recompiles
+        os.remove(self.manifest())
+        self.current = None
+
+    def on_signal(self, signum, frame):
+        rel = self.current
+        self.restore()
+        die(f"interrupted (signal {signum})" + (f"; {rel} restored" if rel else ""), 130)
+
+
+def build(build_dir, jobs):
+    return sh(["cmake", "--build", build_dir, "-j", str(jobs)], None)
+
+
+def run_tests(build_dir, jobs, timeout):
+    """(status, failing test or None): 'pass', 'fail' or 'timeout'. Fast tests first, then the
+    slow benchmark-scene test, each stopping at the first failure."""
+    t0 = time.time()
+    for sel in (["-E", "BenchmarkScenes"], ["-R", "BenchmarkScenes"]):
+        left = timeout - (time.time() - t0)
+        if left <= 0:
+            return "timeout", None
+        rc, out = sh(["ctest", "--test-dir", build_dir, "-LE", "gpu", "--stop-on-failure", "-j", str(jobs),
+                      "--timeout", str(int(max(left, 1)))] + sel, None, timeout=left + 30)
+        if rc is None:
+            return "timeout", None
+        if rc != 0:
+            failed = [ln.split("-", 1)[-1].strip().split(" (")[0] for ln in out.splitlines()
+                      if ln.strip().endswith(("(Failed)", "(Timeout)", "(SEGFAULT)", "(Subprocess aborted)",
+                                              "(Child aborted)", "(Exception)"))]
+            if any("(Timeout)" in ln for ln in out.splitlines() if "tests FAILED" not in ln):
+                return "timeout", failed[0] if failed else None
+            return "fail", failed[0] if failed else "ctest exit %d" % rc
+    return "pass", None
+
+
+def write_report(results, meta, out_dir):
+    per_file = {}
+    for r in results:
+        s = per_file.setdefault(r["file"], {"killed": 0, "survived": 0, "equivalent": 0, "stillborn": 0})
+        key = {"killed": "killed", "timeout": "killed", "survived": "survived", "equivalent": "equivalent",
+               "stillborn": "stillborn"}[r["status"]]
+        s[key] += 1
+    total = {k: sum(s[k] for s in per_file.values()) for k in ("killed", "survived", "equivalent", "stillborn")}
+
+    def score(s):
+        n = s["killed"] + s["survived"]
+        return s["killed"] / n if n else None
+
+    meta["score"] = score(total)
+    meta["totals"] = total
+    with open(os.path.join(out_dir, "report.json"), "w") as f:
+        json.dump({"campaign": meta, "files": per_file, "mutants": results}, f, indent=1)
+    lines = [f"# Mutation campaign at {meta['commit']}", "",
+             f"{meta['date']}; {meta['mutants_run']} mutants run of {meta['mutants_total']} generated "
+             f"(sample {meta['sample']}, seed {meta['seed']}); {meta['minutes']:.1f} minutes.", "",
+             "Score = killed / (killed + survived); stillborn mutants (do not compile) and equivalent ones "
+             "(tests/mutation/equivalent.txt) are not counted.", "",
+             "| file | killed | survived | equivalent | stillborn | score |", "|---|---|---|---|---|---|"]
+    for f, s in sorted(per_file.items()):
+        sc = score(s)
+        lines.append(f"| {f} | {s['killed']} | {s['survived']} | {s['equivalent']} | {s['stillborn']} | "
+                     f"{'-' if sc is None else '%.0f%%' % (100 * sc)} |")
+    sc = meta["score"]
+    lines.append(f"| **all** | {total['killed']} | {total['survived']} | {total['equivalent']} | "
+                 f"{total['stillborn']} | {'-' if sc is None else '%.1f%%' % (100 * sc)} |")
+    lines += ["", "## Survivors", ""]
+    surv = [r for r in results if r["status"] == "survived"]
+    if not surv:
+        lines.append("None.")
+    for r in surv:
+        lines += [f"- `{r['file']}:{r['line']}`", f"  - `{r['original']}`", f"  + `{r['mutant']}`"]
+    lines += ["", "## Killed by", ""]
+    by_test = {}
+    for r in results:
+        if r["status"] in ("killed", "timeout"):
+            by_test[r.get("killed_by") or "timeout"] = by_test.get(r.get("killed_by") or "timeout", 0) + 1
+    for t, n in sorted(by_test.items(), key=lambda x: -x[1]):
+        lines.append(f"- {t}: {n}")
+    with open(os.path.join(out_dir, "report.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="tools/mutate.sh", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--files", action="append", default=[],
+                    help="source files to mutate (repeatable or comma-separated; default: every core file)")
+    ap.add_argument("--changed", metavar="REV", help="the core files changed since git revision REV")
+    ap.add_argument("--sample", type=int, default=0,
+                    help="run this many mutants that compile, drawn at random (0: all); stillborn ones are "
+                         "drawn past")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the sample and of the order (default 1)")
+    ap.add_argument("--budget", type=float, default=0, help="start no mutant after this many minutes (0: none)")
+    ap.add_argument("--build-dir", default="build-mutate", help="CPU-only build folder (default build-mutate)")
+    ap.add_argument("--out", help="report folder (default BUILD_DIR/campaign-COMMIT)")
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2, help="build and test jobs")
+    ap.add_argument("--timeout", type=float, default=0,
+                    help="seconds the tests of one mutant may take (default: 3x the unmutated run, at least 120)")
+    ap.add_argument("--list", action="store_true", help="list the mutants of the sample and stop")
+    ap.add_argument("--fail-under", type=float, default=-1,
+                    help="exit 1 when the score is below this fraction (default: report only)")
+    a = ap.parse_args()
+
+    rc, root = sh(["git", "rev-parse", "--show-toplevel"], os.path.dirname(os.path.abspath(__file__)))
+    root = root.strip()
+    os.chdir(root)
+    if shutil.which("mutate") is None:
+        die("universalmutator's `mutate` is not on PATH (tools/mutate.sh installs it into build-mutate/venv)")
+    if a.sample < 0 or a.budget < 0 or a.timeout < 0 or a.jobs < 1:
+        die("--sample, --budget and --timeout take values >= 0, --jobs >= 1")
+    core = core_files(root)
+    files = [f for arg in a.files for f in arg.split(",") if f]
+    for f in files:
+        if not os.path.isfile(os.path.join(root, f)):
+            die(f"--files: no such file: {f}")
+        if not f.endswith(EXTENSIONS):
+            die(f"--files: {f} is not a C++ source or header of the CPU build")
+    if a.changed:
+        files += changed_files(root, a.changed)
+        if not files:
+            print(f"mutate: no core file changed since {a.changed}; nothing to do")
+            return 0
+    if not files:
+        files = core
+    files = sorted(set(files))
+    commit = sh(["git", "rev-parse", "--short=12", "HEAD"], root)[1].strip()
+    dirty = sh(["git", "status", "--porcelain", "--untracked-files=no"], root)[1].strip() != ""
+    build_dir = os.path.abspath(a.build_dir)
+    out_dir = os.path.abspath(a.out or os.path.join(build_dir, f"campaign-{commit}"))
+    os.makedirs(out_dir, exist_ok=True)
+    restorer = Restorer(root, os.path.join(build_dir, "mutate-backup"))
+
+    mutants = []
+    for f in files:
+        mutants += make_mutants(root, f, os.path.join(out_dir, "mutants"))
+    rng = random.Random(a.seed)
+    rng.shuffle(mutants)
+    total_generated = len(mutants)
+    if a.list:
+        for m in mutants[:a.sample or len(mutants)]:
+            print(f"{m['file']}:{m['line']}: {m['original']}  =>  {m['mutant']}")
+        return 0
+    equivalents = load_equivalents(os.path.join(root, "tests/mutation/equivalent.txt"))
+
+    if not os.path.exists(os.path.join(build_dir, "CMakeCache.txt")):
+        rc, out = sh(["cmake", "-S", root, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release", "-DBVHLAB_ENABLE_CUDA=OFF",
+                      "-DBVHLAB_BUILD_BENCHMARKS=OFF"], root)
+        if rc != 0:
+            die("configuring " + build_dir + " failed:\n" + out[-2000:])
+    print(f"mutate: building the unmutated tree in {a.build_dir}", flush=True)
+    rc, out = build(build_dir, a.jobs)
+    if rc != 0:
+        die("the unmutated tree does not build:\n" + out[-2000:])
+    t0 = time.time()
+    status, failed = run_tests(build_dir, a.jobs, 3600)
+    if status != "pass":
+        die(f"the unmutated tests do not pass ({failed}); a campaign needs a green suite")
+    timeout = a.timeout or max(120.0, 3.0 * (time.time() - t0))
+    print(f"mutate: {a.sample or 'all'} mutants of {total_generated} in {len(files)} files; tests took "
+          f"{time.time() - t0:.0f} s unmutated, limit {timeout:.0f} s per mutant", flush=True)
+
+    start = time.time()
+    results = []
+    alive = 0  # mutants that compiled
+    for i, m in enumerate(mutants):
+        if a.sample and alive >= a.sample:
+            break
+        if a.budget and time.time() - start > 60 * a.budget:
+            print(f"mutate: time budget of {a.budget} minutes spent after {i} mutants", flush=True)
+            break
+        r = {k: m[k] for k in ("file", "line", "original", "mutant")}
+        why = equivalents.get((m["file"], m["original"], m["mutant"]))
+        if why:
+            r["status"], r["reason"] = "equivalent", why
+        else:
+            t = time.time()
+            restorer.apply(m["file"], m["path"])
+            try:
+                rc, out = build(build_dir, a.jobs)
+                if rc != 0:
+                    r["status"] = "stillborn"
+                else:
+                    status, failed = run_tests(build_dir, a.jobs, timeout)
+                    r["status"] = {"pass": "survived", "fail": "killed", "timeout": "timeout"}[status]
+                    if failed:
+                        r["killed_by"] = failed
+            finally:
+                restorer.restore()
+            r["seconds"] = round(time.time() - t, 1)
+        results.append(r)
+        alive += r["status"] != "stillborn"
+        print(f"[{alive}/{a.sample or len(mutants)}] {r['status']:<10} {m['file']}:{m['line']}  {m['mutant'][:90]}"
+              + (f"  ({r['killed_by']})" if r.get("killed_by") else ""), flush=True)
+    build(build_dir, a.jobs)  # leave the build matching the sources
+
+    meta = {"commit": commit + ("-dirty" if dirty else ""), "date": datetime.date.today().isoformat(),
+            "files": files, "sample": a.sample or "all", "seed": a.seed, "mutants_total": total_generated,
+            "mutants_run": len(results), "minutes": (time.time() - start) / 60.0,
+            "tool": "universalmutator " + mutator_version()}
+    print(write_report(results, meta, out_dir))
+    print(f"\nmutate: report in {os.path.relpath(out_dir, root)}/report.md and report.json")
+    if a.fail_under >= 0 and meta["score"] is not None and meta["score"] < a.fail_under:
+        print(f"mutate: score {meta['score']:.3f} is below {a.fail_under}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def mutator_version():
+    try:
+        from importlib.metadata import version
+        return version("universalmutator")
+    except Exception:  # noqa: BLE001 - the version is informative only
+        return "unknown"
+
+
+if __name__ == "__main__":
+    sys.exit(main())
