@@ -12,6 +12,7 @@
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
+#include "tests/support/agreement.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/cpu/kd_trace.h"
@@ -39,18 +40,18 @@ void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, f
         std::vector<Hit> ours, ref;
         trace(set, ours);
         oracle.trace(set.rays, set.query, ref);
-        CompareReport rep =
-            compare_hits(mesh, set.rays, set.query, ours, ref, [&](const Ray& r) { return oracle.intersect(r); });
-        EXPECT_EQ(rep.mismatches, 0u);
-        for (const auto& d : rep.first_mismatches)
-            ADD_FAILURE() << "ray " << d.ray << ": ours " << d.ours.tri << " t=" << d.ours.t << ", embree "
-                          << d.oracle.tri << " t=" << d.oracle.t << ": " << d.reason;
+        const CompareReport rep = test::expect_no_real_mismatch(mesh, oracle, set.rays, set.query, ours, ref);
         EXPECT_GT(set.rays.size(), 0u);
         // Ties that excuse float error are rare: a large share means the tie rules are hiding a
-        // bug. Coincident ties are proven instead (both triangles hit inside at the same t in
-        // double precision: duplicate and overlapping triangles, as in sibenik) and not capped.
-        EXPECT_LE(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)], set.rays.size() / 1000 + 5);
-        EXPECT_EQ(rep.agree + rep.ties + rep.mismatches, rep.rays);
+        // bug. Each kind has its own cap, 5-10x the largest share seen over every kernel and
+        // structure on the benchmark scenes (3e-5 of rays for shared edges and near edges, none
+        // at interval ends). Coincident ties are proven (both triangles hit inside at the same
+        // t in double precision: duplicate and overlapping faces, 0.64% of sibenik's primary
+        // rays) and not capped.
+        const double n = double(set.rays.size());
+        EXPECT_LE(double(rep.ties_by_kind[size_t(TieKind::kSharedEdgeOrVertex)]), n / 5000 + 3) << "shared-edge ties";
+        EXPECT_LE(double(rep.ties_by_kind[size_t(TieKind::kNearEdge)]), n / 5000 + 3) << "near-edge ties";
+        EXPECT_LE(double(rep.ties_by_kind[size_t(TieKind::kIntervalEnd)]), n / 100000 + 3) << "interval-end ties";
     }
 }
 

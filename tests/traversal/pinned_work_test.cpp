@@ -48,8 +48,8 @@ nlohmann::json measure() {
                 work[scene.name + "/" + structure + "/" + type] = test::summarise_work(c);
             }
         };
-        for (accel::BuilderKind kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep,
-                                        accel::BuilderKind::kSbvh}) {
+        for (accel::BuilderKind kind :
+             {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh}) {
             const std::string name = accel::builder_name(kind);
             const accel::BuildTree tree = accel::run_builder(kind, mesh, {}).tree;
             sah[scene.name + "/bvh2-" + name] = accel::compute_stats(tree, mesh, {}, false).sah;
