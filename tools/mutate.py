@@ -117,6 +117,39 @@ def make_mutants(root, rel, out_dir):
     return mutants
 
 
+def planted_mutants(root, path, out_dir):
+    """Hand-written one-line bugs (tests/mutation/planted.txt): file<TAB>original line<TAB>
+    replacement<TAB>what kind of bug. The original must match exactly one line of the file
+    (stripped); the replacement keeps its indentation."""
+    mutants = []
+    with open(path) as f:
+        entries = [(n, line.rstrip("\n").split("\t")) for n, line in enumerate(f, 1)
+                   if line.strip() and not line.startswith("#")]
+    for n, parts in entries:
+        if len(parts) != 4:
+            die(f"{path}:{n}: expected 4 tab-separated fields (file, original, replacement, kind)")
+        rel, orig, repl, kind = parts
+        src = os.path.join(root, rel)
+        if not os.path.isfile(src):
+            die(f"{path}:{n}: no such file: {rel}")
+        with open(src) as f:
+            lines = f.read().split("\n")
+        hits = [i for i, ln in enumerate(lines) if ln.strip() == orig.strip()]
+        if len(hits) != 1:
+            die(f"{path}:{n}: the original line occurs {len(hits)} times in {rel} (it must occur once)")
+        i = hits[0]
+        indent = lines[i][:len(lines[i]) - len(lines[i].lstrip())]
+        lines[i] = indent + repl.strip()
+        d = os.path.join(out_dir, "planted")
+        os.makedirs(d, exist_ok=True)
+        mpath = os.path.join(d, f"{n}_{os.path.basename(rel)}")
+        with open(mpath, "w") as f:
+            f.write("\n".join(lines))
+        mutants.append({"file": rel, "path": mpath, "line": i + 1, "original": orig.strip(),
+                        "mutant": repl.strip(), "kind": kind.strip()})
+    return mutants
+
+
 class Restorer:
     """Keeps the original of the file being mutated and puts it back on exit or signal."""
 
@@ -224,7 +257,8 @@ def write_report(results, meta, out_dir):
     if not surv:
         lines.append("None.")
     for r in surv:
-        lines += [f"- `{r['file']}:{r['line']}`", f"  - `{r['original']}`", f"  + `{r['mutant']}`"]
+        lines += [f"- `{r['file']}:{r['line']}`" + (f" ({r['kind']})" if r.get("kind") else ""),
+                  f"  - `{r['original']}`", f"  + `{r['mutant']}`"]
     lines += ["", "## Killed by", ""]
     by_test = {}
     for r in results:
@@ -252,6 +286,8 @@ def main():
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2, help="build and test jobs")
     ap.add_argument("--timeout", type=float, default=0,
                     help="seconds the tests of one mutant may take (default: 3x the unmutated run, at least 120)")
+    ap.add_argument("--planted", action="store_true",
+                    help="run the hand-written bugs of tests/mutation/planted.txt instead (all of them)")
     ap.add_argument("--no-baseline", action="store_true",
                     help="skip the unmutated test run a campaign starts with (needs --timeout)")
     ap.add_argument("--list", action="store_true", help="list the mutants of the sample and stop")
@@ -286,13 +322,19 @@ def main():
     commit = sh(["git", "rev-parse", "--short=12", "HEAD"], root)[1].strip()
     dirty = sh(["git", "status", "--porcelain", "--untracked-files=no"], root)[1].strip() != ""
     build_dir = os.path.abspath(a.build_dir)
-    out_dir = os.path.abspath(a.out or os.path.join(build_dir, f"campaign-{commit}"))
+    out_dir = os.path.abspath(a.out or os.path.join(build_dir, ("planted-" if a.planted else "campaign-") + commit))
     os.makedirs(out_dir, exist_ok=True)
     restorer = Restorer(root, os.path.join(build_dir, "mutate-backup"))
 
     mutants = []
-    for f in files:
-        mutants += make_mutants(root, f, os.path.join(out_dir, "mutants"))
+    if a.planted:
+        if a.files or a.changed or a.sample:
+            die("--planted runs every entry of tests/mutation/planted.txt; it takes no --files, --changed or --sample")
+        mutants = planted_mutants(root, os.path.join(root, "tests/mutation/planted.txt"), out_dir)
+        files = sorted({m["file"] for m in mutants})
+    else:
+        for f in files:
+            mutants += make_mutants(root, f, os.path.join(out_dir, "mutants"))
     rng = random.Random(a.seed)
     rng.shuffle(mutants)
     total_generated = len(mutants)
@@ -330,7 +372,7 @@ def main():
         if a.budget and time.time() - start > 60 * a.budget:
             print(f"mutate: time budget of {a.budget} minutes spent after {i} mutants", flush=True)
             break
-        r = {k: m[k] for k in ("file", "line", "original", "mutant")}
+        r = {k: m[k] for k in ("file", "line", "original", "mutant", "kind") if k in m}
         why = equivalents.get((m["file"], m["original"], m["mutant"]))
         if why:
             r["status"], r["reason"] = "equivalent", why
@@ -356,6 +398,7 @@ def main():
     build(build_dir, a.jobs)  # leave the build matching the sources
 
     meta = {"commit": commit + ("-dirty" if dirty else ""), "date": datetime.date.today().isoformat(),
+            "kind": "planted" if a.planted else "sampled",
             "files": files, "sample": a.sample or "all", "seed": a.seed, "mutants_total": total_generated,
             "mutants_run": len(results), "minutes": (time.time() - start) / 60.0,
             "tool": "universalmutator " + mutator_version()}
