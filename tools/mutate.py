@@ -365,6 +365,8 @@ def main():
 
     start = time.time()
     results = []
+    if os.path.exists(os.path.join(out_dir, "progress.jsonl")):
+        os.remove(os.path.join(out_dir, "progress.jsonl"))
     alive = 0  # mutants that compiled
     for i, m in enumerate(mutants):
         if a.sample and alive >= a.sample:
@@ -393,6 +395,8 @@ def main():
             r["seconds"] = round(time.time() - t, 1)
         results.append(r)
         alive += r["status"] != "stillborn"
+        with open(os.path.join(out_dir, "progress.jsonl"), "a") as f:  # kept if the campaign is cut short
+            f.write(json.dumps(r) + "\n")
         print(f"[{alive}/{a.sample or len(mutants)}] {r['status']:<10} {m['file']}:{m['line']}  {m['mutant'][:90]}"
               + (f"  ({r['killed_by']})" if r.get("killed_by") else ""), flush=True)
     build(build_dir, a.jobs)  # leave the build matching the sources
