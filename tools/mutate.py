@@ -40,15 +40,35 @@ def die(msg, code=2):
     sys.exit(code)
 
 
+RUNNING = []  # the child process group in flight, killed before a file is restored
+
+
+def kill_running():
+    for p in RUNNING:
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        p.wait()
+    RUNNING.clear()
+
+
 def sh(cmd, cwd, timeout=None, env=None):
-    """Runs cmd; returns (returncode or None on timeout, output)."""
+    """Runs cmd in its own process group; returns (returncode or None on timeout, output). On a
+    timeout the whole group is killed (a build or test left running would write objects of a
+    mutant after its file is restored, and make would keep them)."""
+    p = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
+                         start_new_session=True)
+    RUNNING.append(p)
     try:
-        p = subprocess.run(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                           timeout=timeout, env=env)
-        return p.returncode, p.stdout
-    except subprocess.TimeoutExpired as e:
-        out = e.stdout.decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
-        return None, out
+        out, _ = p.communicate(timeout=timeout)
+        return p.returncode, out
+    except subprocess.TimeoutExpired:
+        kill_running()
+        return None, ""
+    finally:
+        if p in RUNNING:
+            RUNNING.remove(p)
 
 
 def core_files(root):
@@ -191,6 +211,7 @@ class Restorer:
         self.current = None
 
     def on_signal(self, signum, frame):
+        kill_running()  # no build or test of the mutant may outlive it
         rel = self.current
         self.restore()
         die(f"interrupted (signal {signum})" + (f"; {rel} restored" if rel else ""), 130)
@@ -204,12 +225,19 @@ def run_tests(build_dir, jobs, timeout):
     """(status, failing test or None): 'pass', 'fail' or 'timeout'. Fast tests first, then the
     slow benchmark-scene test, each stopping at the first failure."""
     t0 = time.time()
+    # A fresh scene cache for each run: a mutant's loader must not leave meshes for the next.
+    with tempfile.TemporaryDirectory(prefix="bvhlab-mutate-cache-") as cache:
+        env = dict(os.environ, BVHLAB_CACHE_DIR=cache)
+        return run_tests_in(build_dir, jobs, timeout, t0, env)
+
+
+def run_tests_in(build_dir, jobs, timeout, t0, env):
     for sel in (["-E", "BenchmarkScenes"], ["-R", "BenchmarkScenes"]):
         left = timeout - (time.time() - t0)
         if left <= 0:
             return "timeout", None
         rc, out = sh(["ctest", "--test-dir", build_dir, "-LE", "gpu", "--stop-on-failure", "-j", str(jobs),
-                      "--timeout", str(int(max(left, 1)))] + sel, None, timeout=left + 30)
+                      "--timeout", str(int(max(left, 1)))] + sel, None, timeout=left + 30, env=env)
         if rc is None:
             return "timeout", None
         if rc != 0:
