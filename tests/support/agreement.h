@@ -5,12 +5,36 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
 #include <vector>
 
+#include "accel/builders/builder.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/oracle/embree_oracle.h"
 
 namespace bvhlab::test {
+
+/// A BVH build the CPU agreement tests cover.
+struct BvhVariant {
+    accel::BuilderKind kind;
+    int reinsertion;  ///< passes, -1 for the builder's default
+    std::string name() const {
+        return std::string(accel::builder_name(kind)) + (reinsertion == 0 ? " without reinsertion" : "");
+    }
+    accel::BuildTree build(const accel::TriangleMesh& mesh) const {
+        accel::BuilderOptions opts;
+        opts.reinsertion_passes = reinsertion;
+        return accel::run_builder(kind, mesh, opts).tree;
+    }
+};
+
+/// Binned, sweep, and SBVH without and with reinsertion.
+inline std::vector<BvhVariant> bvh_variants() {
+    return {{accel::BuilderKind::kBinned, -1},
+            {accel::BuilderKind::kSweep, -1},
+            {accel::BuilderKind::kSbvh, 0},
+            {accel::BuilderKind::kSbvh, -1}};
+}
 
 /// Compares `ours` with `reference` (Embree's hits of the same rays) and expects 0 real
 /// mismatches, printing the first ones with their rays. Returns the report (ties by kind).

@@ -116,17 +116,9 @@ TEST(Adversarial, EveryBvhAndCwbvhAgreesWithEmbree) {
     for (const auto& s : scenes()) {
         SCOPED_TRACE(s.name);
         const CheckedScene cs(s);
-        struct Variant {
-            accel::BuilderKind kind;
-            int reinsertion;
-        };
-        for (const Variant v : {Variant{accel::BuilderKind::kBinned, -1}, Variant{accel::BuilderKind::kSweep, -1},
-                                Variant{accel::BuilderKind::kSbvh, 0}, Variant{accel::BuilderKind::kSbvh, -1}}) {
-            accel::BuilderOptions opts;
-            opts.reinsertion_passes = v.reinsertion;
-            const accel::BuildTree tree = accel::run_builder(v.kind, s.mesh, opts).tree;
-            const std::string name =
-                std::string(accel::builder_name(v.kind)) + (v.reinsertion == 0 ? " without reinsertion" : "");
+        for (const test::BvhVariant& v : test::bvh_variants()) {
+            const accel::BuildTree tree = v.build(s.mesh);
+            const std::string name = v.name();
             const accel::Bvh2 bvh = accel::convert_to_bvh2(tree, s.mesh);
             cs.expect_agreement("bvh2 " + name, [&](const RaySet& set, std::vector<Hit>& h) {
                 trace_cpu(bvh, set.rays, set.query, h);

@@ -104,16 +104,9 @@ TEST(EdgeRays, EveryBvhAndCwbvhAgreesWithEmbree) {
         const accel::TriangleMesh& mesh = lattices()[i];
         SCOPED_TRACE("lattice " + std::to_string(i + 1));
         const EmbreeOracle oracle(mesh);
-        struct Variant {
-            accel::BuilderKind kind;
-            int reinsertion;
-        };
-        for (const Variant v : {Variant{accel::BuilderKind::kBinned, -1}, Variant{accel::BuilderKind::kSweep, -1},
-                                Variant{accel::BuilderKind::kSbvh, 0}, Variant{accel::BuilderKind::kSbvh, -1}}) {
-            accel::BuilderOptions opts;
-            opts.reinsertion_passes = v.reinsertion;
-            const accel::BuildTree tree = accel::run_builder(v.kind, mesh, opts).tree;
-            SCOPED_TRACE(std::string(accel::builder_name(v.kind)) + (v.reinsertion == 0 ? " without reinsertion" : ""));
+        for (const test::BvhVariant& v : test::bvh_variants()) {
+            const accel::BuildTree tree = v.build(mesh);
+            SCOPED_TRACE(v.name());
             Structure bvh;
             bvh.bvh2 = accel::convert_to_bvh2(tree, mesh);
             expect_edge_rays_agree(

@@ -81,6 +81,24 @@ namespace {
 
 using Variant = std::pair<accel::BuilderKind, accel::CwTris>;
 
+/// Calls fn(structure, tracer) for `kernel` on a structure of each variant, a short-stack
+/// kernel with 1, 2 and 8 entries, each under SCOPED_TRACE.
+void for_each_gpu_tracer(const KernelInfo& kernel, const accel::TriangleMesh& mesh,
+                         const std::vector<Variant>& variants,
+                         const std::function<void(const Structure&, Tracer&)>& fn) {
+    for (const auto& [builder, tris] : variants) {
+        const Structure s = make_structure(mesh, kernel.layout, builder, tris);
+        SCOPED_TRACE(s.name);
+        auto device = std::make_shared<const DeviceStructure>(s);
+        std::vector<GpuTraceOptions> options{{}};
+        if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
+        for (const GpuTraceOptions& opt : options) {
+            SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
+            fn(s, *make_gpu_tracer(device, kernel, opt));
+        }
+    }
+}
+
 /// `kernel` on a structure of each variant (a short-stack kernel with 1, 2 and 8 entries), on
 /// the four protocol ray types of `cfg`: every hit written, 0 real mismatches (the first ones
 /// printed), and counted_ties(report) at most max_tie_fraction x rays + slack.
@@ -90,29 +108,20 @@ void expect_kernel_agrees(const KernelInfo& kernel, const accel::TriangleMesh& m
                           double slack) {
     EmbreeOracle oracle(mesh);
     RayProtocol proto(mesh, oracle, cfg);
-    for (const auto& [builder, tris] : variants) {
-        const Structure s = make_structure(mesh, kernel.layout, builder, tris);
-        SCOPED_TRACE(s.name);
-        auto device = std::make_shared<const DeviceStructure>(s);
-        std::vector<GpuTraceOptions> options{{}};
-        if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
-        for (const GpuTraceOptions& opt : options) {
-            SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
-            auto tracer = make_gpu_tracer(device, kernel, opt);
-            // primary and diffuse are closest-hit queries, AO and shadow any-hit ones.
-            for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
-                SCOPED_TRACE(ray_type_name(t));
-                const RaySet set = proto.make(t);
-                std::vector<Hit> ours, ref;
-                tracer->trace(set, ours);
-                ASSERT_EQ(ours.size(), set.rays.size());
-                EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
-                oracle.trace(set.rays, set.query, ref);
-                const CompareReport rep = test::expect_no_real_mismatch(mesh, oracle, set.rays, set.query, ours, ref);
-                EXPECT_LE(counted_ties(rep), double(set.rays.size()) * max_tie_fraction + slack);
-            }
+    // primary and diffuse are closest-hit queries, AO and shadow any-hit ones.
+    for_each_gpu_tracer(kernel, mesh, variants, [&](const Structure&, Tracer& tracer) {
+        for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
+            SCOPED_TRACE(ray_type_name(t));
+            const RaySet set = proto.make(t);
+            std::vector<Hit> ours, ref;
+            tracer.trace(set, ours);
+            ASSERT_EQ(ours.size(), set.rays.size());
+            EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
+            oracle.trace(set.rays, set.query, ref);
+            const CompareReport rep = test::expect_no_real_mismatch(mesh, oracle, set.rays, set.query, ours, ref);
+            EXPECT_LE(counted_ties(rep), double(set.rays.size()) * max_tie_fraction + slack);
         }
-    }
+    });
 }
 
 }  // namespace
@@ -174,26 +183,17 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEdgeAndPlaneRays) {
                                       {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
         if (kernel.layout == Layout::kCwbvh) variants.push_back({accel::BuilderKind::kSbvh, accel::CwTris::kVertices});
         if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
-        for (const auto& [builder, tris] : variants) {
-            const Structure s = make_structure(mesh, kernel.layout, builder, tris);
-            SCOPED_TRACE(s.name);
+        for_each_gpu_tracer(kernel, mesh, variants, [&](const Structure& s, Tracer& tracer) {
             const std::vector<Ray> rays = test::edge_rays(test::structure_boxes(s), mesh.bounds(), seed + 6, 400);
-            auto device = std::make_shared<const DeviceStructure>(s);
-            std::vector<GpuTraceOptions> options{{}};
-            if (kernel.short_stack) options = {{1, 0}, {2, 0}, {8, 0}};
-            for (const GpuTraceOptions& opt : options) {
-                SCOPED_TRACE("short stack " + std::to_string(opt.kd_stack));
-                auto tracer = make_gpu_tracer(device, kernel, opt);
-                for (Query q : {Query::kClosest, Query::kAny}) {
-                    std::vector<Hit> ours, ref;
-                    tracer->trace({rays, q}, ours);
-                    ASSERT_EQ(ours.size(), rays.size());
-                    EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
-                    oracle.trace(rays, q, ref);
-                    test::expect_no_real_mismatch(mesh, oracle, rays, q, ours, ref);
-                }
+            for (Query q : {Query::kClosest, Query::kAny}) {
+                std::vector<Hit> ours, ref;
+                tracer.trace({rays, q}, ours);
+                ASSERT_EQ(ours.size(), rays.size());
+                EXPECT_EQ(unwritten_or_invalid(ours, mesh.triangle_count()), 0u);
+                oracle.trace(rays, q, ref);
+                test::expect_no_real_mismatch(mesh, oracle, rays, q, ours, ref);
             }
-        }
+        });
     }
 }
 
