@@ -250,6 +250,14 @@ def run_tests_in(build_dir, jobs, timeout, t0, env):
     return "pass", None
 
 
+def write_atomic(path, text):
+    """Writes `path` through a temporary file and a rename: a reader never sees half a report."""
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
 def write_report(results, meta, out_dir):
     per_file = {}
     for r in results:
@@ -265,8 +273,8 @@ def write_report(results, meta, out_dir):
 
     meta["score"] = score(total)
     meta["totals"] = total
-    with open(os.path.join(out_dir, "report.json"), "w") as f:
-        json.dump({"campaign": meta, "files": per_file, "mutants": results}, f, indent=1)
+    write_atomic(os.path.join(out_dir, "report.json"),
+                 json.dumps({"campaign": meta, "files": per_file, "mutants": results}, indent=1))
     lines = [f"# Mutation campaign at {meta['commit']}", "",
              f"{meta['date']}; {meta['mutants_run']} mutants run of {meta['mutants_total']} generated "
              f"(sample {meta['sample']}, seed {meta['seed']}); {meta['minutes']:.1f} minutes.", "",
@@ -294,8 +302,7 @@ def write_report(results, meta, out_dir):
             by_test[r.get("killed_by") or "timeout"] = by_test.get(r.get("killed_by") or "timeout", 0) + 1
     for t, n in sorted(by_test.items(), key=lambda x: -x[1]):
         lines.append(f"- {t}: {n}")
-    with open(os.path.join(out_dir, "report.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
+    write_atomic(os.path.join(out_dir, "report.md"), "\n".join(lines) + "\n")
     return "\n".join(lines)
 
 
@@ -326,8 +333,6 @@ def main():
     rc, root = sh(["git", "rev-parse", "--show-toplevel"], os.path.dirname(os.path.abspath(__file__)))
     root = root.strip()
     os.chdir(root)
-    if shutil.which("mutate") is None:
-        die("universalmutator's `mutate` is not on PATH (tools/mutate.sh installs it into build-mutate/venv)")
     if a.sample < 0 or a.budget < 0 or a.timeout < 0 or a.jobs < 1:
         die("--sample, --budget and --timeout take values >= 0, --jobs >= 1")
     if a.no_baseline and not a.timeout:
@@ -347,6 +352,10 @@ def main():
     if not files:
         files = core
     files = sorted(set(files))
+    if a.planted and (a.files or a.changed or a.sample):
+        die("--planted runs every entry of tests/mutation/planted.txt; it takes no --files, --changed or --sample")
+    if shutil.which("mutate") is None:
+        die("universalmutator's `mutate` is not on PATH (tools/mutate.sh installs it into build-mutate/venv)")
     commit = sh(["git", "rev-parse", "--short=12", "HEAD"], root)[1].strip()
     dirty = sh(["git", "status", "--porcelain", "--untracked-files=no"], root)[1].strip() != ""
     build_dir = os.path.abspath(a.build_dir)
@@ -356,8 +365,6 @@ def main():
 
     mutants = []
     if a.planted:
-        if a.files or a.changed or a.sample:
-            die("--planted runs every entry of tests/mutation/planted.txt; it takes no --files, --changed or --sample")
         mutants = planted_mutants(root, os.path.join(root, "tests/mutation/planted.txt"), out_dir)
         files = sorted({m["file"] for m in mutants})
     else:
