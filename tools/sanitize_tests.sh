@@ -14,7 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 unset BVHLAB_SCENES
 flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DBVHLAB_ENABLE_CUDA=OFF -DBVHLAB_BUILD_BENCHMARKS=OFF \
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DBVHLAB_ENABLE_CUDA=OFF -DBVHLAB_BUILD_BENCHMARKS=OFF -DBVHLAB_BUILD_PYTHON=OFF \
     -DBVHLAB_WITH_OIIO=OFF -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined"
 cmake --build build-asan -j"$(nproc)"
 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

@@ -17,7 +17,9 @@ namespace bvhlab::trav {
 enum class Layout : uint32_t { kBvh2 = 0, kKd = 1, kCwbvh = 2 };
 
 /// "bvh2", "kdtree" or "cwbvh".
-const char* layout_name(Layout layout);
+inline const char* layout_name(Layout layout) {
+    return layout == Layout::kBvh2 ? "bvh2" : layout == Layout::kKd ? "kdtree" : "cwbvh";
+}
 
 struct Structure {
     std::string name;  ///< "bvh2/binned", "bvh2/sweep", "bvh2/sbvh", "cwbvh/<builder>" or "kdtree"

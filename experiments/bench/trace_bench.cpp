@@ -4,10 +4,9 @@
 // before anything is timed; a mismatch skips the benchmark with an error.
 #include <benchmark/benchmark.h>
 
-#include "accel/builders/builder.h"
-#include "accel/layouts/bvh2_convert.h"
 #include "experiments/bench/bench_common.h"
 #include "traversal/cpu/cpu_trace.h"
+#include "traversal/factory.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/rays/protocol.h"
 
@@ -26,7 +25,9 @@ struct Prepared {
 std::shared_ptr<Prepared> prepare(const BenchScene& scene) {
     auto p = std::make_shared<Prepared>();
     p->mesh = scene.load();
-    p->bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, p->mesh, {}).tree, p->mesh);
+    trav::StructureSpec spec;  // the library's default structure: a binned SAH BVH2
+    spec.epo = false;
+    p->bvh = trav::build_structure(p->mesh, spec).structure.bvh2;
     p->oracle = std::make_unique<trav::EmbreeOracle>(p->mesh);
     trav::ProtocolConfig cfg;
     cfg.camera = scene.has_camera ? scene.camera : trav::framing_camera(p->mesh);

@@ -75,22 +75,7 @@ void register_build(CLI::App& app, Globals& g) {
         if (!o->out.empty()) accel::refuse_overwriting_input(o->out, s.source, "--out");
         Built b = build_scene(s, o->build, g);
         if (!o->out.empty()) {
-            accel::TreeFileMeta meta;
-            meta.triangles = s.mesh.triangle_count();
-            meta.scene_hash = s.hash;
-            if (b.loaded_meta) {  // re-saving a loaded file keeps its provenance
-                meta = *b.loaded_meta;
-            } else if (b.is_kd()) {
-                meta.kdtree = true;
-                meta.kd = o->build.kd;
-            } else {
-                meta.builder = o->build.kind();
-                meta.options = o->build.opts;
-            }
-            if (b.is_kd())
-                accel::write_kd_file(o->out, b.structure.kd.tree, meta);
-            else
-                accel::write_tree_file(o->out, b.result.tree, meta);
+            b.save(o->out, s.hash);
             b.record["structure_file"] = o->out;
         }
         if (g.json)

@@ -257,7 +257,7 @@ void register_render(CLI::App& app, Globals& g) {
                 if (tracer->short_stack()) gopts.kd_stack = tracer->short_stack();
                 gopts.block_size = o->trace.block_size;
                 gopts.fetch_threshold = o->trace.fetch_threshold;
-                res = render::render_gpu(rscene, cd, o->rs, *built.device, trav::find_kernel(tracer->name()), gopts,
+                res = render::render_gpu(rscene, cd, o->rs, *built.device(), trav::find_kernel(tracer->name()), gopts,
                                          progress);
             } else {
                 res = render::render_host(rscene, cd, o->rs, *tracer, *tracer, progress);

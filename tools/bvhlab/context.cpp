@@ -332,6 +332,19 @@ std::string BuildOptions::structure_file() const {
     return structure;
 }
 
+trav::StructureSpec BuildOptions::spec() const {
+    trav::StructureSpec s;
+    s.builder = is_kdtree() ? "kdtree" : builder;
+    s.layout = layout;
+    s.options = opts;
+    s.kd = kd;
+    s.collapse = collapse;
+    s.cw_tris = cw_tris;
+    s.kd_stack = kd_stack;
+    s.epo = epo;
+    return s;
+}
+
 void BuildOptions::check_applicable() const {
     if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
     if (cw_tris_flag->count() && !is_cwbvh()) throw Error("--cw-tris applies to --layout cwbvh");
@@ -474,28 +487,6 @@ void emit(const nlohmann::json& record) {
     stamp("build_type", build_type());
     stamp("machine", machine);
     std::cout << j.dump() << std::endl;
-}
-
-nlohmann::json stats_json(const accel::TreeStats& s, const accel::BuildResult& r, const std::string& builder,
-                          const accel::TriangleMesh& mesh) {
-    nlohmann::json j;
-    j["builder"] = builder;
-    j["structure"] = "bvh2";
-    j["triangles"] = mesh.triangle_count();
-    j["dropped_non_finite"] = mesh.dropped.non_finite;
-    j["dropped_zero_area"] = mesh.dropped.zero_area;
-    j["nodes"] = s.nodes;
-    j["leaves"] = s.leaves;
-    j["depth"] = s.depth;
-    j["mean_leaf_size"] = s.mean_leaf_size;
-    j["max_leaf_size"] = s.max_leaf_size;
-    j["references"] = s.references;
-    j["duplication"] = mesh.triangle_count() ? double(s.references) / double(mesh.triangle_count()) : 0.0;
-    j["bytes"] = s.bytes;
-    j["sah"] = s.sah;
-    j["epo"] = s.epo >= 0 ? nlohmann::json(s.epo) : nlohmann::json(nullptr);
-    j["build_ms"] = r.build_ms;
-    return j;
 }
 
 }  // namespace bvhlab::cli

@@ -14,6 +14,7 @@
 #include "accel/builders/kdtree.h"
 #include "accel/core/mesh.h"
 #include "accel/core/stats.h"
+#include "traversal/factory.h"
 #include "traversal/rays/protocol.h"
 
 namespace bvhlab {
@@ -123,6 +124,8 @@ struct BuildOptions {
     /// --layout with a kd-tree, --collapse or --cw-tris without --layout cwbvh).
     /// Structure files are checked against their own config when loaded.
     void check_applicable() const;
+    /// The library's structure spec of these options.
+    trav::StructureSpec spec() const;
 };
 
 /// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.
@@ -161,10 +164,6 @@ constexpr int kJsonSchemaVersion = 1;
 /// Prints a JSON object as one line on stdout, stamped with the identifying fields every record
 /// carries: schema, tool, commit, build_type, machine (and its own "record" kind).
 void emit(const nlohmann::json& j);
-
-/// Build statistics as JSON (keys: triangles, nodes, leaves, ..., build_ms, builder).
-nlohmann::json stats_json(const accel::TreeStats& s, const accel::BuildResult& r, const std::string& builder,
-                          const accel::TriangleMesh& mesh);
 
 }  // namespace cli
 }  // namespace bvhlab

@@ -5,27 +5,16 @@
 #include <cstdio>
 #include <optional>
 
-#include "accel/builders/kdtree.h"
 #include "accel/core/check.h"
-#include "accel/core/validate.h"
 #include "accel/io/tree_file.h"
-#include "accel/layouts/bvh2_convert.h"
-#include "accel/layouts/cwbvh_convert.h"
-#include "accel/layouts/kd_convert.h"
-#include "accel/passes/collapse_wide.h"
 #include "traversal/device/kd_traverse.h"
 #include "traversal/gpu/gpu_tracer.h"
 
 namespace bvhlab::cli {
 
-/// Loads a structure file and checks that it belongs to this scene and to the options given
-/// explicitly on the command line.
-static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts, const std::string& file,
-                                   const Globals& g) {
-    Stage st(g, "loading structure " + file);
-    accel::TreeFile f = accel::read_tree_file(file);
-    const std::string stale = accel::stale_reason(f.meta, scene.mesh.triangle_count(), scene.hash);
-    if (!stale.empty()) throw Error("stale structure file '" + file + "': " + stale);
+/// Checks a structure file read from disk against the options given explicitly on the command
+/// line (everything not given comes from the file); the scene check is the factory's.
+static void check_explicit_options(const BuildOptions& opts, const accel::TreeFile& f, const std::string& file) {
     if (f.meta.kdtree) {
         if (opts.layout_flag->count())
             throw Error("structure file '" + file + "' holds a kd-tree; --layout applies to BVHs");
@@ -41,7 +30,7 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
         if (accel::describe_config(asked) != accel::describe_config(f.meta))
             throw Error("stale structure file '" + file + "': it was built with " + accel::describe_config(f.meta) +
                         ", but " + accel::describe_config(asked) + " was asked for");
-        return f;
+        return;
     }
     for (const CLI::Option* flag : opts.kd_flags)
         if (flag->count())
@@ -51,7 +40,6 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
         throw Error("structure file '" + file + "' holds a BVH; --kd-stack applies to kd-trees");
     accel::BuilderOptions asked = f.meta.options;
     const accel::BuilderOptions& given = opts.opts;
-    // Only what the user said explicitly must match; everything else comes from the file.
     const CLI::Option* const* flags = opts.config_flags.data();
     if (flags[0]->count()) asked.num_bins = given.num_bins;
     if (flags[1]->count()) asked.config.max_leaf_size = given.config.max_leaf_size;
@@ -65,156 +53,27 @@ static accel::TreeFile load_cached(const Scene& scene, const BuildOptions& opts,
     if (have != want)
         throw Error("stale structure file '" + file + "': it was built with " + have + ", but " + want +
                     " was asked for");
-    return f;
 }
 
-/// The kd-tree path of build_scene: kd SAH and sizes (no EPO: it is a BVH figure). Uses the
-/// tree of a loaded structure file when `cached` is given.
-static Built build_kdtree(const Scene& scene, const BuildOptions& opts, const Globals& g, accel::TreeFile* cached,
-                          const std::string& file) {
-    Built b;
-    accel::KdTreeBuilder builder(cached ? cached->meta.kd : opts.kd);
-    accel::KdTree tree;
-    if (cached) {
-        tree = std::move(cached->kd);
-        tree.bounds = scene.mesh.bounds();  // not stored: the scene hash guarantees the same box
-    } else {
-        Stage st(g, "building SAH kd-tree over " + std::to_string(scene.mesh.triangle_count()) + " triangles");
-        const auto t0 = std::chrono::steady_clock::now();
-        tree = builder.build(scene.mesh);
-        b.result.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    }
-    const std::string err = accel::validate_kd(tree, scene.mesh.triangle_count());
-    if (!err.empty())
-        throw Error((cached ? "structure file '" + file + "' holds" : std::string("the kd-tree builder produced")) +
-                    " an invalid kd-tree: " + err);
-    const accel::KdTreeStats ks = accel::compute_kd_stats(tree, builder.config());
-    b.record = base_record("build", scene);
-    b.record["builder"] = "kdtree";
-    b.record["structure"] = "kdtree";
-    b.record["nodes"] = ks.nodes;
-    b.record["leaves"] = ks.leaves;
-    b.record["depth"] = ks.depth;
-    b.record["max_depth"] = builder.max_depth_for(scene.mesh.triangle_count());
-    b.record["references"] = ks.references;
-    b.record["mean_leaf_size"] = ks.leaves ? double(ks.references) / double(ks.leaves) : 0.0;
-    b.record["max_leaf_size"] = ks.max_leaf_size;
-    b.record["duplication"] = double(ks.references) / double(scene.mesh.triangle_count());
-    b.record["bytes"] = tree.bytes();
-    b.record["sah"] = ks.sah;
-    b.record["sah_constants"] = {{"traversal", builder.config().traversal_cost},
-                                 {"intersection", builder.config().intersection_cost},
-                                 {"empty_bonus", builder.config().empty_bonus}};
-    b.record["epo"] = nullptr;
-    b.record["build_ms"] = b.result.build_ms;
-    b.record["machine"] = machine_description();
-    b.stats.sah = ks.sah;
-    b.structure.name = "kdtree";
-    b.structure.layout = trav::Layout::kKd;
-    b.structure.kd = accel::convert_to_kd_layout(std::move(tree), scene.mesh);
-    b.record["layout_bytes"] = b.structure.bytes();
-    if (cached) {
-        b.record["structure_file"] = file;
-        b.loaded_meta = cached->meta;
-    }
-    return b;
-}
-
-/// The bytes of the BVH2 layout of `tree` (nodes, Woop triangles, triangle ids), without
-/// building it: what a CWBVH's bytes are compared with.
-static size_t bvh2_layout_bytes(const accel::BuildTree& tree) {
-    size_t interior = 0;
-    for (const accel::BuildNode& n : tree.nodes) interior += !n.is_leaf();
-    return std::max<size_t>(interior, 1) * sizeof(accel::Bvh2Node) +
-           tree.prim_indices.size() * (sizeof(accel::WoopTriangle) + sizeof(uint32_t));
-}
-
-/// The CWBVH path of build_scene: collapse the binary tree to 8-wide, check it, quantise.
-static void convert_cwbvh(const Scene& scene, const BuildOptions& opts, const Globals& g, Built& b) {
-    const auto t0 = std::chrono::steady_clock::now();
-    accel::WideTree w;
-    {
-        Stage st(g, "collapsing to an 8-wide BVH (" + opts.collapse + ") and quantising its boxes");
-        w = accel::collapse_to_wide(
-            b.result.tree, scene.mesh,
-            opts.collapse == "greedy" ? accel::CollapseMethod::kGreedy : accel::CollapseMethod::kSahOptimal);
-        const std::string err = accel::validate_wide(w, scene.mesh.triangle_count(), b.result.tree.prim_indices);
-        BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide tree: " + err);
-        b.structure.layout = trav::Layout::kCwbvh;
-        b.structure.cwbvh = accel::convert_to_cwbvh(
-            w, scene.mesh, opts.cw_tris == "vertices" ? accel::CwTris::kVertices : accel::CwTris::kWoop);
-    }
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    const accel::WideStats ws = accel::compute_wide_stats(w);
-    const size_t bvh2_bytes = bvh2_layout_bytes(b.result.tree);
-    b.record["wide"] = {{"collapse", opts.collapse},
-                        {"triangles", opts.cw_tris},
-                        {"collapse_ms", ms},
-                        {"nodes", ws.nodes},
-                        {"leaves", ws.leaves},
-                        {"references", ws.references},
-                        {"mean_children", ws.mean_children},
-                        {"sah", ws.sah},
-                        {"sah_costs", {{"node", accel::WideCost{}.node}, {"prim", accel::WideCost{}.prim}}},
-                        {"depth", ws.depth},
-                        {"node_bytes", b.structure.cwbvh.nodes.size() * sizeof(accel::CwbvhNode)}};
-    b.record["bvh2_layout_bytes"] = bvh2_bytes;
-    b.record["bytes_vs_bvh2"] = double(b.structure.cwbvh.bytes()) / double(bvh2_bytes);
-}
-
-Built build_scene(const Scene& scene, const BuildOptions& opts_in, const Globals& g) {
-    opts_in.check_applicable();
-    if (opts_in.is_kdtree()) return build_kdtree(scene, opts_in, g, nullptr, "");
-    Built b;
-    BuildOptions opts = opts_in;
+Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g) {
+    opts.check_applicable();
+    const trav::StageHook stage = [&g](const std::string& what) { return std::make_shared<Stage>(g, what); };
     const std::string file = opts.structure_file();
-    if (!file.empty()) {
-        accel::TreeFile f = load_cached(scene, opts, file, g);
-        if (f.meta.kdtree) return build_kdtree(scene, opts, g, &f, file);
-        b.loaded_meta = f.meta;
-        opts.builder = accel::builder_name(f.meta.builder);
-        opts.opts = f.meta.options;
-        b.result.tree = std::move(f.tree);
+    Built b;
+    if (file.empty()) {
+        static_cast<trav::AccelStructure&>(b) = trav::build_structure(scene.mesh, opts.spec(), stage);
     } else {
-        Stage st(g, "building " + opts.builder + " SAH BVH over " + std::to_string(scene.mesh.triangle_count()) +
-                        " triangles");
-        b.result = accel::run_builder(opts.kind(), scene.mesh, opts.opts);
-    }
-    const std::string builder = opts.builder;
-    accel::ValidateOptions vo;
-    vo.allow_duplicates = opts.kind() == accel::BuilderKind::kSbvh;
-    const std::string err = accel::validate(b.result.tree, scene.mesh, opts.opts.config, vo);
-    if (!err.empty())
-        throw Error((file.empty() ? "builder '" + builder + "' produced" : "structure file '" + file + "' holds") +
-                    " an invalid tree: " + err);
-    {
-        Stage st(g, opts.epo ? "computing SAH and EPO" : "computing SAH");
-        b.stats = accel::compute_stats(b.result.tree, scene.mesh, opts.opts.config, opts.epo);
+        accel::TreeFile f;
+        {
+            Stage st(g, "loading structure " + file);
+            f = accel::read_tree_file(file);
+        }
+        check_explicit_options(opts, f, file);
+        static_cast<trav::AccelStructure&>(b) =
+            trav::structure_from_file(scene.mesh, scene.hash, std::move(f), file, opts.spec(), stage);
     }
     b.record = base_record("build", scene);
-    b.record.update(stats_json(b.stats, b.result, builder, scene.mesh));
-    if (opts.is_cwbvh()) {
-        convert_cwbvh(scene, opts, g, b);
-        // Woop triangles are the default and keep the plain name; vertex triples are named.
-        b.structure.name = std::string(opts.cw_tris == "vertices" ? "cwbvh-vertices/" : "cwbvh/") + builder;
-    } else {
-        b.structure.name = "bvh2/" + builder;
-        b.structure.layout = trav::Layout::kBvh2;
-        b.structure.bvh2 = accel::convert_to_bvh2(b.result.tree, scene.mesh);
-    }
-    b.record["structure"] = b.structure.name;
-    b.record["layout"] = trav::layout_name(b.structure.layout);
-    b.record["layout_bytes"] = b.structure.bytes();
-    b.record["layout_depth"] = b.structure.depth();
-    if (builder != "sweep") b.record["bins"] = opts.opts.num_bins;
-    if (builder == "sbvh") {
-        b.record["alpha"] = opts.opts.sbvh_alpha;
-        b.record["budget"] = opts.opts.sbvh_budget;
-    }
-    b.record["max_leaf"] = opts.opts.config.max_leaf_size;
-    b.record["reinsertion_passes"] = accel::reinsertion_passes(opts.kind(), opts.opts);
-    b.record["config"] = accel::describe_config(opts.kind(), opts.opts);
-    if (!file.empty()) b.record["structure_file"] = file;  // build_ms is then 0: nothing was built
+    b.record.update(b.figures);
     b.record["machine"] = machine_description();
     return b;
 }
@@ -241,20 +100,12 @@ void TraceOptions::add_to(CLI::App& app, bool allow_embree) {
                      ->check(CLI::Range(1, 32));
 }
 
-/// The layout whose CPU traversal is the one kernel `name` runs on the GPU (the CPU reference
-/// behind `--device cpu --kernel NAME`).
-static std::optional<trav::Layout> cpu_reference_layout(const std::string& name) {
-    if (name == "plain") return trav::Layout::kBvh2;   // traverse_bvh2
-    if (name == "cwbvh") return trav::Layout::kCwbvh;  // traverse_cwbvh
-    return std::nullopt;
-}
-
 void TraceOptions::validate(BuildOptions& build) const {
     // --kernel picks the layout it traces, unless --layout says otherwise.
     if (kernel_flag->count() && kernel != "all" && device != "embree") {
         trav::Layout layout;
         if (device == "cpu") {
-            const auto l = cpu_reference_layout(kernel);
+            const auto l = trav::cpu_reference_layout(kernel);
             if (!l)
                 throw Error("--kernel " + kernel +
                             " has no CPU form: it needs --device gpu (on the CPU, --kernel takes "
@@ -294,24 +145,11 @@ void TraceOptions::validate(BuildOptions& build) const {
     }
 }
 
-namespace {
-
-/// The default GPU kernel of a structure: the fastest BVH2 kernel as measured on the H100 (the
-/// best on every diffuse set and on furball; within 4% of while-while-fma on primary rays)
-/// (experiments/NOTES.md), or the kd kernel that matches --kd-stack.
-std::string default_kernel(const Built& b, int kd_stack) {
-    if (b.structure.layout == trav::Layout::kCwbvh) return "cwbvh";
-    if (!b.is_kd()) return "dynamic-speculative-fma";
-    return kd_stack == trav::kKdFullStack ? "kd-full-stack" : "kd-short-stack";
-}
-
-}  // namespace
-
 std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,
                                                         const trav::EmbreeOracle* oracle) {
     std::vector<std::unique_ptr<trav::Tracer>> out;
     if (t.device == "cpu") {
-        out.push_back(trav::make_cpu_tracer(built.structure, b.kd_stack));
+        out.push_back(built.cpu_tracer());
         return out;
     }
     if (t.device == "embree") {
@@ -325,7 +163,7 @@ std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const Trac
         for (const trav::KernelInfo& k : trav::registered_kernels())
             if (k.layout == built.structure.layout) kernels.push_back(k);
     } else {
-        kernels.push_back(trav::find_kernel(t.kernel.empty() ? default_kernel(built, b.kd_stack) : t.kernel));
+        kernels.push_back(t.kernel.empty() ? built.default_kernel() : trav::find_kernel(t.kernel));
     }
     // Each kernel's options, checked before anything is uploaded: --kd-stack 1..8 sizes a short
     // stack (a full-stack kernel takes none), and with --kernel all --fetch-threshold goes to
@@ -347,9 +185,8 @@ std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const Trac
                         "' takes a short stack of 1..8 entries (--kd-stack), not 64");
         options.push_back(o);
     }
-    if (!built.device) built.device = std::make_shared<trav::DeviceStructure>(built.structure);
     for (size_t i = 0; i < kernels.size(); ++i)
-        out.push_back(trav::make_gpu_tracer(built.device, kernels[i], options[i]));
+        out.push_back(trav::make_gpu_tracer(built.device(), kernels[i], options[i]));
     return out;
 }
 

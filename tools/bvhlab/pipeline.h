@@ -11,28 +11,20 @@
 
 #include "accel/io/tree_file.h"
 #include "tools/bvhlab/context.h"
-#include "traversal/gpu/device_structure.h"
+#include "traversal/factory.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/tracer.h"
 
 namespace bvhlab::cli {
 
-/// One structure, whatever its kind: the layout every tracer takes, its figures, and its GPU
-/// upload once a GPU tracer asked for it.
-struct Built {
-    accel::BuildResult result;  ///< the BuildTree of a BVH (empty for a kd-tree)
-    accel::TreeStats stats;
-    trav::Structure structure;
-    nlohmann::json record;                                ///< the "build" JSON line
-    std::shared_ptr<const trav::DeviceStructure> device;  ///< uploaded on first GPU use
-    std::optional<accel::TreeFileMeta> loaded_meta;       ///< provenance when loaded from a structure file
-
-    bool is_kd() const { return structure.layout == trav::Layout::kKd; }
+/// One structure, whatever its kind (the library's AccelStructure), with its "build" JSON line.
+struct Built : trav::AccelStructure {
+    nlohmann::json record;  ///< the "build" JSON line: base fields, the build figures, machine
 };
 
-/// Builds, validates (throws on an invalid tree), computes statistics and converts to the
-/// traversal layout.
+/// The factory's build_structure (or, for --structure FILE, structure_from_file after the
+/// options given explicitly are checked against the file), with progress lines.
 Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g);
 
 /// Which tracers a command uses: --device, --kernel, --block-size (and --kd-stack, which

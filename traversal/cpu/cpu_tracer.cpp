@@ -10,10 +10,6 @@
 
 namespace bvhlab::trav {
 
-const char* layout_name(Layout layout) {
-    return layout == Layout::kBvh2 ? "bvh2" : layout == Layout::kKd ? "kdtree" : "cwbvh";
-}
-
 void trace_cpu_counted(const Structure& s, int kd_stack, const RaySet& set, std::vector<Hit>& hits,
                        std::vector<TraversalCounters>* counters) {
     if (s.layout == Layout::kBvh2) {

@@ -57,4 +57,15 @@ const KernelInfo& find_kernel(const std::string& name) {
     throw Error("no GPU kernel '" + name + "' (registered: " + names + "; `bvhlab kernels` describes them)");
 }
 
+const KernelInfo& default_kernel(Layout layout, bool short_stack) {
+    std::lock_guard<std::mutex> lock(table_mutex());
+    if (table().empty())
+        throw Error(std::string("no default GPU kernel for the ") + layout_name(layout) +
+                    " layout: this bvhlab has no GPU kernels (built without CUDA)");
+    for (const KernelInfo& e : table())
+        if (e.is_default && e.layout == layout && (layout != Layout::kKd || e.short_stack == short_stack)) return e;
+    throw Error(std::string("no GPU kernel is registered as the default for the ") + layout_name(layout) + " layout" +
+                (layout == Layout::kKd ? (short_stack ? " with a short stack" : " with a full stack") : ""));
+}
+
 }  // namespace bvhlab::trav

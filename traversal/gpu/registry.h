@@ -52,6 +52,10 @@ struct KernelInfo {
     int max_block = 1024;               ///< the largest block it launches (its __launch_bounds__)
     bool dynamic_fetch = false;         ///< takes a fetch threshold (--fetch-threshold 1..32)
     bool counts = false;                ///< runs a shared traversal and can count its work (LaunchArgs::counters)
+    /// The kernel a structure of its layout gets unless one is named: one per layout, and for
+    /// kd-trees one with a full stack and one with a short stack. Chosen by measurement
+    /// (experiments/NOTES.md); the factory and the CLI ask the registry, never a name.
+    bool is_default = false;
 };
 
 /// Adds a kernel; throws bvhlab::Error on a duplicate name. Returns true (for static init).
@@ -61,6 +65,9 @@ bool register_kernel(const KernelInfo& k);
 std::vector<KernelInfo> registered_kernels();
 /// The kernel of that name; throws bvhlab::Error listing the registered names otherwise.
 const KernelInfo& find_kernel(const std::string& name);
+/// The default kernel (KernelInfo::is_default) of `layout`; for kd-trees the one with a short
+/// stack when `short_stack`. Throws bvhlab::Error when there is none (a build without CUDA).
+const KernelInfo& default_kernel(Layout layout, bool short_stack = false);
 
 }  // namespace bvhlab::trav
 

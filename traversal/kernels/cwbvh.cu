@@ -26,6 +26,6 @@ void launch(const LaunchArgs& a) {
 BVHLAB_REGISTER_KERNEL({"cwbvh", Layout::kCwbvh,
                         "compressed 8-wide BVH: one thread per ray, the traversal the CPU reference runs "
                         "(octant-ordered node groups, quantised boxes)",
-                        uint32_t(kCwbvhStackSize), false, 128, launch, 1024, false, true});
+                        uint32_t(kCwbvhStackSize), false, 128, launch, 1024, false, true, /*is_default=*/true});
 
 }  // namespace bvhlab::trav

@@ -23,6 +23,6 @@ void launch(const LaunchArgs& a) {
 
 BVHLAB_REGISTER_KERNEL({"kd-full-stack", Layout::kKd,
                         "kd-tree, one thread per ray, full stack of 64 (tmin, tmax, node) entries: the reference",
-                        kKdFullStack, false, 128, launch, 1024, false, true});
+                        kKdFullStack, false, 128, launch, 1024, false, true, /*is_default=*/true});
 
 }  // namespace bvhlab::trav

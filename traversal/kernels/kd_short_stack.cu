@@ -26,6 +26,6 @@ void launch(const LaunchArgs& a) {
 BVHLAB_REGISTER_KERNEL(
     {"kd-short-stack", Layout::kKd,
      "kd-tree, one thread per ray, short stack of 1-8 entries (--kd-stack) with restart (Horn et al. 2007)",
-     kNoStackLimit, true, 128, launch, 1024, false, true});
+     kNoStackLimit, true, 128, launch, 1024, false, true, /*is_default=*/true});
 
 }  // namespace bvhlab::trav

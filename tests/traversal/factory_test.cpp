@@ -1,0 +1,199 @@
+// SPDX-License-Identifier: MIT
+// The structure factory (traversal/factory.h): every builder and layout from one spec, the
+// same trees as the builders give directly, errors named, structure files round-tripped, and
+// the registry's default kernels (one per layout, two for kd-trees).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <set>
+
+#include "accel/core/check.h"
+#include "accel/io/procedural.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "tests/support/agreement.h"
+#include "traversal/factory.h"
+#include "traversal/oracle/embree_oracle.h"
+#include "traversal/rays/raygen.h"
+
+namespace bvhlab::trav {
+namespace {
+
+bool built_with_cuda() {
+    std::string why;
+    gpu_available(&why);
+    return why.find("without CUDA") == std::string::npos;
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+const accel::TriangleMesh& mesh() {
+    static const accel::TriangleMesh m = accel::make_procedural(accel::ProceduralKind::kStructured, 3000, 5);
+    return m;
+}
+
+std::vector<Ray> camera_rays(const accel::TriangleMesh& m) {
+    PrimaryConfig pc;
+    pc.width = 64;
+    pc.height = 48;
+    return generate_primary(framing_camera(m), pc);
+}
+
+}  // namespace
+
+TEST(StructureFactory, EveryBuilderAndLayoutTracesLikeEmbree) {
+    const accel::TriangleMesh& m = mesh();
+    const EmbreeOracle oracle(m);
+    RaySet set;
+    set.rays = camera_rays(m);
+    std::vector<Hit> ref;
+    oracle.trace(set.rays, set.query, ref);
+    struct Case {
+        const char* builder;
+        const char* layout;
+        const char* name;
+        Layout want;
+    };
+    for (const Case& c : {Case{"binned", "bvh2", "bvh2/binned", Layout::kBvh2},
+                          Case{"bvh", "bvh2", "bvh2/binned", Layout::kBvh2},
+                          Case{"sweep", "bvh2", "bvh2/sweep", Layout::kBvh2},
+                          Case{"sbvh", "bvh2", "bvh2/sbvh", Layout::kBvh2},
+                          Case{"sbvh", "cwbvh", "cwbvh/sbvh", Layout::kCwbvh},
+                          Case{"binned", "cwbvh", "cwbvh/binned", Layout::kCwbvh},
+                          Case{"kdtree", "bvh2", "kdtree", Layout::kKd}}) {
+        StructureSpec spec;
+        spec.builder = c.builder;
+        spec.layout = c.layout;
+        spec.epo = false;
+        const AccelStructure s = build_structure(m, spec);
+        EXPECT_EQ(s.structure.name, c.name);
+        EXPECT_EQ(s.structure.layout, c.want);
+        EXPECT_EQ(s.figures["structure"], c.name);
+        EXPECT_EQ(s.figures["triangles"], m.triangle_count());
+        EXPECT_GT(s.stats.sah, 0.0) << c.name;
+        EXPECT_GT(s.figures["nodes"].get<size_t>(), 1u) << c.name;
+        std::vector<Hit> ours;
+        s.cpu_tracer()->trace(set, ours);
+        SCOPED_TRACE(c.name);
+        test::expect_no_real_mismatch(m, oracle, set.rays, set.query, ours, ref);
+    }
+}
+
+TEST(StructureFactory, GivesTheTreeTheBuilderGives) {
+    const accel::TriangleMesh& m = mesh();
+    StructureSpec spec;
+    spec.builder = "sbvh";
+    spec.options.config.max_leaf_size = 4;
+    spec.epo = false;
+    const AccelStructure s = build_structure(m, spec);
+    accel::BuilderOptions o;
+    o.config.max_leaf_size = 4;
+    const accel::Bvh2 direct = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kSbvh, m, o).tree, m);
+    ASSERT_EQ(s.structure.bvh2.nodes.size(), direct.nodes.size());
+    EXPECT_EQ(0, std::memcmp(s.structure.bvh2.nodes.data(), direct.nodes.data(),
+                             direct.nodes.size() * sizeof(accel::Bvh2Node)));
+    EXPECT_EQ(s.figures["max_leaf"], 4);
+    EXPECT_LE(s.stats.max_leaf_size, 4u);
+    EXPECT_EQ(s.spec.builder, "sbvh");
+}
+
+TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
+    const accel::TriangleMesh& m = mesh();
+    auto refused = [&](const std::function<void(StructureSpec&)>& edit, const std::string& word) {
+        StructureSpec spec;
+        edit(spec);
+        const std::string e = error_of([&] { build_structure(m, spec); });
+        EXPECT_NE(e.find(word), std::string::npos) << "'" << e << "' should name " << word;
+        EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    };
+    refused([](StructureSpec& s) { s.builder = "octree"; }, "octree");
+    refused([](StructureSpec& s) { s.layout = "bvh4"; }, "bvh4");
+    refused(
+        [](StructureSpec& s) {
+            s.builder = "kdtree";
+            s.layout = "cwbvh";
+        },
+        "cwbvh");
+    refused([](StructureSpec& s) { s.collapse = "best"; }, "best");
+    refused([](StructureSpec& s) { s.cw_tris = "quads"; }, "quads");
+    refused([](StructureSpec& s) { s.kd_stack = 9; }, "kd_stack");
+    refused([](StructureSpec& s) { s.options.num_bins = 1; }, "bins");
+    refused([](StructureSpec& s) { s.options.config.max_leaf_size = 0; }, "max_leaf");
+    refused([](StructureSpec& s) { s.options.config.min_leaf_size = 9; }, "min_leaf");
+    refused([](StructureSpec& s) { s.options.sbvh_alpha = std::nanf(""); }, "alpha");
+    refused([](StructureSpec& s) { s.options.sbvh_budget = 0.5f; }, "budget");
+    refused([](StructureSpec& s) { s.kd.traversal_cost = 0.0f; }, "kd_ct");
+    refused([](StructureSpec& s) { s.kd.max_depth = 65; }, "kd_max_depth");
+    const std::string e = error_of([] { build_structure(accel::TriangleMesh{}, StructureSpec{}); });
+    EXPECT_NE(e.find("no triangles"), std::string::npos) << e;
+}
+
+TEST(StructureFactory, StructureFilesRoundTripAndStaleOnesAreRefused) {
+    const accel::TriangleMesh& m = mesh();
+    const std::string hash = accel::scene_hash(m);
+    const auto dir = std::filesystem::temp_directory_path() / ("bvhlab_factory_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    for (const char* builder : {"sweep", "kdtree"}) {
+        StructureSpec spec;
+        spec.builder = builder;
+        spec.epo = false;
+        const AccelStructure built = build_structure(m, spec);
+        const std::string path = (dir / (std::string(builder) + ".bvh")).string();
+        built.save(path, hash);
+        const AccelStructure loaded = load_structure(m, hash, path, StructureSpec{});
+        EXPECT_EQ(loaded.structure.name, built.structure.name);
+        EXPECT_EQ(loaded.spec.builder, builder);
+        EXPECT_EQ(loaded.structure.bytes(), built.structure.bytes());
+        EXPECT_EQ(loaded.figures["structure_file"], path);
+        ASSERT_TRUE(loaded.loaded_meta.has_value());
+        const std::string stale = error_of([&] { load_structure(m, "0123456789abcdef", path); });
+        EXPECT_NE(stale.find("stale structure file"), std::string::npos) << stale;
+        const accel::TriangleMesh other = accel::make_procedural(accel::ProceduralKind::kSoup, 100, 1);
+        EXPECT_NE(error_of([&] { load_structure(other, accel::scene_hash(other), path); }).find("stale"),
+                  std::string::npos);
+    }
+    // A BVH file loads into the CWBVH layout too; a kd-tree file does not.
+    StructureSpec cw;
+    cw.layout = "cwbvh";
+    EXPECT_EQ(load_structure(m, hash, (dir / "sweep.bvh").string(), cw).structure.name, "cwbvh/sweep");
+    EXPECT_NE(error_of([&] { load_structure(m, hash, (dir / "kdtree.bvh").string(), cw); }).find("kd-tree"),
+              std::string::npos);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(StructureFactory, DefaultKernelsComeFromTheRegistry) {
+    StructureSpec kd;
+    kd.builder = "kdtree";
+    kd.epo = false;
+    AccelStructure full = build_structure(mesh(), kd);
+    kd.kd_stack = 3;
+    AccelStructure shorty = build_structure(mesh(), kd);
+    if (!built_with_cuda()) {
+        EXPECT_NE(error_of([&] { full.default_kernel(); }).find("without CUDA"), std::string::npos);
+        GTEST_SKIP() << "built without CUDA: the registry is empty";
+    }
+    // Exactly one default per layout, and for kd-trees one per stack kind.
+    std::set<std::pair<int, bool>> seen;
+    for (const KernelInfo& k : registered_kernels())
+        if (k.is_default) EXPECT_TRUE(seen.insert({int(k.layout), k.short_stack}).second) << k.name;
+    EXPECT_EQ(seen.size(), 4u);
+    EXPECT_EQ(default_kernel(Layout::kBvh2).layout, Layout::kBvh2);
+    EXPECT_EQ(default_kernel(Layout::kCwbvh).layout, Layout::kCwbvh);
+    EXPECT_FALSE(full.default_kernel().short_stack);
+    EXPECT_TRUE(shorty.default_kernel().short_stack);
+    EXPECT_EQ(shorty.gpu_options(shorty.default_kernel()).kd_stack, 3);
+    EXPECT_TRUE(default_kernel(Layout::kBvh2).is_default);
+}
+
+}  // namespace bvhlab::trav

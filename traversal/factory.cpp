@@ -1,0 +1,325 @@
+// SPDX-License-Identifier: MIT
+#include "traversal/factory.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "accel/core/check.h"
+#include "accel/core/validate.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/cwbvh_convert.h"
+#include "accel/layouts/kd_convert.h"
+#include "accel/passes/collapse_wide.h"
+#include "traversal/device/kd_traverse.h"
+
+namespace bvhlab::trav {
+
+namespace {
+
+std::shared_ptr<void> begin(const StageHook& stage, const std::string& what) {
+    return stage ? stage(what) : nullptr;
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <typename T>
+void check_range(const char* name, T v, T lo, T hi) {
+    if (!(v >= lo && v <= hi))  // NaN fails too
+        throw Error(std::string(name) + " " + std::to_string(v) + " is not in [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+}
+
+/// The kd-tree path: kd SAH and sizes (no EPO: it is a BVH figure). `tree` is built here
+/// unless a loaded one is given.
+AccelStructure make_kdtree(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
+                           accel::KdTree* loaded, const std::string& path) {
+    AccelStructure b;
+    b.spec = spec;
+    accel::KdTreeBuilder builder(spec.kd);
+    accel::KdTree tree;
+    if (loaded) {
+        tree = std::move(*loaded);
+        tree.bounds = mesh.bounds();  // not stored: the scene hash guarantees the same box
+    } else {
+        auto st = begin(stage, "building SAH kd-tree over " + std::to_string(mesh.triangle_count()) + " triangles");
+        const auto t0 = std::chrono::steady_clock::now();
+        tree = builder.build(mesh);
+        b.result.build_ms = ms_since(t0);
+    }
+    const std::string err = accel::validate_kd(tree, mesh.triangle_count());
+    if (!err.empty())
+        throw Error((loaded ? "structure file '" + path + "' holds" : std::string("the kd-tree builder produced")) +
+                    " an invalid kd-tree: " + err);
+    const accel::KdTreeStats ks = accel::compute_kd_stats(tree, builder.config());
+    nlohmann::json& f = b.figures;
+    f["builder"] = "kdtree";
+    f["structure"] = "kdtree";
+    f["triangles"] = mesh.triangle_count();
+    f["nodes"] = ks.nodes;
+    f["leaves"] = ks.leaves;
+    f["depth"] = ks.depth;
+    f["max_depth"] = builder.max_depth_for(mesh.triangle_count());
+    f["references"] = ks.references;
+    f["mean_leaf_size"] = ks.leaves ? double(ks.references) / double(ks.leaves) : 0.0;
+    f["max_leaf_size"] = ks.max_leaf_size;
+    f["duplication"] = mesh.triangle_count() ? double(ks.references) / double(mesh.triangle_count()) : 0.0;
+    f["bytes"] = tree.bytes();
+    f["sah"] = ks.sah;
+    f["sah_constants"] = {{"traversal", builder.config().traversal_cost},
+                          {"intersection", builder.config().intersection_cost},
+                          {"empty_bonus", builder.config().empty_bonus}};
+    f["epo"] = nullptr;
+    f["build_ms"] = b.result.build_ms;
+    b.stats.sah = ks.sah;
+    b.structure.name = "kdtree";
+    b.structure.layout = Layout::kKd;
+    b.structure.kd = accel::convert_to_kd_layout(std::move(tree), mesh);
+    f["layout"] = layout_name(b.structure.layout);
+    f["layout_bytes"] = b.structure.bytes();
+    if (loaded) f["structure_file"] = path;
+    return b;
+}
+
+/// The bytes of the BVH2 layout of `tree` (nodes, Woop triangles, triangle ids), without
+/// building it: what a CWBVH's bytes are compared with.
+size_t bvh2_layout_bytes(const accel::BuildTree& tree) {
+    size_t interior = 0;
+    for (const accel::BuildNode& n : tree.nodes) interior += !n.is_leaf();
+    return std::max<size_t>(interior, 1) * sizeof(accel::Bvh2Node) +
+           tree.prim_indices.size() * (sizeof(accel::WoopTriangle) + sizeof(uint32_t));
+}
+
+/// The CWBVH path: collapse the binary tree to 8-wide, check it, quantise.
+void convert_cwbvh(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
+                   AccelStructure& b) {
+    const auto t0 = std::chrono::steady_clock::now();
+    accel::WideTree w;
+    {
+        auto st = begin(stage, "collapsing to an 8-wide BVH (" + spec.collapse + ") and quantising its boxes");
+        w = accel::collapse_to_wide(
+            b.result.tree, mesh,
+            spec.collapse == "greedy" ? accel::CollapseMethod::kGreedy : accel::CollapseMethod::kSahOptimal);
+        const std::string err = accel::validate_wide(w, mesh.triangle_count(), b.result.tree.prim_indices);
+        BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide tree: " + err);
+        b.structure.layout = Layout::kCwbvh;
+        b.structure.cwbvh = accel::convert_to_cwbvh(
+            w, mesh, spec.cw_tris == "vertices" ? accel::CwTris::kVertices : accel::CwTris::kWoop);
+    }
+    const double ms = ms_since(t0);
+    const accel::WideStats ws = accel::compute_wide_stats(w);
+    const size_t bvh2_bytes = bvh2_layout_bytes(b.result.tree);
+    b.figures["wide"] = {{"collapse", spec.collapse},
+                         {"triangles", spec.cw_tris},
+                         {"collapse_ms", ms},
+                         {"nodes", ws.nodes},
+                         {"leaves", ws.leaves},
+                         {"references", ws.references},
+                         {"mean_children", ws.mean_children},
+                         {"sah", ws.sah},
+                         {"sah_costs", {{"node", accel::WideCost{}.node}, {"prim", accel::WideCost{}.prim}}},
+                         {"depth", ws.depth},
+                         {"node_bytes", b.structure.cwbvh.nodes.size() * sizeof(accel::CwbvhNode)}};
+    b.figures["bvh2_layout_bytes"] = bvh2_bytes;
+    b.figures["bytes_vs_bvh2"] = double(b.structure.cwbvh.bytes()) / double(bvh2_bytes);
+}
+
+/// The BVH path after the binary tree exists (built, or loaded from `path`): validation,
+/// figures, layout.
+AccelStructure finish_bvh(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
+                          AccelStructure b, const std::string& path) {
+    const std::string builder = accel::builder_name(spec.kind());
+    accel::ValidateOptions vo;
+    vo.allow_duplicates = spec.kind() == accel::BuilderKind::kSbvh;
+    const std::string err = accel::validate(b.result.tree, mesh, spec.options.config, vo);
+    if (!err.empty())
+        throw Error((path.empty() ? "builder '" + builder + "' produced" : "structure file '" + path + "' holds") +
+                    " an invalid tree: " + err);
+    {
+        auto st = begin(stage, spec.epo ? "computing SAH and EPO" : "computing SAH");
+        b.stats = accel::compute_stats(b.result.tree, mesh, spec.options.config, spec.epo);
+    }
+    const accel::TreeStats& s = b.stats;
+    nlohmann::json& f = b.figures;
+    f["builder"] = builder;
+    f["triangles"] = mesh.triangle_count();
+    f["dropped_non_finite"] = mesh.dropped.non_finite;
+    f["dropped_zero_area"] = mesh.dropped.zero_area;
+    f["nodes"] = s.nodes;
+    f["leaves"] = s.leaves;
+    f["depth"] = s.depth;
+    f["mean_leaf_size"] = s.mean_leaf_size;
+    f["max_leaf_size"] = s.max_leaf_size;
+    f["references"] = s.references;
+    f["duplication"] = mesh.triangle_count() ? double(s.references) / double(mesh.triangle_count()) : 0.0;
+    f["bytes"] = s.bytes;
+    f["sah"] = s.sah;
+    f["epo"] = s.epo >= 0 ? nlohmann::json(s.epo) : nlohmann::json(nullptr);
+    f["build_ms"] = b.result.build_ms;  // 0 for a loaded file: nothing was built
+    if (spec.is_cwbvh()) {
+        convert_cwbvh(mesh, spec, stage, b);
+        // Woop triangles are the default and keep the plain name; vertex triples are named.
+        b.structure.name = std::string(spec.cw_tris == "vertices" ? "cwbvh-vertices/" : "cwbvh/") + builder;
+    } else {
+        b.structure.name = "bvh2/" + builder;
+        b.structure.layout = Layout::kBvh2;
+        b.structure.bvh2 = accel::convert_to_bvh2(b.result.tree, mesh);
+    }
+    f["structure"] = b.structure.name;
+    f["layout"] = layout_name(b.structure.layout);
+    f["layout_bytes"] = b.structure.bytes();
+    f["layout_depth"] = b.structure.depth();
+    if (builder != "sweep") f["bins"] = spec.options.num_bins;
+    if (builder == "sbvh") {
+        f["alpha"] = spec.options.sbvh_alpha;
+        f["budget"] = spec.options.sbvh_budget;
+    }
+    f["max_leaf"] = spec.options.config.max_leaf_size;
+    f["reinsertion_passes"] = accel::reinsertion_passes(spec.kind(), spec.options);
+    f["config"] = accel::describe_config(spec.kind(), spec.options);
+    if (!path.empty()) f["structure_file"] = path;
+    return b;
+}
+
+}  // namespace
+
+accel::BuilderKind StructureSpec::kind() const {
+    if (builder == "bvh") return accel::BuilderKind::kBinned;
+    if (is_kdtree()) throw Error("builder 'kdtree' builds a kd-tree, not a BVH");
+    return accel::parse_builder_kind(builder);
+}
+
+void StructureSpec::check() const {
+    if (!is_kdtree()) kind();  // names an unknown builder
+    if (layout != "bvh2" && layout != "cwbvh")
+        throw Error("layout '" + layout + "' is not one of bvh2, cwbvh (a kd-tree has its own layout)");
+    if (is_kdtree() && layout == "cwbvh")
+        throw Error("layout cwbvh is built from a BVH, not a kd-tree (builder 'kdtree')");
+    if (collapse != "sah" && collapse != "greedy") throw Error("collapse '" + collapse + "' is not one of sah, greedy");
+    if (cw_tris != "woop" && cw_tris != "vertices")
+        throw Error("cw_tris '" + cw_tris + "' is not one of woop, vertices");
+    if (kd_stack != kKdFullStack && (kd_stack < 1 || kd_stack > 8))
+        throw Error("kd_stack " + std::to_string(kd_stack) + " is neither 64 (full stack) nor in [1, 8] (short stack)");
+    check_range("bins", options.num_bins, 2, 256);
+    check_range("max_leaf", options.config.max_leaf_size, 1u, 64u);
+    check_range("min_leaf", options.config.min_leaf_size, 1u, 64u);
+    if (options.config.min_leaf_size > options.config.max_leaf_size)
+        throw Error("min_leaf " + std::to_string(options.config.min_leaf_size) + " is larger than max_leaf " +
+                    std::to_string(options.config.max_leaf_size));
+    check_range("alpha", options.sbvh_alpha, 0.0f, 1.0f);
+    check_range("budget", options.sbvh_budget, 1.0f, 16.0f);
+    check_range("spatial_bins", options.sbvh_spatial_bins, 2, 256);
+    check_range("reinsertion_passes", options.reinsertion_passes, -1, 16);
+    check_range("kd_ct", kd.traversal_cost, 0.001f, 1e6f);
+    check_range("kd_ci", kd.intersection_cost, 0.001f, 1e6f);
+    check_range("kd_bonus", kd.empty_bonus, 0.0f, 0.99f);
+    check_range("kd_max_depth", kd.max_depth, -1, 64);
+}
+
+AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec_in,
+                               const StageHook& stage) {
+    spec_in.check();
+    if (mesh.triangle_count() == 0) throw Error("the mesh has no triangles to build a structure over");
+    StructureSpec spec = spec_in;
+    if (spec.is_kdtree()) return make_kdtree(mesh, spec, stage, nullptr, "");
+    spec.builder = accel::builder_name(spec.kind());  // "bvh" -> "binned"
+    AccelStructure b;
+    b.spec = spec;
+    {
+        auto st = begin(stage, "building " + spec.builder + " SAH BVH over " + std::to_string(mesh.triangle_count()) +
+                                   " triangles");
+        b.result = accel::run_builder(spec.kind(), mesh, spec.options);
+    }
+    return finish_bvh(mesh, spec, stage, std::move(b), "");
+}
+
+AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash,
+                                   accel::TreeFile file, const std::string& path, const StructureSpec& spec_in,
+                                   const StageHook& stage) {
+    const std::string stale = accel::stale_reason(file.meta, mesh.triangle_count(), scene_hash);
+    if (!stale.empty()) throw Error("stale structure file '" + path + "': " + stale);
+    StructureSpec spec = spec_in;
+    if (file.meta.kdtree) {
+        if (spec.layout == "cwbvh")
+            throw Error("structure file '" + path + "' holds a kd-tree; the cwbvh layout is built from a BVH");
+        spec.builder = "kdtree";
+        spec.kd = file.meta.kd;
+        spec.check();
+        AccelStructure b = make_kdtree(mesh, spec, stage, &file.kd, path);
+        b.loaded_meta = file.meta;
+        return b;
+    }
+    spec.builder = accel::builder_name(file.meta.builder);
+    spec.options = file.meta.options;
+    spec.check();
+    AccelStructure b;
+    b.spec = spec;
+    b.loaded_meta = file.meta;
+    b.result.tree = std::move(file.tree);
+    return finish_bvh(mesh, spec, stage, std::move(b), path);
+}
+
+AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash,
+                              const std::string& path, const StructureSpec& spec, const StageHook& stage) {
+    accel::TreeFile f;
+    {
+        auto st = begin(stage, "loading structure " + path);
+        f = accel::read_tree_file(path);
+    }
+    return structure_from_file(mesh, scene_hash, std::move(f), path, spec, stage);
+}
+
+std::shared_ptr<const DeviceStructure> AccelStructure::device() {
+    if (!device_) device_ = std::make_shared<DeviceStructure>(structure);
+    return device_;
+}
+
+const KernelInfo& AccelStructure::default_kernel() const {
+    return trav::default_kernel(structure.layout, is_kd() && spec.kd_stack != kKdFullStack);
+}
+
+GpuTraceOptions AccelStructure::gpu_options(const KernelInfo& kernel) const {
+    GpuTraceOptions o;
+    if (kernel.short_stack && spec.kd_stack != kKdFullStack) o.kd_stack = spec.kd_stack;
+    return o;
+}
+
+std::unique_ptr<Tracer> AccelStructure::cpu_tracer() const { return make_cpu_tracer(structure, spec.kd_stack); }
+
+std::unique_ptr<Tracer> AccelStructure::gpu_tracer(const std::string& kernel, std::optional<GpuTraceOptions> opts) {
+    const KernelInfo& k = kernel.empty() ? default_kernel() : find_kernel(kernel);
+    const GpuTraceOptions o = opts ? *opts : gpu_options(k);
+    check_kernel_fits(k, structure.layout, structure.depth(), o);  // before anything is uploaded
+    return make_gpu_tracer(device(), k, o);
+}
+
+void AccelStructure::save(const std::string& path, const std::string& scene_hash) const {
+    accel::TreeFileMeta meta;
+    if (loaded_meta) {  // re-saving a loaded file keeps its provenance
+        meta = *loaded_meta;
+    } else if (is_kd()) {
+        meta.kdtree = true;
+        meta.kd = spec.kd;
+    } else {
+        meta.builder = spec.kind();
+        meta.options = spec.options;
+    }
+    if (!loaded_meta) {
+        meta.triangles = figures.value("triangles", uint64_t(0));
+        meta.scene_hash = scene_hash;
+    }
+    if (is_kd())
+        accel::write_kd_file(path, structure.kd.tree, meta);
+    else
+        accel::write_tree_file(path, result.tree, meta);
+}
+
+std::optional<Layout> cpu_reference_layout(const std::string& name) {
+    if (name == "plain") return Layout::kBvh2;   // traverse_bvh2
+    if (name == "cwbvh") return Layout::kCwbvh;  // traverse_cwbvh
+    return std::nullopt;
+}
+
+}  // namespace bvhlab::trav

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: MIT
+// The front door of the library: a mesh and a structure spec (builder, layout, options) in, a
+// traceable structure out, with its build figures, its device upload on demand, its default
+// kernel and its tracers. The CLI, the tests, the benchmarks, the renderer's driver and the
+// Python module all build structures here; nothing else chooses a builder or a kernel.
+// Modelled on Embree's bvh4_factory (builders and traversers chosen by name inside the
+// library) and madmann91/bvh's default_builder.h.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "accel/builders/builder.h"
+#include "accel/builders/kdtree.h"
+#include "accel/core/mesh.h"
+#include "accel/core/stats.h"
+#include "accel/io/tree_file.h"
+#include "traversal/gpu/device_structure.h"
+#include "traversal/gpu/gpu_tracer.h"
+#include "traversal/gpu/registry.h"
+#include "traversal/structure.h"
+#include "traversal/tracer.h"
+
+namespace bvhlab::trav {
+
+/// What to build. The defaults are the CLI's: a binned SAH BVH in the BVH2 layout.
+struct StructureSpec {
+    std::string builder = "binned";   ///< binned (also "bvh"), sweep, sbvh, or kdtree
+    std::string layout = "bvh2";      ///< a BVH's traversal layout: bvh2 or cwbvh (8-wide, compressed)
+    accel::BuilderOptions options;    ///< the BVH builders' options (bins, leaf sizes, SBVH, reinsertion)
+    accel::KdTreeBuilder::Config kd;  ///< the kd-tree builder's constants
+    std::string collapse = "sah";     ///< cwbvh: sah (least wide SAH) or greedy
+    std::string cw_tris = "woop";     ///< cwbvh leaf triangles: woop (48 B) or vertices (36 B)
+    int kd_stack = kKdFullStack;      ///< kd-tree traversal: 64 = full stack, 1..8 = short stack with restart
+    bool epo = true;                  ///< compute the EPO of a BVH (slow on very large scenes)
+
+    bool is_kdtree() const { return builder == "kdtree"; }
+    bool is_cwbvh() const { return !is_kdtree() && layout == "cwbvh"; }
+    /// The BVH builder (throws bvhlab::Error for kdtree or an unknown name).
+    accel::BuilderKind kind() const;
+    /// Refuses, with a one-line bvhlab::Error naming the value, any field out of its range or
+    /// a combination that does not exist (a kd-tree in the cwbvh layout, min leaf > max leaf).
+    void check() const;
+};
+
+/// Progress: called when a stage starts, with what it does; the stage ends when the returned
+/// object is destroyed (null is fine). The CLI prints "[bvhlab] ... done (s)" lines with it.
+using StageHook = std::function<std::shared_ptr<void>(const std::string& what)>;
+
+/// A built (or loaded) structure in its traversal layout, with everything known about it.
+class AccelStructure {
+public:
+    StructureSpec spec;                              ///< what it is (for a loaded file: the file's builder and options)
+    Structure structure;                             ///< the layout every tracer takes
+    accel::BuildResult result;                       ///< the binary BuildTree of a BVH (empty for a kd-tree)
+    accel::TreeStats stats;                          ///< a BVH's figures (for a kd-tree only .sah is set)
+    nlohmann::json figures;                          ///< the build figures as JSON (builder, nodes, sah, ...)
+    std::optional<accel::TreeFileMeta> loaded_meta;  ///< provenance when loaded from a structure file
+
+    bool is_kd() const { return structure.layout == Layout::kKd; }
+
+    /// The structure on the GPU, uploaded on the first call. Throws bvhlab::Error without one.
+    std::shared_ptr<const DeviceStructure> device();
+    /// The registry's default kernel for this layout (for a kd-tree: the one whose stack
+    /// matches spec.kd_stack). Throws bvhlab::Error in a build without CUDA.
+    const KernelInfo& default_kernel() const;
+    /// The GPU options that spec.kd_stack implies for `kernel`.
+    GpuTraceOptions gpu_options(const KernelInfo& kernel) const;
+
+    /// The CPU tracer of the structure (the object must outlive it).
+    std::unique_ptr<Tracer> cpu_tracer() const;
+    /// A GPU tracer with `kernel` ("" = the default kernel); uploads the structure first.
+    /// Throws bvhlab::Error for a kernel that does not fit the layout, depth or options.
+    std::unique_ptr<Tracer> gpu_tracer(const std::string& kernel = "", std::optional<GpuTraceOptions> opts = {});
+
+    /// Writes the tree to a structure file (`bvhlab build --out`), checksummed and stamped with
+    /// the scene's triangle count and hash; a loaded structure keeps its provenance.
+    void save(const std::string& path, const std::string& scene_hash) const;
+
+private:
+    std::shared_ptr<const DeviceStructure> device_;
+};
+
+/// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
+/// figures (SAH, EPO, sizes), and the traversal layout.
+AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec,
+                               const StageHook& stage = {});
+
+/// The structure of a structure file already read (`path` names it in errors and figures):
+/// its tree, validated, in the layout of `spec` (layout, collapse, cw_tris, kd_stack, epo);
+/// builder and options come from the file. Throws bvhlab::Error for a file whose triangle
+/// count or scene hash differ from the mesh's, or a layout that does not apply.
+AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash,
+                                   accel::TreeFile file, const std::string& path, const StructureSpec& spec = {},
+                                   const StageHook& stage = {});
+
+/// Reads a structure file and returns structure_from_file of it.
+AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash,
+                              const std::string& path, const StructureSpec& spec = {}, const StageHook& stage = {});
+
+/// The layout whose CPU traversal is the one GPU kernel `name` runs (the CPU reference behind
+/// `--device cpu --kernel NAME`: plain for BVH2, cwbvh for CWBVH), or none.
+std::optional<Layout> cpu_reference_layout(const std::string& name);
+
+}  // namespace bvhlab::trav
