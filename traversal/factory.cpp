@@ -17,9 +17,7 @@ namespace bvhlab::trav {
 
 namespace {
 
-std::shared_ptr<void> begin(const StageHook& stage, const std::string& what) {
-    return stage ? stage(what) : nullptr;
-}
+std::shared_ptr<void> begin(const StageHook& stage, const std::string& what) { return stage ? stage(what) : nullptr; }
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -218,8 +216,7 @@ void StructureSpec::check() const {
     check_range("kd_max_depth", kd.max_depth, -1, 64);
 }
 
-AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec_in,
-                               const StageHook& stage) {
+AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {
     spec_in.check();
     if (mesh.triangle_count() == 0) throw Error("the mesh has no triangles to build a structure over");
     StructureSpec spec = spec_in;
@@ -235,9 +232,8 @@ AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureS
     return finish_bvh(mesh, spec, stage, std::move(b), "");
 }
 
-AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash,
-                                   accel::TreeFile file, const std::string& path, const StructureSpec& spec_in,
-                                   const StageHook& stage) {
+AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
+                                   const std::string& path, const StructureSpec& spec_in, const StageHook& stage) {
     const std::string stale = accel::stale_reason(file.meta, mesh.triangle_count(), scene_hash);
     if (!stale.empty()) throw Error("stale structure file '" + path + "': " + stale);
     StructureSpec spec = spec_in;
@@ -261,8 +257,8 @@ AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::s
     return finish_bvh(mesh, spec, stage, std::move(b), path);
 }
 
-AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash,
-                              const std::string& path, const StructureSpec& spec, const StageHook& stage) {
+AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash, const std::string& path,
+                              const StructureSpec& spec, const StageHook& stage) {
     accel::TreeFile f;
     {
         auto st = begin(stage, "loading structure " + path);

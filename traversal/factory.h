@@ -87,20 +87,19 @@ private:
 
 /// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
 /// figures (SAH, EPO, sizes), and the traversal layout.
-AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec,
-                               const StageHook& stage = {});
+AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
 
 /// The structure of a structure file already read (`path` names it in errors and figures):
 /// its tree, validated, in the layout of `spec` (layout, collapse, cw_tris, kd_stack, epo);
 /// builder and options come from the file. Throws bvhlab::Error for a file whose triangle
 /// count or scene hash differ from the mesh's, or a layout that does not apply.
-AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash,
-                                   accel::TreeFile file, const std::string& path, const StructureSpec& spec = {},
+AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
+                                   const std::string& path, const StructureSpec& spec = {},
                                    const StageHook& stage = {});
 
 /// Reads a structure file and returns structure_from_file of it.
-AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash,
-                              const std::string& path, const StructureSpec& spec = {}, const StageHook& stage = {});
+AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash, const std::string& path,
+                              const StructureSpec& spec = {}, const StageHook& stage = {});
 
 /// The layout whose CPU traversal is the one GPU kernel `name` runs (the CPU reference behind
 /// `--device cpu --kernel NAME`: plain for BVH2, cwbvh for CWBVH), or none.

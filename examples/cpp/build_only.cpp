@@ -16,8 +16,8 @@ int main() {
         for (accel::BuilderKind kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
             const accel::BuildResult r = accel::run_builder(kind, mesh, {});
             const accel::TreeStats s = accel::compute_stats(r.tree, mesh, {}, false);
-            std::printf("%-7s %zu triangles: %llu nodes, SAH %.3f\n", accel::builder_name(kind),
-                        mesh.triangle_count(), (unsigned long long)s.nodes, s.sah);
+            std::printf("%-7s %zu triangles: %llu nodes, SAH %.3f\n", accel::builder_name(kind), mesh.triangle_count(),
+                        (unsigned long long)s.nodes, s.sah);
         }
         return 0;
     } catch (const std::exception& e) {

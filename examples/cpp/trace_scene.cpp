@@ -31,8 +31,8 @@ size_t trace_and_check(trav::Tracer& tracer, const accel::TriangleMesh& mesh, co
     const trav::CompareReport rep = trav::compare_hits(mesh, set.rays, set.query, ours, ref,
                                                        [&](const trav::Ray& r) { return oracle.intersect(r); });
     std::printf("%-8s %-26s %9zu rays %9.1f Mrays/s  agree %zu, ties %zu, mismatches %zu\n", what,
-                tracer.name().c_str(), set.rays.size(), ms > 0 ? double(set.rays.size()) / (ms * 1e3) : 0.0,
-                rep.agree, rep.ties, rep.mismatches);
+                tracer.name().c_str(), set.rays.size(), ms > 0 ? double(set.rays.size()) / (ms * 1e3) : 0.0, rep.agree,
+                rep.ties, rep.mismatches);
     return rep.mismatches;
 }
 

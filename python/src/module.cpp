@@ -85,7 +85,8 @@ py::array to_numpy(std::vector<T>&& v, const py::dtype& dt) {
 /// The records of a numpy array of `dt` records (or raw bytes of the same size), checked.
 template <typename T>
 const T* records(const py::array& a, const py::dtype& dt, const char* what, size_t* n) {
-    if (a.ndim() != 1) throw Error(std::string(what) + " must be a 1-D array of records, not " + std::to_string(a.ndim()) + "-D");
+    if (a.ndim() != 1)
+        throw Error(std::string(what) + " must be a 1-D array of records, not " + std::to_string(a.ndim()) + "-D");
     if (a.itemsize() != py::ssize_t(sizeof(T)) || !(a.dtype().equal(dt) || a.dtype().kind() == 'V'))
         throw Error(std::string(what) + " must have bvhlab's dtype (bvhlab." + (sizeof(T) == 32 ? "RAY" : "HIT") +
                     "_DTYPE, " + std::to_string(sizeof(T)) + "-byte records)");
@@ -113,8 +114,7 @@ trav::Query parse_query(const std::string& q) {
 std::shared_ptr<Scene> scene_from_arrays(py::array_t<float, py::array::c_style | py::array::forcecast> vertices,
                                          py::array_t<int64_t, py::array::c_style | py::array::forcecast> indices,
                                          bool drop_degenerate) {
-    if (vertices.ndim() != 2 || vertices.shape(1) != 3)
-        throw Error("vertices must be an (N, 3) array of floats");
+    if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw Error("vertices must be an (N, 3) array of floats");
     if (indices.ndim() != 2 || indices.shape(1) != 3) throw Error("indices must be an (M, 3) array of integers");
     auto s = std::make_shared<Scene>();
     const size_t nv = size_t(vertices.shape(0)), nt = size_t(indices.shape(0));
@@ -131,8 +131,8 @@ std::shared_ptr<Scene> scene_from_arrays(py::array_t<float, py::array::c_style |
                 throw Error("triangle " + std::to_string(t) + " names vertex " + std::to_string(ix[3 * t + c]) +
                             ", but there are " + std::to_string(nv) + " vertices");
         const auto& V = s->mesh.vertices;
-        const accel::TriangleCheck check = accel::check_triangle(V[size_t(ix[3 * t])], V[size_t(ix[3 * t + 1])],
-                                                                 V[size_t(ix[3 * t + 2])]);
+        const accel::TriangleCheck check =
+            accel::check_triangle(V[size_t(ix[3 * t])], V[size_t(ix[3 * t + 1])], V[size_t(ix[3 * t + 2])]);
         if (check != accel::TriangleCheck::kOk && !drop_degenerate)
             throw Error("triangle " + std::to_string(t) + " has " +
                         (check == accel::TriangleCheck::kNonFinite ? "a non-finite vertex" : "zero area") +
@@ -336,15 +336,17 @@ PYBIND11_MODULE(_bvhlab, m) {
 
     py::class_<Structure, std::shared_ptr<Structure>>(m, "Structure", "A built acceleration structure")
         .def_property_readonly("name", [](const Structure& s) { return s.s.structure.name; })
-        .def_property_readonly("layout", [](const Structure& s) { return std::string(trav::layout_name(s.s.structure.layout)); })
+        .def_property_readonly("layout",
+                               [](const Structure& s) { return std::string(trav::layout_name(s.s.structure.layout)); })
         .def_property_readonly("stats", [](const Structure& s) { return to_py(s.s.figures); })
         .def_property_readonly("bytes", [](const Structure& s) { return s.s.structure.bytes(); })
         .def_property_readonly("depth", [](const Structure& s) { return s.s.structure.depth(); })
         .def_property_readonly("scene", [](const Structure& s) { return s.scene; })
-        .def_property_readonly("default_kernel", [](const Structure& s) { return std::string(s.s.default_kernel().name); })
+        .def_property_readonly("default_kernel",
+                               [](const Structure& s) { return std::string(s.s.default_kernel().name); })
         .def(
-            "save", [](const Structure& s, const std::string& path) { s.s.save(path, s.scene->hash); },
-            py::arg("path"), "Writes the tree to a structure file (bvhlab build --out's format)")
+            "save", [](const Structure& s, const std::string& path) { s.s.save(path, s.scene->hash); }, py::arg("path"),
+            "Writes the tree to a structure file (bvhlab build --out's format)")
         .def("__repr__", [](const Structure& s) {
             return "<bvhlab.Structure " + s.s.structure.name + ", " + std::to_string(s.s.structure.bytes()) + " bytes>";
         });
@@ -406,8 +408,7 @@ PYBIND11_MODULE(_bvhlab, m) {
         },
         py::arg("scene"), py::arg("kind") = "primary", py::arg("width") = 1024, py::arg("height") = 768,
         py::arg("spp") = 1, py::arg("ao_rays") = 8, py::arg("diffuse_rays") = 4, py::arg("seed") = 1,
-        py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(),
-        py::arg("fov") = 0.0f,
+        py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(), py::arg("fov") = 0.0f,
         "The ray protocol's rays: kind primary|ao|diffuse|shadow; returns (rays, query). Secondary rays start at "
         "Embree's primary hits, so they do not depend on any structure");
 
@@ -489,8 +490,7 @@ PYBIND11_MODULE(_bvhlab, m) {
             std::vector<trav::Ray> rv = ray_vector(rays);
             size_t n = 0;
             const trav::Hit* hp = records<trav::Hit>(hits, hit_dtype(), "hits", &n);
-            if (n != rv.size())
-                throw Error(std::to_string(n) + " hits for " + std::to_string(rv.size()) + " rays");
+            if (n != rv.size()) throw Error(std::to_string(n) + " hits for " + std::to_string(rv.size()) + " rays");
             std::vector<trav::Hit> ours(hp, hp + n), ref;
             for (size_t i = 0; i < n; ++i)
                 if (ours[i].tri >= 0 && size_t(ours[i].tri) >= scene->mesh.triangle_count())
@@ -506,8 +506,8 @@ PYBIND11_MODULE(_bvhlab, m) {
             {
                 py::gil_scoped_release release;
                 oracle.trace(rv, q, ref);
-                rep = trav::compare_hits(scene->mesh, rv, q, ours, ref,
-                                         [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
+                rep = trav::compare_hits(
+                    scene->mesh, rv, q, ours, ref, [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
             }
             return report_dict(rep);
         },
@@ -555,8 +555,8 @@ PYBIND11_MODULE(_bvhlab, m) {
         },
         py::arg("structure"), py::arg("width") = 320, py::arg("height") = 240, py::arg("spp") = 16,
         py::arg("max_depth") = 8, py::arg("seed") = 1, py::arg("device") = "cpu", py::arg("kernel") = "",
-        py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(),
-        py::arg("fov") = 0.0f, py::arg("sky") = py::none(),
+        py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(), py::arg("fov") = 0.0f,
+        py::arg("sky") = py::none(),
         "Path-traces the structure's scene with its OBJ materials, lit by its emissive triangles and the sky (RGB "
         "radiance; default: white without emitters, black with them); returns "
         "a float32 (height, width, 3) image of linear radiance");

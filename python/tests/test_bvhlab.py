@@ -235,7 +235,8 @@ def test_every_gpu_kernel_agrees_with_embree(cornell):
 @needs_gpu
 def test_gpu_render_matches_the_cpu_render(cornell):
     s = bvhlab.build(cornell)
-    cpu = bvhlab.render(s, width=48, height=36, spp=64, seed=3)
-    gpu = bvhlab.render(s, width=48, height=36, spp=64, seed=3, device="gpu")
-    assert gpu.shape == cpu.shape
+    cpu = bvhlab.render(s, width=48, height=36, spp=64, seed=3, **CORNELL_CAMERA)
+    gpu = bvhlab.render(s, width=48, height=36, spp=64, seed=3, device="gpu", **CORNELL_CAMERA)
+    assert gpu.shape == cpu.shape and np.isfinite(gpu).all()
+    assert cpu.mean() > 0.05
     assert abs(gpu.mean() - cpu.mean()) < 0.05 * cpu.mean()

@@ -65,13 +65,11 @@ TEST(StructureFactory, EveryBuilderAndLayoutTracesLikeEmbree) {
         const char* name;
         Layout want;
     };
-    for (const Case& c : {Case{"binned", "bvh2", "bvh2/binned", Layout::kBvh2},
-                          Case{"bvh", "bvh2", "bvh2/binned", Layout::kBvh2},
-                          Case{"sweep", "bvh2", "bvh2/sweep", Layout::kBvh2},
-                          Case{"sbvh", "bvh2", "bvh2/sbvh", Layout::kBvh2},
-                          Case{"sbvh", "cwbvh", "cwbvh/sbvh", Layout::kCwbvh},
-                          Case{"binned", "cwbvh", "cwbvh/binned", Layout::kCwbvh},
-                          Case{"kdtree", "bvh2", "kdtree", Layout::kKd}}) {
+    for (const Case& c :
+         {Case{"binned", "bvh2", "bvh2/binned", Layout::kBvh2}, Case{"bvh", "bvh2", "bvh2/binned", Layout::kBvh2},
+          Case{"sweep", "bvh2", "bvh2/sweep", Layout::kBvh2}, Case{"sbvh", "bvh2", "bvh2/sbvh", Layout::kBvh2},
+          Case{"sbvh", "cwbvh", "cwbvh/sbvh", Layout::kCwbvh}, Case{"binned", "cwbvh", "cwbvh/binned", Layout::kCwbvh},
+          Case{"kdtree", "bvh2", "kdtree", Layout::kKd}}) {
         StructureSpec spec;
         spec.builder = c.builder;
         spec.layout = c.layout;

@@ -8,7 +8,9 @@
 namespace bvhlab::cli {
 
 void register_kernels(CLI::App& app, Globals& g) {
-    CLI::App* sub = app.add_subcommand("kernels", "list the GPU kernels: name, layout, stack, block size, description");
+    CLI::App* sub = app.add_subcommand(
+        "kernels",
+        "list the GPU kernels: name, layout, whether it is its layout's default, stack, block size, description");
     sub->callback([&g] {
         const auto kernels = trav::registered_kernels();
         if (kernels.empty() && !g.json)
@@ -27,10 +29,11 @@ void register_kernels(CLI::App& app, Globals& g) {
                       {"dynamic_fetch", k.dynamic_fetch},
                       {"max_block", k.max_block},
                       {"default_block", k.default_block},
+                      {"default", k.is_default},
                       {"description", k.description}});
             } else {
-                std::printf("%-28s %-7s stack %-22s block %4d  %s\n", k.name, trav::layout_name(k.layout),
-                            stack.c_str(), k.default_block, k.description);
+                std::printf("%-28s %-7s %-8s stack %-22s block %4d  %s\n", k.name, trav::layout_name(k.layout),
+                            k.is_default ? "default" : "", stack.c_str(), k.default_block, k.description);
             }
         }
     });
