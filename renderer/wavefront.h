@@ -23,7 +23,6 @@ struct RenderSettings {
     uint32_t seed = 1;
     double time_limit_s = 0.0;  ///< > 0: stop after the pass that crosses it (at least one pass)
     Strategy strategy = Strategy::kMis;
-    PlantedBug bug = PlantedBug::kNone;
     std::string dump_rays_dir;  ///< non-empty: each bounce's rays of pass 0 as ray files here
     std::string writer;         ///< the commit recorded in dumped ray files
     /// Samples of every pixel traced together in one pass (a wave); 0: the driver's default

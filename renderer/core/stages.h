@@ -22,7 +22,8 @@ namespace bvhlab::render {
 /// that both strategies alone converge to the same image as their combination.
 enum class Strategy : uint32_t { kMis = 0, kBsdfOnly = 1, kLightOnly = 2 };
 
-/// Deliberate bugs for the tests that prove the CPU/GPU comparison can fail. Never set by the CLI.
+/// Deliberate bugs for the tests that prove the CPU/GPU comparison can fail: planted only
+/// through renderer/testing.h (ScopedPlantedBug), which the drivers read into PathParams.
 /// kNoCosine: light samples lose the cosine; kBsdfWeightOne: emitters found by BSDF sampling
 /// keep weight 1 under MIS, so direct light is counted twice.
 enum class PlantedBug : uint32_t { kNone = 0, kNoCosine = 1, kBsdfWeightOne = 2 };

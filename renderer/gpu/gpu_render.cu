@@ -9,6 +9,7 @@
 #include "renderer/gpu/extend.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/gpu/stage_kernels.h"
+#include "renderer/testing.h"
 #include "traversal/cuda_check.h"
 #include "traversal/gpu/device_buffer.h"
 
@@ -186,7 +187,8 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         res.ms_accumulate += t.ms(last - 1, last);
         res.spp += samples;
     };
-    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy, settings.bug};
+    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy,
+                  testing::planted_bug()};
     BVHLAB_CUDA_CHECK(cudaDeviceSynchronize());
     res.ms_setup = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
     uint32_t enqueued = 0, in_flight = 0;  // samples enqueued; those of the pass not yet collected

@@ -13,6 +13,7 @@
 #include "renderer/compare.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
+#include "renderer/testing.h"
 #include "tests/support/gpu_support.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -247,7 +248,7 @@ TEST(GpuRender, APlantedBugFailsTheComparison) {
     rs.spp = 256;
     const RenderResult cpu = cpu_reference(s, 32, 24, rs);
     for (PlantedBug bug : {PlantedBug::kNoCosine, PlantedBug::kBsdfWeightOne}) {
-        rs.bug = bug;
+        const testing::ScopedPlantedBug planted(bug);
         rs.seed = 2;
         const Comparison c = compare_renders(cpu, gpu_render(s, 32, 24, rs, "dynamic-speculative-fma"));
         EXPECT_FALSE(c.agree) << "planted bug " << int(bug) << ": " << c.summary();

@@ -12,6 +12,7 @@
 #include "accel/io/obj_loader.h"
 #include "renderer/compare.h"
 #include "renderer/image.h"
+#include "renderer/testing.h"
 #include "renderer/wavefront.h"
 #include "tests/support/test_support.h"
 #include "traversal/oracle/embree_oracle.h"
@@ -214,7 +215,7 @@ TEST(Furnace, CatchesAMissingCosine) {
     SkyOption sky{true, splat(0.5f)};
     RenderSettings rs;
     rs.spp = 32;
-    rs.bug = PlantedBug::kNoCosine;
+    const testing::ScopedPlantedBug bug(PlantedBug::kNoCosine);
     accel::Material white;
     white.diffuse = splat(1.0f);
     const RenderResult r = render(icosphere(3, white), sphere_camera(), 32, rs, sky);
@@ -257,11 +258,16 @@ TEST(Estimators, BsdfLightAndMisAgreeAndPlantedBugsDiffer) {
 
     rs.strategy = Strategy::kMis;
     rs.spp = 256;
-    rs.bug = PlantedBug::kBsdfWeightOne;
-    const Comparison wrong_weight = compare_renders(mis, render(s.mesh, s.cam, 24, rs));
+    Comparison wrong_weight, no_cosine;
+    {
+        const testing::ScopedPlantedBug bug(PlantedBug::kBsdfWeightOne);
+        wrong_weight = compare_renders(mis, render(s.mesh, s.cam, 24, rs));
+    }
     EXPECT_FALSE(wrong_weight.agree) << "an emitter hit weighted 1 under MIS: " << wrong_weight.summary();
-    rs.bug = PlantedBug::kNoCosine;
-    const Comparison no_cosine = compare_renders(mis, render(s.mesh, s.cam, 24, rs));
+    {
+        const testing::ScopedPlantedBug bug(PlantedBug::kNoCosine);
+        no_cosine = compare_renders(mis, render(s.mesh, s.cam, 24, rs));
+    }
     EXPECT_FALSE(no_cosine.agree) << "no cosine: " << no_cosine.summary();
 }
 
