@@ -18,6 +18,7 @@ every survivor by file and line. docs/mutation.md tells how to read and act on i
 
 import argparse
 import datetime
+import fcntl
 import difflib
 import json
 import os
@@ -361,6 +362,14 @@ def main():
     build_dir = os.path.abspath(a.build_dir)
     out_dir = os.path.abspath(a.out or os.path.join(build_dir, ("planted-" if a.planted else "campaign-") + commit))
     os.makedirs(out_dir, exist_ok=True)
+    # One campaign per build folder: two would share the backup of the mutated file, and each
+    # would "recover" the other's mutant into the sources (seen: a header holding another
+    # file's text). The lock lasts as long as this process.
+    lock = open(os.path.join(build_dir, "mutate.lock"), "w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        die(f"another campaign is running with the build folder {a.build_dir} (its lock {lock.name} is held)")
     restorer = Restorer(root, os.path.join(build_dir, "mutate-backup"))
 
     mutants = []
