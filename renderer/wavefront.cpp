@@ -152,8 +152,8 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
     RenderResult res;
     res.wave_samples = wave;
     res.bounces.resize(settings.max_depth);
-    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy,
-                  testing::planted_bug()};
+    PathParams pp{settings.max_depth, settings.rr_depth,     settings.seed, 0, npix,
+                  settings.strategy,  testing::planted_bug()};
     res.ms_setup = ms_since(t_start);
     for (uint32_t pass = 0; res.spp < settings.spp; ++pass) {
         pp.first_sample = res.spp;

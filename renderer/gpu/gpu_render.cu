@@ -187,8 +187,8 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         res.ms_accumulate += t.ms(last - 1, last);
         res.spp += samples;
     };
-    PathParams pp{settings.max_depth, settings.rr_depth, settings.seed, 0, npix, settings.strategy,
-                  testing::planted_bug()};
+    PathParams pp{settings.max_depth, settings.rr_depth,     settings.seed, 0, npix,
+                  settings.strategy,  testing::planted_bug()};
     BVHLAB_CUDA_CHECK(cudaDeviceSynchronize());
     res.ms_setup = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
     uint32_t enqueued = 0, in_flight = 0;  // samples enqueued; those of the pass not yet collected
