@@ -11,6 +11,8 @@
 
 namespace bvhlab::accel {
 
+/// The offset basis is 1469598103934665603, not FNV-1a's standard 14695981039346656037: the
+/// file formats fixed it (README, "The checksums and the scene hash").
 constexpr uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 /// FNV-1a over bytes: the scene hash and structure files (their format is fixed by it).

@@ -240,3 +240,39 @@ def test_gpu_render_matches_the_cpu_render(cornell):
     assert gpu.shape == cpu.shape and np.isfinite(gpu).all()
     assert cpu.mean() > 0.05
     assert abs(gpu.mean() - cpu.mean()) < 0.05 * cpu.mean()
+
+
+# The documented checksums (README, "The checksums and the scene hash"), written from the
+# README alone: FNV-1a steps from the offset basis 1469598103934665603.
+FNV_BASIS, FNV_PRIME, MASK = 1469598103934665603, 1099511628211, (1 << 64) - 1
+
+
+def fnv_bytes(data, h=FNV_BASIS):
+    for b in data:
+        h = ((h ^ b) * FNV_PRIME) & MASK
+    return h
+
+
+def fnv_words(data):
+    h = FNV_BASIS
+    n8 = len(data) // 8 * 8
+    for w in np.frombuffer(data[:n8], dtype="<u8").tolist():
+        h = ((h ^ w) * FNV_PRIME) & MASK
+    return fnv_bytes(data[n8:], h)
+
+
+def test_file_checksums_and_scene_hash_follow_the_documented_algorithm(cornell, tmp_path):
+    rays, query = bvhlab.rays(cornell, "primary", width=16, height=9)
+    bvhlab.write_rays(str(tmp_path / "p.rays"), rays, query)
+    data = (tmp_path / "p.rays").read_bytes()
+    assert int.from_bytes(data[-8:], "little") == fnv_words(data[:-8])
+    s = bvhlab.build(cornell)
+    hits, _ = bvhlab.trace(s, rays, query)
+    bvhlab.write_hits(str(tmp_path / "p.hits"), hits, query)
+    data = (tmp_path / "p.hits").read_bytes()
+    assert int.from_bytes(data[-8:], "little") == fnv_words(data[:-8])
+    s.save(str(tmp_path / "s.bvh"))
+    data = (tmp_path / "s.bvh").read_bytes()
+    assert int.from_bytes(data[-8:], "little") == fnv_bytes(data[:-8])
+    tri = cornell.vertices[cornell.indices].astype("<f4")  # (triangles, 3 corners, xyz)
+    assert "%016x" % fnv_bytes(tri.tobytes()) == cornell.hash

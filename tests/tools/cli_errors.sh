@@ -349,6 +349,15 @@ expect_error render-aperture-negative "aperture" render "$data/cornell_box.obj" 
 expect_error render-missing-textures-value "missing-textures" render "$data/cornell_box.obj" --missing-textures maybe -o "$tmp/x.pfm"
 head -c 64 /dev/urandom >"$tmp/garbage_env.exr"
 expect_error render-garbage-env "cannot read .*garbage_env[.]exr|cannot read .*garbage_env" render "$data/cornell_box.obj" --env "$tmp/garbage_env.exr" -o "$tmp/x.pfm"
+printf 'BVHLRAYS\1\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/zero.rays"
+expect_error verify-zero-rays "zero.rays' has no rays: nothing to verify" verify "$data/cornell_box.obj" --rays "$tmp/zero.rays"
+expect_error bench-zero-rays "zero.rays' has no rays: nothing to bench" bench "$data/cornell_box.obj" --rays "$tmp/zero.rays"
+expect_error seed-overflow "--seed: 99999999999999999999 is larger than 2\^64 - 1" rays "$data/cornell_box.obj" \
+    --type primary --seed 99999999999999999999 -o "$tmp/seed.rays"
+expect_error seed-negative "--seed: '-1' is not a non-negative integer" rays "$data/cornell_box.obj" --type primary \
+    --seed -1 -o "$tmp/seed.rays"
+expect_error gen-seed-negative "--seed: '-1' is not a non-negative integer" gen --kind soup -n 10 --seed -1 \
+    -o "$tmp/seed.obj"
 expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh

@@ -100,7 +100,7 @@ void register_bench(CLI::App& app, Globals& g) {
             }
         };
         if (from_file) {
-            const trav::RaySet set = trav::read_ray_file(o->rays_file);
+            const trav::RaySet set = read_rays_for(o->rays_file, "bench");
             std::vector<trav::Hit> out;
             bench_set(set, "file", nullptr, &out);
             if (!o->hits_out.empty()) trav::write_hit_file(o->hits_out, {out, set.query, git_commit()});

@@ -22,7 +22,7 @@ void register_gen(CLI::App& app, Globals& g) {
     sub->add_option("-n,--triangles", o->triangles, "number of triangles")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 30))
         ->capture_default_str();
-    sub->add_option("--seed", o->seed, "random seed")->capture_default_str();
+    sub->add_option("--seed", o->seed, "random seed")->check(UInt64())->capture_default_str();
     sub->add_option("-o,--out", o->out, "OBJ file to write")->required();
     sub->callback([o, &g] {
         accel::TriangleMesh m;

@@ -105,7 +105,7 @@ void register_verify(CLI::App& app, Globals& g) {
             rows.push_back(std::move(j));
         };
         if (hits->count()) {
-            const trav::RaySet set = trav::read_ray_file(o->rays_file);
+            const trav::RaySet set = read_rays_for(o->rays_file, "verify");
             trav::HitSet hs = trav::read_hit_file(o->hits_file);
             trav::check_hit_ids(hs, s.mesh.triangle_count(), o->hits_file);
             if (hs.hits.size() != set.rays.size())
@@ -135,7 +135,7 @@ void register_verify(CLI::App& app, Globals& g) {
             // The ray sets (and Embree's answers) are made once and shared by every structure.
             std::vector<std::pair<trav::RaySet, std::string>> sets;
             if (file->count()) {
-                sets.emplace_back(trav::read_ray_file(o->rays_file), "file");
+                sets.emplace_back(read_rays_for(o->rays_file, "verify"), "file");
             } else {
                 trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
                 for (trav::RayType t : parse_ray_types(o->types))

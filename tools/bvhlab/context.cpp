@@ -71,6 +71,27 @@ CLI::Validator FiniteRange(double lo, double hi) {
 
 CLI::Validator Finite() { return FiniteRange(-3.0e38, 3.0e38); }
 
+CLI::Validator UInt64() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos)
+                return "'" + text + "' is not a non-negative integer";
+            try {
+                std::stoull(text);
+            } catch (const std::out_of_range&) {
+                return text + " is larger than 2^64 - 1";
+            }
+            return "";
+        },
+        "UINT64");
+}
+
+trav::RaySet read_rays_for(const std::string& path, const char* command) {
+    trav::RaySet set = trav::read_ray_file(path);
+    if (set.rays.empty()) throw Error("ray file '" + path + "' has no rays: nothing to " + command);
+    return set;
+}
+
 double Stage::seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
 
 void Stage::progress_bytes(size_t done, size_t total) const {
@@ -400,7 +421,7 @@ void RayOptions::add_to(CLI::App& app) {
     app.add_option("--diffuse-rays", cfg.diffuse_rays, "diffuse rays per primary hit")
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
-    app.add_option("--seed", cfg.seed, "seed of every random choice")->capture_default_str();
+    app.add_option("--seed", cfg.seed, "seed of every random choice")->check(UInt64())->capture_default_str();
     camera.add_to(app);
 }
 

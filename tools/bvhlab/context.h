@@ -16,6 +16,7 @@
 #include "accel/core/stats.h"
 #include "traversal/factory.h"
 #include "traversal/rays/protocol.h"
+#include "traversal/rays/ray_file.h"
 
 namespace bvhlab {
 
@@ -37,6 +38,12 @@ struct Globals {
 CLI::Validator FiniteRange(double lo, double hi);
 /// A CLI11 check for each number of a vector option: finite.
 CLI::Validator Finite();
+/// A CLI11 check for a 64-bit unsigned option: decimal digits only, at most 2^64 - 1 (CLI11
+/// would read 99999999999999999999 as 2^64 - 1 and -1 as 2^64 - 1).
+CLI::Validator UInt64();
+
+/// A ray file for `command` (bench, verify): read_ray_file, refusing a file with no rays.
+trav::RaySet read_rays_for(const std::string& path, const char* command);
 
 /// Progress on stderr: "what ..." when the stage starts, "what: done (s)" when it ends, and
 /// nothing more when it ends by an exception (the error line says why).
