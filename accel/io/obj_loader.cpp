@@ -36,12 +36,15 @@ std::string read_file(const std::string& path) {
 
 /// Whether [b, e) is a number as a whole, as strtod reads it; its value in `value`.
 /// The common forms go through std::from_chars without a copy (the scan of furball spent most
-/// of its time copying tokens into strings for strtod); the rest (a leading '+', hex) through
-/// strtod, so both accept exactly what strtod accepts.
+/// of its time copying tokens into strings for strtod); the rest (a leading '+', inf, nan)
+/// through strtod. Hexadecimal is refused: strtod reads `0x10` as 16, but tinyobjloader reads
+/// 0, so the scan would pass a value the parser then gets wrong.
 bool is_number(const char* b, const char* e, double& value) {
     if (b == e) return false;
     const auto [ptr, ec] = std::from_chars(b, e, value);
     if (ec == std::errc() && ptr == e) return true;
+    const char* digits = b + (*b == '+' || *b == '-');
+    if (e - digits >= 2 && digits[0] == '0' && (digits[1] == 'x' || digits[1] == 'X')) return false;
     std::string tok(b, e);
     char* end = nullptr;
     value = std::strtod(tok.c_str(), &end);

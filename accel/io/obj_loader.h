@@ -27,8 +27,9 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
 
 /// The loader's version: part of every scene-cache key, bumped whenever the same OBJ would load
 /// differently (scene_cache.h).
-// 2: materials keep Ks, Ns, Ni, d, illum, map_Kd; 3: texcoords; 4: denormal coordinates as 0
-constexpr uint32_t kObjLoaderVersion = 4;
+// 2: materials keep Ks, Ns, Ni, d, illum, map_Kd; 3: texcoords; 4: denormal coordinates as 0;
+// 5: hexadecimal numbers refused (tinyobjloader read them as 0)
+constexpr uint32_t kObjLoaderVersion = 5;
 
 /// Writes `mesh` as OBJ (v and f lines, usemtl per material run). Throws on I/O errors.
 void write_obj(const TriangleMesh& mesh, const std::string& path);

@@ -35,6 +35,12 @@ printf 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n' >"$tmp/degenerate.obj"
 head -c 100 /dev/urandom >"$tmp/random.obj"
 printf 'NOTRAYS!\1\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badmagic.rays"
 printf 'BVHLRAYS\7\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badversion.rays"
+printf 'v 0x10 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/hex.obj"
+expect_error obj-hex "line 1: malformed 'v' line: '0x10' is not a number" build "$tmp/hex.obj"
+expect_error render-env-scale-alone "--env-scale requires --env" render "$data/cornell_box.obj" --width 4 --height 4 \
+    --spp 1 --env-scale 2 -o "$tmp/e.pfm"
+expect_error render-focus-alone "--focus requires --aperture" render "$data/cornell_box.obj" --width 4 --height 4 \
+    --spp 1 --focus 3 -o "$tmp/f.pfm"
 printf 'BVHLRAYS\1\0\0\0\0\0\0\0\5\0\0\0\0\0\0\0' >"$tmp/truncated.rays"
 
 expect_error missing-file "cannot open|no scene" build "$tmp/nope.obj"

@@ -58,6 +58,9 @@ TEST(RayFile, RoundTripIsByteExact) {
     a.writer.clear();  // an unnamed writer is stored as "unknown"
     write_ray_file(f.path(), a);
     EXPECT_EQ(read_ray_file(f.path()).writer, "unknown");
+    a.writer = "ab\x1b[31m\xff\x7f";  // escape bytes never reach a terminal or JSON
+    write_ray_file(f.path(), a);
+    EXPECT_EQ(read_ray_file(f.path()).writer, "ab?[31m??");
 }
 
 TEST(RayFile, Version1FilesAreStillRead) {

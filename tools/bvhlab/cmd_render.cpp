@@ -104,13 +104,17 @@ void register_render(CLI::App& app, Globals& g) {
     auto* env = sub->add_option("--env", o->env,
                                 "lat-long (equirectangular) environment map, linear radiance: .exr, .hdr, .pfm (+y up, "
                                 "the image centre along -z)");
-    sub->add_option("--env-scale", o->env_scale, "multiplies the environment map")
+    sub->add_option("--env-scale", o->env_scale, "multiplies the environment map (needs --env)")
         ->check(FiniteRange(0.0, 1e30))
-        ->capture_default_str();
+        ->capture_default_str()
+        ->needs(env);
     env->excludes("--sky");
     o->camera.add_to(*sub);
-    sub->add_option("--aperture", o->aperture, "thin-lens aperture radius (0: pinhole)")->check(FiniteRange(0.0, 1e30));
-    sub->add_option("--focus", o->focus, "focus distance (default: eye to target)")->check(FiniteRange(0.0, 1e30));
+    auto* aperture = sub->add_option("--aperture", o->aperture, "thin-lens aperture radius (0: pinhole)")
+                         ->check(FiniteRange(0.0, 1e30));
+    sub->add_option("--focus", o->focus, "focus distance of the thin lens (needs --aperture; default: eye to target)")
+        ->check(FiniteRange(0.0, 1e30))
+        ->needs(aperture);
     sub->add_option("--eye-end", o->eye_end, "eye position at the end of the camera's motion (motion blur)")
         ->expected(3)
         ->check(Finite());

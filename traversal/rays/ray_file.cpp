@@ -92,6 +92,10 @@ std::vector<T> read_records(const std::string& path, const char* magic, uint32_t
     if (!v1 && std::fread(h.writer, sizeof h.writer, 1, f.get()) != 1)
         throw Error("'" + path + "' is truncated: shorter than the 48-byte " + std::string(what) + " header");
     set.writer = v1 ? std::string() : std::string(h.writer, strnlen(h.writer, sizeof h.writer));
+    // The writer is text for people and JSON: a byte outside printable ASCII (an escape
+    // sequence, 0xFF) is shown as '?', never passed to a terminal or a JSON encoder.
+    for (char& c : set.writer)
+        if (c < 0x20 || c > 0x7e) c = '?';
     std::fseek(f.get(), 0, SEEK_END);
     const long size = std::ftell(f.get());
     if (size < 0) throw Error("cannot read '" + path + "': " + std::strerror(errno));
