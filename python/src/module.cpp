@@ -237,20 +237,8 @@ std::unique_ptr<trav::Tracer> make_tracer(Structure& st, const std::string& devi
     return st.s.gpu_tracer(k.name, o);
 }
 
-py::dict report_dict(const trav::CompareReport& rep) {
-    py::dict d;
-    d["rays"] = rep.rays;
-    d["agree"] = rep.agree;
-    d["ties"] = rep.ties;
-    d["mismatches"] = rep.mismatches;
-    d["ties_shared_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kSharedEdgeOrVertex)];
-    d["ties_near_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kNearEdge)];
-    d["ties_interval_end"] = rep.ties_by_kind[size_t(trav::TieKind::kIntervalEnd)];
-    d["ties_coincident"] = rep.ties_by_kind[size_t(trav::TieKind::kCoincident)];
-    py::dict kinds;
-    for (int k = 0; k < trav::kMismatchKinds; ++k)
-        kinds[trav::mismatch_kind_name(trav::MismatchKind(k))] = rep.mismatches_by_kind[size_t(k)];
-    d["mismatch_kinds"] = kinds;
+py::dict report_dict(const trav::CompareReport& rep, const trav::CompareConfig& cc) {
+    py::dict d = to_py(trav::report_json(rep, cc));
     py::list first;
     for (const auto& m : rep.first_mismatches) {
         py::dict x;
@@ -509,7 +497,7 @@ PYBIND11_MODULE(_bvhlab, m) {
                 rep = trav::compare_hits(
                     scene->mesh, rv, q, ours, ref, [&](const trav::Ray& r) { return oracle.intersect(r); }, cc);
             }
-            return report_dict(rep);
+            return report_dict(rep, cc);
         },
         py::arg("scene"), py::arg("rays"), py::arg("hits"), py::arg("query") = "closest",
         py::arg("edge_eps") = trav::CompareConfig{}.edge_eps, py::arg("t_tol") = trav::CompareConfig{}.t_rel_tol,

@@ -17,6 +17,13 @@ inline std::string no_gpu_reason() {
     return gpu_available(&why) ? std::string() : why;
 }
 
+/// Whether this build has the GPU kernels (nvcc at configure time), device or not.
+inline bool built_with_cuda() {
+    std::string why;
+    gpu_available(&why);
+    return why.find("without CUDA") == std::string::npos;
+}
+
 #define BVHLAB_SKIP_WITHOUT_GPU() \
     if (const std::string why = ::bvhlab::trav::no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 

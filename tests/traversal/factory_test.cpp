@@ -16,18 +16,13 @@
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "tests/support/agreement.h"
+#include "tests/support/gpu_support.h"
 #include "traversal/factory.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/raygen.h"
 
 namespace bvhlab::trav {
 namespace {
-
-bool built_with_cuda() {
-    std::string why;
-    gpu_available(&why);
-    return why.find("without CUDA") == std::string::npos;
-}
 
 std::string error_of(const std::function<void()>& f) {
     try {

@@ -11,20 +11,12 @@
 #include "accel/core/stats.h"
 #include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "tests/support/gpu_support.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/gpu/gpu_tracer.h"
 #include "traversal/gpu/registry.h"
 
 namespace bvhlab::trav {
-namespace {
-
-bool built_with_cuda() {
-    std::string why;
-    gpu_available(&why);
-    return why.find("without CUDA") == std::string::npos;
-}
-
-}  // namespace
 
 TEST(KernelRegistry, NamesTheIssueKernelsOnceEachWithADescription) {
     if (!built_with_cuda()) GTEST_SKIP() << "built without CUDA: the registry is empty";

@@ -223,21 +223,7 @@ nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle,
     nlohmann::json j = base_record("verify", scene);
     j["ray_type"] = cs.ray_type;
     j["query"] = cs.set.query == trav::Query::kAny ? "any" : "closest";
-    j["rays"] = rep.rays;
-    j["agree"] = rep.agree;
-    j["ties"] = rep.ties;
-    j["ties_shared_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kSharedEdgeOrVertex)];
-    j["ties_near_edge"] = rep.ties_by_kind[size_t(trav::TieKind::kNearEdge)];
-    j["ties_interval_end"] = rep.ties_by_kind[size_t(trav::TieKind::kIntervalEnd)];
-    j["ties_coincident"] = rep.ties_by_kind[size_t(trav::TieKind::kCoincident)];
-    j["mismatches"] = rep.mismatches;
-    nlohmann::json kinds = nlohmann::json::object();
-    for (int k = 0; k < trav::kMismatchKinds; ++k)
-        kinds[trav::mismatch_kind_name(trav::MismatchKind(k))] = rep.mismatches_by_kind[size_t(k)];
-    j["mismatch_kinds"] = kinds;
-    j["max_rel_dt"] = rep.max_rel_dt;
-    j["edge_eps"] = cc.edge_eps;
-    j["t_rel_tol"] = cc.t_rel_tol;
+    j.update(trav::report_json(rep, cc));
     return j;
 }
 

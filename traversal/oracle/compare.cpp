@@ -256,4 +256,24 @@ CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ra
     return rep;
 }
 
+nlohmann::json report_json(const CompareReport& rep, const CompareConfig& cfg) {
+    nlohmann::json j;
+    j["rays"] = rep.rays;
+    j["agree"] = rep.agree;
+    j["ties"] = rep.ties;
+    j["ties_shared_edge"] = rep.ties_by_kind[size_t(TieKind::kSharedEdgeOrVertex)];
+    j["ties_near_edge"] = rep.ties_by_kind[size_t(TieKind::kNearEdge)];
+    j["ties_interval_end"] = rep.ties_by_kind[size_t(TieKind::kIntervalEnd)];
+    j["ties_coincident"] = rep.ties_by_kind[size_t(TieKind::kCoincident)];
+    j["mismatches"] = rep.mismatches;
+    nlohmann::json kinds = nlohmann::json::object();
+    for (int k = 0; k < kMismatchKinds; ++k)
+        kinds[mismatch_kind_name(MismatchKind(k))] = rep.mismatches_by_kind[size_t(k)];
+    j["mismatch_kinds"] = kinds;
+    j["max_rel_dt"] = rep.max_rel_dt;
+    j["edge_eps"] = cfg.edge_eps;
+    j["t_rel_tol"] = cfg.t_rel_tol;
+    return j;
+}
+
 }  // namespace bvhlab::trav

@@ -5,6 +5,8 @@
 // against the claimed triangle) before any disagreement about it can be excused as a tie.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <functional>
 #include <string>
@@ -105,5 +107,9 @@ using ClosestLookup = std::function<Hit(const Ray&)>;
 CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
                            const std::vector<Hit>& ours, const std::vector<Hit>& oracle, const ClosestLookup& lookup,
                            const CompareConfig& cfg = {});
+
+/// The report's counts as JSON, as `bvhlab verify --json` and Python's verify() give them: rays,
+/// agree, ties and ties_<kind>, mismatches and mismatch_kinds, max_rel_dt, and the tolerances.
+nlohmann::json report_json(const CompareReport& rep, const CompareConfig& cfg);
 
 }  // namespace bvhlab::trav
