@@ -112,6 +112,21 @@ TEST(ReinsertionOptimizer, RespectsTheDepthLimit) {
     EXPECT_GT(depth_of(free_tree), built);
 }
 
+// run_builder's reinsertion keeps the configured depth limit: the same soup and passes, with
+// the limit one above the built depth, give a tree that validate() accepts (the unlimited
+// passes above deepen it by one, which the limit must refuse).
+TEST(ReinsertionOptimizer, RunBuilderKeepsTheConfiguredDepthLimit) {
+    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 20000, 4);
+    BuilderOptions o;
+    o.reinsertion_passes = 0;
+    const uint32_t built = depth_of(run_builder(BuilderKind::kBinned, m, o).tree);
+    o.config.max_depth = built + 1;  // leaves at depth `built` are allowed, one deeper is not
+    o.reinsertion_passes = 4;
+    const BuildTree t = run_builder(BuilderKind::kBinned, m, o).tree;
+    EXPECT_EQ(validate(t, m, o.config), "");
+    EXPECT_LE(depth_of(t), built);
+}
+
 TEST(ReinsertionOptimizer, SameTreeWithAnyThreadCount) {
     const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 30000, 5);
     BuilderOptions o;

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
 // SAH and EPO on hand-built trees, and triangle clipping.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
+#include "accel/builders/builder.h"
 #include "accel/core/clip.h"
 #include "accel/core/stats.h"
+#include "accel/io/procedural.h"
 #include "tests/support/test_support.h"
 
 namespace bvhlab::accel {
@@ -95,6 +98,26 @@ TEST(TreeStats, EpoCountsOverlap) {
     const double inside10 = clip_triangle(m.vertex(0, 0), m.vertex(0, 1), m.vertex(0, 2), m.triangle_bounds(1)).area;
     EXPECT_GT(inside01, 0.0);
     EXPECT_NEAR(s.epo, (inside01 + inside10) / m.surface_area(), 1e-9);
+}
+
+// EPO and SAH summed over many triangles in parallel (TBB joins partial sums of stolen ranges)
+// equal the same figures computed on one thread.
+TEST(TreeStats, ParallelFiguresEqualOneThreadsFigures) {
+    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 30000, 9);
+    const BuildTree t = run_builder(BuilderKind::kBinned, m, {}).tree;
+    const BuildConfig c;
+    TreeStats serial;
+    {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        serial = compute_stats(t, m, c);
+    }
+    tbb::global_control four(tbb::global_control::max_allowed_parallelism, 4);
+    for (int run = 0; run < 3; ++run) {
+        const TreeStats s = compute_stats(t, m, c);
+        EXPECT_NEAR(s.epo, serial.epo, 1e-9 * serial.epo);
+        EXPECT_NEAR(s.sah, serial.sah, 1e-9 * serial.sah);
+    }
+    EXPECT_GT(serial.epo, 0.0);
 }
 
 }  // namespace bvhlab::accel
