@@ -35,6 +35,14 @@ printf 'v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n' >"$tmp/degenerate.obj"
 head -c 100 /dev/urandom >"$tmp/random.obj"
 printf 'NOTRAYS!\1\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badmagic.rays"
 printf 'BVHLRAYS\7\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0' >"$tmp/badversion.rays"
+mkdir -p "$tmp/cat"
+cp "$data/cornell_box.obj" "$tmp/cat/"
+printf '{"scenes": {"a": {"file": "cornell_box.obj", "camera": null}}}' >"$tmp/cat/scenes.json"
+BVHLAB_SCENES=$tmp/cat expect_error catalogue-null-camera "scenes.json': scene 'a': field 'camera' must be an object" build a
+printf '{"scenes": {"a": {"file": "cornell_box.obj", "ao_length": 1e39}}}' >"$tmp/cat/scenes.json"
+BVHLAB_SCENES=$tmp/cat expect_error catalogue-ao-length "scene 'a': field 'ao_length' is 1e\+39, outside" build a
+rm "$tmp/cat/scenes.json" && mkdir "$tmp/cat/scenes.json"
+BVHLAB_SCENES=$tmp/cat expect_error catalogue-folder "scenes.json' is not a regular file" build a
 printf 'v 0x10 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/hex.obj"
 expect_error obj-hex "line 1: malformed 'v' line: '0x10' is not a number" build "$tmp/hex.obj"
 expect_error render-env-scale-alone "--env-scale requires --env" render "$data/cornell_box.obj" --width 4 --height 4 \
