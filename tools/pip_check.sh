@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 src=$(pwd)
-venv=${1:-build-pip/venv}
+venv=$(realpath -m "${1:-build-pip/venv}")  # absolute: the tests run from another folder
 rm -rf "$venv"
 /usr/bin/python3 -m venv --system-site-packages "$venv"
 # --config-settings works with Debian 12's pip 23.0 (its short form -C came with 23.1).
