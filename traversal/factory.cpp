@@ -51,7 +51,8 @@ AccelStructure make_kdtree(const accel::TriangleMesh& mesh, const StructureSpec&
     if (!err.empty())
         throw Error((loaded ? "structure file '" + path + "' holds" : std::string("the kd-tree builder produced")) +
                     " an invalid kd-tree: " + err);
-    const accel::KdTreeStats ks = accel::compute_kd_stats(tree, builder.config());
+    const accel::KdTreeStats ks =
+        accel::compute_kd_stats(tree, builder.config().traversal_cost, builder.config().intersection_cost);
     nlohmann::json& f = b.figures;
     f["builder"] = "kdtree";
     f["structure"] = "kdtree";

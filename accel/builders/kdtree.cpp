@@ -13,6 +13,8 @@
 // re-prices the planes. Events refer to node-local triangle slots, so concurrent subtrees never
 // share state; below a size threshold a subtree is built by one thread into its own fragment of
 // the final node array.
+// The split search (kd/plane_search), the events (kd/events) and the final layout (kd/flatten)
+// are in accel/builders/kd/; this file is the recursion.
 #include "accel/builders/kdtree.h"
 
 #include <tbb/blocked_range.h>
@@ -29,17 +31,16 @@
 #include <memory>
 #include <utility>
 
+#include "accel/builders/kd/events.h"
+#include "accel/builders/kd/flatten.h"
+#include "accel/builders/kd/plane_search.h"
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::accel::kd {
 namespace {
 
-enum : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
-constexpr uint32_t kSlotBits = 30;
-constexpr uint32_t kSlotMask = (1u << kSlotBits) - 1;
-constexpr uint32_t kMaxSmallNode = KdTreeBuilder::kMaxSmallNodeSize;
 /// The most vertices of a clipped polygon that a fragment keeps (a triangle clipped to a box
 /// has at most 9; more, from rounding, and the child clips the triangle anew).
 constexpr uint32_t kMaxKeptPolygon = 15;
@@ -53,104 +54,6 @@ constexpr size_t kParallelSplit = size_t(1) << 16;
 /// ahead (the table, 12 bytes a slot, outgrows the L2 cache).
 constexpr size_t kPrefetchRoutes = size_t(1) << 14;
 constexpr size_t kRouteAhead = 32;
-
-/// Eight floats or ints (GCC/Clang vector types): one AVX2 register, or two SSE or NEON ones.
-/// They must never cross a call that is not inlined: the AVX2 copies pass them in one register
-/// and the portable code in memory, so every function that takes or returns one is
-/// always_inline. (to_float and AxisCost::operator() were only `inline`: at -O0 they were
-/// real calls, and a sanitizer build read their arguments from a garbage address.)
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
-constexpr uint32_t kLanes = 8;
-using FV = float __attribute__((vector_size(4 * kLanes)));
-using IV = int32_t __attribute__((vector_size(4 * kLanes)));
-__attribute__((always_inline)) inline FV to_float(const IV& x) { return __builtin_convertvector(x, FV); }
-/// The smallest lane (inlined into the AVX2 copies as into the portable ones).
-__attribute__((always_inline)) inline float hmin(const FV& x) {
-    float m = x[0];
-    for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, x[i]);
-    return m;
-}
-/// x86-64 builds carry a second copy of the small-node plane search compiled for AVX2, used
-/// when the CPU has it (the portable copy runs each vector as two SSE halves).
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define BVHLAB_KD_AVX2 1
-#else
-#define BVHLAB_KD_AVX2 0
-#endif
-
-/// A float's bits mapped so that unsigned order is float order, and back.
-inline uint32_t sort_key(float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, sizeof u);
-    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
-}
-inline float from_sort_key(uint32_t u) {
-    u = (u & 0x80000000u) ? (u & 0x7fffffffu) : ~u;
-    float f;
-    std::memcpy(&f, &u, sizeof f);
-    return f;
-}
-
-/// One event on one axis, as one 64-bit key: the plane position's sort key above the event
-/// type (end < planar < start) above a node-local triangle slot. Each axis has its own sorted
-/// list; key order is position, then type, then slot, and comparing two events is a single
-/// integer comparison (merges run without branches). Positions carry +0 for -0 (x + 0 is +0
-/// for x = -0), so that equal positions have equal keys.
-struct Event {
-    uint64_t key;
-
-    /// Unwritten, so that sizing an event array costs no fill: every array is written whole
-    /// before it is read.
-    Event() {}
-    explicit Event(uint64_t k) : key(k) {}
-    static Event make(float pos, uint32_t type, uint32_t slot) {
-        return Event(uint64_t(sort_key(pos + 0.0f)) << 32 | type << kSlotBits | slot);
-    }
-    uint32_t pos_key() const { return uint32_t(key >> 32); }
-    uint32_t type() const { return uint32_t(key) >> kSlotBits; }
-    uint32_t slot() const { return uint32_t(key) & kSlotMask; }
-    Event with_slot(uint32_t s) const { return Event((key & ~uint64_t(kSlotMask)) | s); }
-    bool operator<(const Event& o) const { return key < o.key; }
-};
-
-/// Merges two sorted event lists into out, which may also be a's array nb places before a
-/// (then every write lands below the events of a still to be read). Usually b (the
-/// straddlers' new events) is much shorter: then each of its events finds its place in a by a
-/// galloping search and the runs of a between them are block copies. Otherwise a conditional
-/// move instead of a branch per event (the new events fall anywhere among the others).
-void merge_events(const Event* a, size_t na, const Event* b, size_t nb, Event* out) {
-    size_t i = 0, j = 0;
-    if (nb * 16 < na) {
-        for (; j < nb; ++j) {
-            // The end of the run of a below b[j]: gallop, then bisect the last step.
-            const uint64_t y = b[j].key;
-            size_t step = 1, lo = i, hi = i;
-            while (hi < na && a[hi].key < y) {
-                lo = hi + 1;
-                hi = i + step;
-                step *= 2;
-            }
-            const Event* end = std::lower_bound(a + lo, a + std::min(hi, na), b[j]);
-            out = std::copy(a + i, end, out);
-            i = size_t(end - a);
-            *out++ = b[j];
-        }
-        std::copy(a + i, a + na, out);
-        return;
-    }
-    while (i < na && j < nb) {
-        const uint64_t x = a[i].key, y = b[j].key;
-        const bool take_b = y < x;
-        out->key = take_b ? y : x;
-        ++out;
-        j += take_b;
-        i += !take_b;
-    }
-    out = std::copy(a + i, a + na, out);
-    std::copy(b + j, b + nb, out);
-}
 
 /// A node's work: its voxel, and per triangle slot the global id and the bounds of the
 /// triangle clipped to the voxel; per axis, the events of those bounds, sorted.
@@ -172,55 +75,14 @@ struct Work {
     }
 };
 
-/// A node of at most kMaxSmallNode triangles, held on the stack: no events, no heap. Such a
-/// node's children are no larger, so its whole subtree is built from these. The clipped bounds
-/// are kept per axis (structure of arrays), so that the plane search loads them kLanes at a
-/// time; the entries from n to the next multiple of kLanes hold the voxel's lower face, never
-/// a candidate.
-struct SmallWork {
-    AABB voxel;
-    uint32_t n = 0;
-    uint32_t flat = 0;  ///< bit k: some bound is flat (lo == hi) on axis k
-    uint32_t tris[kMaxSmallNode];
-    /// Per slot, the triangle clipped to the voxel, when this fragment has already clipped
-    /// it: its place in the thread's PolygonArena, as (first vertex << 4) | count; kNoPolygon
-    /// when the triangle is still to be clipped.
-    uint32_t poly[kMaxSmallNode];
-    alignas(32) float lo[3][kMaxSmallNode];
-    alignas(32) float hi[3][kMaxSmallNode];
-
-    /// A small node's copy of a (small) Work node, padded.
-    static SmallWork of(const Work& w) {
-        SmallWork sw;
-        sw.voxel = w.voxel;
-        for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s], w.polygon(s));
-        sw.pad();
-        return sw;
-    }
-    void add(uint32_t t, const AABB& b, uint32_t polygon) {
-        tris[n] = t;
-        poly[n] = polygon;
-        for (int k = 0; k < 3; ++k) {
-            lo[k][n] = b.lo[k], hi[k][n] = b.hi[k];
-            flat |= uint32_t(b.lo[k] == b.hi[k]) << k;
-        }
-        ++n;
-    }
-    /// Appends slot s of another small node.
-    void add(const SmallWork& w, uint32_t s) {
-        tris[n] = w.tris[s];
-        poly[n] = w.poly[s];
-        for (int k = 0; k < 3; ++k) {
-            lo[k][n] = w.lo[k][s], hi[k][n] = w.hi[k][s];
-            flat |= uint32_t(w.lo[k][s] == w.hi[k][s]) << k;
-        }
-        ++n;
-    }
-    void pad() {
-        for (uint32_t s = n; s % kLanes != 0; ++s)
-            for (int k = 0; k < 3; ++k) lo[k][s] = hi[k][s] = voxel.lo[k];
-    }
-};
+/// A small node's copy of a (small) Work node, padded.
+SmallWork small_of(const Work& w) {
+    SmallWork sw;
+    sw.voxel = w.voxel;
+    for (size_t s = 0; s < w.tris.size(); ++s) sw.add(w.tris[s], w.boxes[s], w.polygon(s));
+    sw.pad();
+    return sw;
+}
 
 /// The clipped polygons of the fragment a thread is building (a stack: a node's children's
 /// polygons are dropped when its subtree is done). Unfilled storage, so that making room
@@ -247,50 +109,6 @@ private:
     size_t size_ = 0, cap_ = 0;
 };
 
-/// Writes the events on axis k of bounds b[first, last), each with its index as its slot, to
-/// out in key order but for position: the ends, the planars, then the starts, each by slot.
-/// Returns the end of what was written (at most 2 (last - first) events).
-Event* write_events(const AABB* b, uint32_t first, uint32_t last, int k, Event* out) {
-    for (uint32_t s = first; s < last; ++s)
-        if (b[s].lo[k] != b[s].hi[k]) *out++ = Event::make(b[s].hi[k], kEnd, s);
-    for (uint32_t s = first; s < last; ++s)
-        if (b[s].lo[k] == b[s].hi[k]) *out++ = Event::make(b[s].lo[k], kPlanar, s);
-    for (uint32_t s = first; s < last; ++s)
-        if (b[s].lo[k] != b[s].hi[k]) *out++ = Event::make(b[s].lo[k], kStart, s);
-    return out;
-}
-
-/// Sorts a[0, m) by position into t (a is scratch): a stable LSD radix sort, three digits of
-/// 11, 11 and 10 bits, all counted in one pass, moved a -> t -> a -> t. Events generated in
-/// key order but for their positions leave sorted by key.
-void radix_sort_by_pos(Event* a, Event* t, size_t m) {
-    static constexpr int kShift[3] = {0, 11, 22};
-    std::unique_ptr<uint32_t[]> count(new uint32_t[3 * 2048]());
-    const auto digit = [](const Event& e, int d) { return (e.pos_key() >> kShift[d]) & 2047u; };
-    for (size_t i = 0; i < m; ++i)
-        for (int d = 0; d < 3; ++d) ++count[d * 2048 + digit(a[i], d)];
-    for (int d = 0; d < 3; ++d) {
-        uint32_t* c = &count[d * 2048];
-        uint32_t sum = 0;
-        for (int b = 0; b < 2048; ++b) sum += std::exchange(c[b], sum);
-    }
-    Event* from = a;
-    Event* to = t;
-    for (int d = 0; d < 3; ++d) {
-        uint32_t* c = &count[d * 2048];
-        for (size_t i = 0; i < m; ++i) to[c[digit(from[i], d)]++] = from[i];
-        std::swap(from, to);
-    }
-}
-
-/// Sorts a[0, m) by position into t, as radix_sort_by_pos(); a comparison sort when m is
-/// small (the radix sort's counters, 24 KB, cost more than sorting a few hundred events).
-void sort_by_pos(Event* a, Event* t, size_t m) {
-    if (m >= 512) return radix_sort_by_pos(a, t, m);
-    std::copy(a, a + m, t);
-    std::sort(t, t + m);  // keys are unique and ordered as the radix sort's stable output
-}
-
 /// Runs f(0) .. f(count - 1), as parallel tasks only when `parallel` (worth it for large
 /// inputs: on the 32-triangle Cornell box, TBB's task start-up had been a quarter of the
 /// whole build). Isolated: a thread waiting for these tasks runs none but them. Otherwise
@@ -304,38 +122,6 @@ void run_tasks(int count, bool parallel, const F& f) {
     else
         for (int i = 0; i < count; ++i) f(i);
 }
-
-/// A subtree built by one thread, in the final layout (children of a node side by side) but
-/// with fragment-local node and triangle-list indices; node 0 is its root.
-struct Fragment {
-    std::vector<KdNode> nodes;
-    std::vector<uint32_t> prims;
-};
-
-/// The few nodes above the fragments, built in parallel. A node is either a split with two
-/// children or a fragment.
-struct TopNode {
-    uint32_t axis = 3;
-    float split = 0.0f;
-    std::unique_ptr<TopNode> child[2];
-    Fragment frag;
-};
-
-struct Plane {
-    float cost = INFINITY;
-    int axis = -1;
-    float pos = 0.0f;
-    bool planar_left = true;
-};
-
-/// One axis's sweep records, one per distinct plane position, as structure of arrays (the
-/// pricing pass loads them kLanes at a time): the position's sort key and the events of each
-/// type up to and including it. Entry 0 is the position before the first (all counts zero);
-/// position g is entry g + 1, and the arrays run kLanes entries past the last.
-struct Sweep {
-    std::vector<uint32_t> key, starts, planars, ends;
-    size_t groups = 0;  ///< the number of positions
-};
 
 /// Where split() sends a parent slot's events: its slot in each child, and per axis the event
 /// types that each child keeps (bit 1 << type for the left child, 8 << type for the right).
@@ -496,7 +282,7 @@ private:
     void build_fragment(std::unique_ptr<Work> w, int depth, Fragment& f, uint32_t at, bool counted = false) {
         const auto n = uint32_t(w->tris.size());
         if (n <= small_) {
-            const SmallWork sw = SmallWork::of(*w);
+            const SmallWork sw = small_of(*w);
             release(std::move(w));
             build_small(sw, depth, f, at, state_.local().polygons);
             return;
@@ -522,7 +308,7 @@ private:
 
     Plane choose_plane(const Work& w) const {
         if (w.tris.size() > small_) return find_plane(w, Records::kShared);
-        return find_plane_small(SmallWork::of(w));
+        return find_plane_small(small_of(w), c_, avx2_);
     }
 
     /// The bounds of straddling triangle t clipped to each side of plane p in `voxel`.
@@ -577,7 +363,7 @@ private:
     /// triangle to their voxel anew (same bounds to rounding: double-precision vertices,
     /// rounded to float).
     void build_small(const SmallWork& w, int depth, Fragment& f, uint32_t at, PolygonArena& polygons) {
-        const Plane p = depth < max_depth_ ? find_plane_small(w) : Plane{};
+        const Plane p = depth < max_depth_ ? find_plane_small(w, c_, avx2_) : Plane{};
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
             f.nodes[at] = KdNode::leaf(uint32_t(f.prims.size()), w.n);
             f.prims.insert(f.prims.end(), w.tris, w.tris + w.n);
@@ -616,29 +402,6 @@ private:
         polygons.resize(mark);
     }
 
-    /// The SAH of a plane on one axis of a voxel, with the empty-space bonus. A child's area is
-    /// linear in the plane position: 2 (a b + (a + b) d) for the other two extents a, b and
-    /// the child's extent d along the axis.
-    /// Evaluated for kLanes planes at once (FV positions, IV counts).
-    struct AxisCost {
-        float lo, hi, face, side, ct, ci, bonus;
-        /// The small-node search looks for the cheapest plane's position only below this cost
-        /// (a plane that costs more loses to an earlier axis or to the leaf).
-        float below = INFINITY;
-        template <typename F, typename I>
-        __attribute__((always_inline)) F operator()(const F& pos, const I& nl, const I& nr) const {
-            const F pl = face + side * (pos - lo), pr = face + side * (hi - pos);
-            const F c = ct + ci * (pl * to_float(nl) + pr * to_float(nr));
-            return ((nl == 0) | (nr == 0)) ? c * bonus : c;
-        }
-    };
-    AxisCost axis_cost(const AABB& voxel, int k, float inv_area) const {
-        const Vec3 ext = voxel.hi - voxel.lo;
-        const float a = ext[(k + 1) % 3], b = ext[(k + 2) % 3];
-        return {voxel.lo[k],       voxel.hi[k],          2.0f * a * b * inv_area, 2.0f * (a + b) * inv_area,
-                c_.traversal_cost, c_.intersection_cost, 1.0f - c_.empty_bonus};
-    }
-
     /// Where find_plane() keeps its per-position records.
     enum class Records {
         kShared,  ///< one buffer serves all three axes (the large nodes above the fragments)
@@ -661,121 +424,10 @@ private:
         for (int k = 0; k < 3; ++k) {
             Sweep& sweep = ts.sweeps[records == Records::kShared ? 0 : k];
             if (records != Records::kKept) count_positions(w.events[k], sweep);
-            const AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            const bool flat = sweep.planars[sweep.groups] != 0;
-            Plane p;
-#if BVHLAB_KD_AVX2
-            if (avx2_)
-                p = flat ? price_avx2<true>(sweep, n, k, cost) : price_avx2<false>(sweep, n, k, cost);
-            else
-#endif
-                p = flat ? price<true>(sweep, n, k, cost) : price<false>(sweep, n, k, cost);
+            const Plane p = price_positions(sweep, n, k, axis_cost(w.voxel, k, inv_area, c_), avx2_);
             if (p.cost < best.cost) best = p;  // an earlier axis wins ties
         }
         return best;
-    }
-
-    /// find_plane's second pass on one axis: the cheapest plane among the sweep's positions
-    /// inside the voxel, kLanes positions at a time. At a position: left of the plane, every
-    /// bound that starts before it and every flat bound up to it; right, every bound that
-    /// ends after it (so the starts at it go right). A flat bound at the position counts left
-    /// for the left-first cost, right for the right-first one; without flat bounds on the axis
-    /// (kFlat false) the two are the same. Ties go to the lower position, then left first,
-    /// as in a scalar loop that keeps only strictly cheaper planes.
-    template <bool kFlat>
-    static Plane price(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
-        return price_body<kFlat>(s, n, k, cost);
-    }
-#if BVHLAB_KD_AVX2
-    template <bool kFlat>
-    __attribute__((target("avx2"))) static Plane price_avx2(const Sweep& s, uint32_t n, int k, const AxisCost& cost) {
-        return price_body<kFlat>(s, n, k, cost);
-    }
-#endif
-    template <bool kFlat>
-    __attribute__((always_inline)) static inline Plane price_body(const Sweep& s, uint32_t n, int k,
-                                                                  const AxisCost& cost) {
-        // Loads kLanes records from entry i (an out parameter: a vector return value would
-        // change the ABI between the two copies).
-        const auto load = [](IV& v, const std::vector<uint32_t>& a, size_t i) {
-            std::memcpy(&v, a.data() + i, sizeof v);
-        };
-        IV lane;
-        for (uint32_t i = 0; i < kLanes; ++i) lane[i] = int32_t(i);
-        const FV inf = FV{} + INFINITY;
-        // Per lane: the cheapest cost seen and its candidate's order, 2 g (+ 1 right first).
-        FV best = inf;
-        IV best_at = IV{};
-        const auto groups = int32_t(s.groups);
-        for (int32_t g = 0; g < groups; g += int32_t(kLanes)) {
-            IV key, planars_to, starts_before, ends_to;
-            load(key, s.key, size_t(g) + 1);
-            load(planars_to, s.planars, size_t(g) + 1);
-            load(starts_before, s.starts, size_t(g));
-            load(ends_to, s.ends, size_t(g) + 1);
-            const IV left = starts_before + planars_to;
-            const IV right = int32_t(n) - ends_to - planars_to;
-            // from_sort_key, kLanes at a time (keys with the top bit set are negative here)
-            const IV bits = key < 0 ? (key & 0x7fffffff) : ~key;
-            FV pos;
-            std::memcpy(&pos, &bits, sizeof pos);
-            const IV order = 2 * (g + lane);
-            const IV inside = (g + lane < groups) & (pos > cost.lo) & (pos < cost.hi);
-            const FV c = inside ? cost(pos, left, right) : inf;
-            IV cheaper = c < best;
-            best = cheaper ? c : best;
-            best_at = cheaper ? order : best_at;
-            if (kFlat) {
-                IV planars_before;
-                load(planars_before, s.planars, size_t(g));
-                const IV planars = planars_to - planars_before;
-                const FV r = inside & (planars != 0) ? cost(pos, left - planars, right + planars) : inf;
-                cheaper = r < best;
-                best = cheaper ? r : best;
-                best_at = cheaper ? order + 1 : best_at;
-            }
-        }
-        const float m = hmin(best);
-        if (!(m < INFINITY)) return Plane{};
-        int32_t at = INT32_MAX;
-        for (uint32_t i = 0; i < kLanes; ++i)
-            if (best[i] == m) at = std::min(at, best_at[i]);
-        return {m, k, from_sort_key(s.key[size_t(at / 2) + 1]), at % 2 == 0};
-    }
-
-    /// find_plane's first pass on one axis: one record per distinct position of the n
-    /// triangles' sorted events e.
-    static void count_positions(const std::vector<Event>& e, Sweep& s) {
-        const size_t m = e.size();
-        if (s.key.size() < m + 1 + kLanes) {  // never shrunk, so never filled again
-            for (auto* a : {&s.key, &s.starts, &s.planars, &s.ends}) a->resize(m + 1 + kLanes);
-            s.starts[0] = s.planars[0] = s.ends[0] = 0;
-        }
-        uint32_t *key = s.key.data() + 1, *starts = s.starts.data() + 1;
-        uint32_t *planars = s.planars.data() + 1, *ends = s.ends.data() + 1;
-        // Running counts only, with no reset per position: each event's record is
-        // overwritten until the position's last event, which keeps it.
-        uint32_t counts[3] = {0, 0, 0};  // by type: ends, planars, starts
-        size_t groups = 0;
-        for (size_t i = 0; i < m; ++i) {
-            const uint32_t k = e[i].pos_key();
-            ++counts[e[i].type()];
-            key[groups] = k;
-            starts[groups] = counts[kStart];
-            planars[groups] = counts[kPlanar];
-            ends[groups] = counts[kEnd];
-            groups += uint32_t(i + 1 == m || e[i + 1].pos_key() != k);
-        }
-        s.groups = groups;
-    }
-
-    enum : uint8_t { kBoth = 0, kLeftOnly = 1, kRightOnly = 2 };
-    /// The side of a plane that a clipped bound lies on, by the rule the sweep counted with.
-    static uint8_t classify(float lo, float hi, const Plane& p) {
-        if (lo == p.pos && hi == p.pos) return p.planar_left ? kLeftOnly : kRightOnly;
-        if (hi <= p.pos) return kLeftOnly;
-        if (lo >= p.pos) return kRightOnly;
-        return kBoth;
     }
 
     /// The event types (bits 1 << type) on axis k of a straddler's bounds `parent` that its
@@ -950,123 +602,6 @@ private:
         return {std::move(lp), std::move(rp), false};
     }
 
-    /// find_plane for a node without events (at most small_ triangles): every bound inside
-    /// the voxel is a candidate, counted directly with the sweep's rule, so the choice is the
-    /// same plane the sweep would make (ties: lower axis, then lower position, left first).
-    /// A plane that costs no less than the leaf (Ci n) is not returned: the caller makes a
-    /// leaf either way, and the search skips its position.
-    Plane find_plane_small(const SmallWork& w) const {
-        Plane best;
-        const float area = w.voxel.area();
-        if (!(area > 0.0f) || w.n == 0) return best;
-        const float inv_area = 1.0f / area;
-        const float leaf = c_.intersection_cost * float(w.n);
-        for (int k = 0; k < 3; ++k) {
-            const bool flat = w.flat >> k & 1;
-            AxisCost cost = axis_cost(w.voxel, k, inv_area);
-            cost.below = std::min(best.cost, leaf);
-            Plane p;
-#if BVHLAB_KD_AVX2
-            if (avx2_)
-                p = flat ? small_axis_avx2<true>(w, k, cost) : small_axis_avx2<false>(w, k, cost);
-            else
-#endif
-                p = flat ? small_axis<true>(w, k, cost) : small_axis<false>(w, k, cost);
-            if (p.cost < best.cost) best = p;  // an earlier axis wins ties
-        }
-        return best;
-    }
-
-    /// The cheapest plane on axis k of a small node. Candidates go kLanes at a time through
-    /// GCC/Clang vector types. Without flat (planar) bounds on this axis, which is the common
-    /// case, both sides of a plane cost the same and half the work is skipped.
-    template <bool kFlat>
-    static Plane small_axis(const SmallWork& w, int k, const AxisCost& cost) {
-        return small_axis_sized<kFlat>(w, k, cost);
-    }
-#if BVHLAB_KD_AVX2
-    template <bool kFlat>
-    __attribute__((target("avx2"))) static Plane small_axis_avx2(const SmallWork& w, int k, const AxisCost& cost) {
-        return small_axis_sized<kFlat>(w, k, cost);
-    }
-#endif
-    /// small_axis's body, inlined into each copy so that it is compiled for that copy's ISA,
-    /// in versions by node size: kMax is the most vectors per candidate list. Nodes of up to
-    /// kLanes triangles (most searches: four in five on furball at Wald & Havran's constants)
-    /// get a version with one, nodes of up to 2 and 4 kLanes ones with two and four, so that
-    /// loops unroll and vectors stay in registers.
-    template <bool kFlat>
-    __attribute__((always_inline)) static inline Plane small_axis_sized(const SmallWork& w, int k,
-                                                                        const AxisCost& cost) {
-        constexpr uint32_t kVecs = kMaxSmallNode / kLanes;
-        if (w.n <= kLanes) return small_axis_body<kFlat, 1>(w, k, cost);
-        if (w.n <= 2 * kLanes) return small_axis_body<kFlat, 2>(w, k, cost);
-        if (w.n <= 4 * kLanes) return small_axis_body<kFlat, 4>(w, k, cost);
-        return small_axis_body<kFlat, kVecs>(w, k, cost);
-    }
-    template <bool kFlat, uint32_t kMax>
-    __attribute__((always_inline)) static inline Plane small_axis_body(const SmallWork& w, int k,
-                                                                       const AxisCost& cost) {
-        const uint32_t n = w.n, vecs = kMax == 1 ? 1 : (n + kLanes - 1) / kLanes;
-        const FV inf = FV{} + INFINITY;
-        // Candidates: the lower bounds (list 0) and the upper bounds (list 1).
-        FV pos[2][kMax];
-        IV below[2][kMax], above[2][kMax], planar[2][kMax];
-        for (uint32_t v = 0; v < vecs; ++v) {
-            std::memcpy(&pos[0][v], &w.lo[k][kLanes * v], sizeof(FV));
-            std::memcpy(&pos[1][v], &w.hi[k][kLanes * v], sizeof(FV));
-            for (int l = 0; l < 2; ++l) below[l][v] = above[l][v] = planar[l][v] = IV{};
-        }
-        for (uint32_t s = 0; s < n; ++s) {
-            const float lo = w.lo[k][s], hi = w.hi[k][s];
-            const IV flat = IV{} - int32_t(lo == hi);  // all ones when flat
-            for (int l = 0; l < 2; ++l)
-                for (uint32_t v = 0; v < vecs; ++v) {  // comparisons give -1 for true
-                    below[l][v] -= lo < pos[l][v];
-                    above[l][v] -= hi > pos[l][v];
-                    if (kFlat) planar[l][v] -= flat & (lo == pos[l][v]);
-                }
-        }
-        FV left[2][kMax], right[2][kMax];
-        for (int l = 0; l < 2; ++l)
-            for (uint32_t v = 0; v < vecs; ++v) {
-                const FV x = pos[l][v];
-                const IV b = below[l][v], a = above[l][v];
-                const IV inside = (x > cost.lo) & (x < cost.hi);
-                left[l][v] = inside ? cost(x, b + planar[l][v], a) : inf;
-                if (kFlat) right[l][v] = inside ? cost(x, b, a + planar[l][v]) : inf;
-            }
-        // The cheapest cost, the lowest position at that cost, and left before right, with
-        // vector minima instead of a branch per candidate (they mispredicted).
-        FV low = inf;
-        for (int l = 0; l < 2; ++l)
-            for (uint32_t v = 0; v < vecs; ++v) {
-                low = low < left[l][v] ? low : left[l][v];
-                if (kFlat) low = low < right[l][v] ? low : right[l][v];
-            }
-        const float m = hmin(low);
-        if (!(m < cost.below)) return Plane{};
-        FV at = inf;
-        for (int l = 0; l < 2; ++l)
-            for (uint32_t v = 0; v < vecs; ++v) {
-                IV hit = left[l][v] == m;
-                if (kFlat) hit |= right[l][v] == m;
-                const FV x = hit ? pos[l][v] : inf;
-                at = at < x ? at : x;
-            }
-        const float x = hmin(at);
-        bool planar_left = true;
-        if (kFlat) {
-            IV on_left = IV{};
-            for (int l = 0; l < 2; ++l)
-                for (uint32_t v = 0; v < vecs; ++v) on_left |= (left[l][v] == m) & (pos[l][v] == x);
-            int32_t any = 0;
-            for (uint32_t i = 0; i < kLanes; ++i) any |= on_left[i];
-            planar_left = any != 0;
-        }
-        return {m, k, x, planar_left};
-    }
-
     /// A triangle's corners side by side: one or two cache lines, where the mesh's index
     /// and vertex arrays cost two to four.
     struct Corners {
@@ -1076,79 +611,17 @@ private:
     const KdTreeBuilder::Config& c_;
     const int max_depth_;
     const uint32_t small_;  // nodes of at most this many triangles keep no events
-#if BVHLAB_KD_AVX2
-    const bool avx2_ = c_.use_avx2 && __builtin_cpu_supports("avx2");
-#endif
+    const bool avx2_ = use_avx2(c_.use_avx2);
     std::vector<Corners> corners_;
     const bool parallel_;  // whether the root's setup runs as parallel tasks
     mutable tbb::enumerable_thread_specific<ThreadState> state_;
     std::atomic<uint64_t> frag_tris_{0}, frag_nodes_{0}, frag_refs_{0};  // for reserving fragments
 };
 
-/// The final layout: the top nodes in depth-first order, each fragment appended whole with its
-/// indices moved to their final place. A first walk places everything; the fragments are then
-/// copied in parallel.
-KdTree flatten(const TopNode& root, const AABB& bounds) {
-    struct Placed {
-        const Fragment* frag;
-        uint32_t at, base, prim_base;  // its root's index; where its other nodes and ids go
-    };
-    std::vector<Placed> frags;
-    std::vector<std::pair<uint32_t, KdNode>> interior;
-    uint64_t nodes = 1, prims = 0;  // checked against KdNode's 30-bit children below
-    std::vector<std::pair<const TopNode*, uint32_t>> stack{{&root, 0}};
-    while (!stack.empty()) {
-        auto [n, d] = stack.back();
-        stack.pop_back();
-        if (!n->child[0]) {
-            frags.push_back({&n->frag, d, uint32_t(nodes), uint32_t(prims)});
-            nodes += n->frag.nodes.size() - 1;
-            prims += n->frag.prims.size();
-            continue;
-        }
-        interior.push_back({d, KdNode::interior(n->axis, n->split, uint32_t(nodes))});
-        stack.push_back({n->child[1].get(), uint32_t(nodes + 1)});
-        stack.push_back({n->child[0].get(), uint32_t(nodes)});
-        nodes += 2;
-    }
-    BVHLAB_CHECK(nodes <= KdNode::kMaxIndex && prims <= UINT32_MAX,
-                 "kd-tree too large (" + std::to_string(nodes) + " nodes, " + std::to_string(prims) +
-                     " references; the limits are 2^30 and 2^32): lower max_depth");
-    KdTree t;
-    t.bounds = bounds;
-    // Sizing the node array writes nothing (KdNode's default constructor), so its fresh pages
-    // are first touched by the parallel copy below. On this VM a fresh page costs several
-    // microseconds: furball's nodes (600 MB before they were 8 bytes) took 0.7-1.9 s when one
-    // thread zero-filled them.
-    t.nodes.resize(nodes);
-    for (const auto& [d, x] : interior) t.nodes[d] = x;
-    const auto copy_nodes = [&](size_t i) {
-        // Fragment node j > 0 goes to base + j - 1; its root goes to at.
-        const Placed& p = frags[i];
-        const auto place = [&](KdNode x) {
-            return x.is_leaf() ? KdNode::leaf(x.first() + p.prim_base, x.count())
-                               : KdNode::interior(x.axis(), x.split(), p.base + x.child() - 1);
-        };
-        t.nodes[p.at] = place(p.frag->nodes[0]);
-        for (size_t j = 1; j < p.frag->nodes.size(); ++j) t.nodes[p.base + j - 1] = place(p.frag->nodes[j]);
-    };
-    const auto copy_prims = [&](size_t i) {
-        const Placed& p = frags[i];
-        std::copy(p.frag->prims.begin(), p.frag->prims.end(), t.prim_indices.begin() + p.prim_base);
-    };
-    if (frags.size() == 1) {  // a small mesh: no tasks
-        t.prim_indices.resize(prims);
-        copy_nodes(0);
-        copy_prims(0);
-        return t;
-    }
-    tbb::parallel_invoke([&] { t.prim_indices.resize(prims); },
-                         [&] { tbb::parallel_for(size_t(0), frags.size(), copy_nodes); });
-    tbb::parallel_for(size_t(0), frags.size(), copy_prims);
-    return t;
-}
-
 }  // namespace
+}  // namespace bvhlab::accel::kd
+
+namespace bvhlab::accel {
 
 int KdTreeBuilder::max_depth_for(size_t n) const {
     if (config_.max_depth >= 0) return std::min(config_.max_depth, int(kMaxTreeDepth));
@@ -1157,16 +630,16 @@ int KdTreeBuilder::max_depth_for(size_t n) const {
 
 KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
-    BVHLAB_CHECK(mesh.triangle_count() <= kSlotMask, "too many triangles for the kd-tree builder");
+    BVHLAB_CHECK(mesh.triangle_count() <= kd::kSlotMask, "too many triangles for the kd-tree builder");
     BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");
-    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNode,
-                 "kd-tree small_node_size must be at most " + std::to_string(kMaxSmallNode));
+    BVHLAB_CHECK(config_.small_node_size <= kMaxSmallNodeSize,
+                 "kd-tree small_node_size must be at most " + std::to_string(kMaxSmallNodeSize));
     BVHLAB_CHECK(config_.empty_bonus >= 0 && config_.empty_bonus < 1, "the empty-space bonus must be in [0, 1)");
     AABB bounds;
-    std::unique_ptr<TopNode> tree;
+    std::unique_ptr<kd::TopNode> tree;
     {
-        Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
-        std::unique_ptr<Work> root = rec.root();
+        kd::Recursion rec(config_, mesh, max_depth_for(mesh.triangle_count()));
+        std::unique_ptr<kd::Work> root = rec.root();
         bounds = root->voxel;
         tree = rec.build_top(std::move(root), 0);
     }
@@ -1174,80 +647,9 @@ KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
     // sweep records; on furball ~0.5 GB) are freed before flatten() touches the final arrays,
     // so that the OS can hand their just-freed pages back: on this VM a page the host already
     // backs faults in ~2 us, a new one in ~10 us (experiments/NOTES.md, session 7).
-    KdTree out = flatten(*tree, bounds);
+    KdTree out = kd::flatten(*tree, bounds);
     destroy_iteratively(std::move(tree));
     return out;
-}
-
-namespace {
-
-/// Visits every node with its cell and depth (children after their parent).
-template <typename F>
-void walk_cells(const KdTree& tree, F&& visit) {
-    struct Item {
-        uint32_t node;
-        AABB cell;
-        uint32_t depth;
-    };
-    std::vector<Item> stack{{0, tree.bounds, 0}};
-    while (!stack.empty()) {
-        const Item it = stack.back();
-        stack.pop_back();
-        const KdNode& n = tree.nodes[it.node];
-        if (!visit(it.node, n, it.cell, it.depth) || n.is_leaf()) continue;
-        AABB l = it.cell, r = it.cell;
-        l.hi[int(n.axis())] = n.split();
-        r.lo[int(n.axis())] = n.split();
-        stack.push_back({n.child(), l, it.depth + 1});
-        stack.push_back({n.child() + 1, r, it.depth + 1});
-    }
-}
-
-}  // namespace
-
-KdTreeStats compute_kd_stats(const KdTree& tree, const KdTreeBuilder::Config& c) {
-    KdTreeStats s;
-    if (tree.nodes.empty()) return s;
-    s.nodes = tree.nodes.size();
-    const double root = tree.bounds.area();
-    walk_cells(tree, [&](uint32_t, const KdNode& n, const AABB& cell, uint32_t depth) {
-        const double rel = root > 0 ? double(cell.area()) / root : 0.0;
-        if (n.is_leaf()) {
-            ++s.leaves;
-            s.references += n.count();
-            s.depth = std::max(s.depth, depth);
-            s.max_leaf_size = std::max(s.max_leaf_size, n.count());
-            s.sah += rel * c.intersection_cost * n.count();
-        } else {
-            s.sah += rel * c.traversal_cost;
-        }
-        return true;
-    });
-    return s;
-}
-
-std::string validate_kd(const KdTree& tree, size_t triangles) {
-    if (tree.nodes.empty()) return "kd-tree has no nodes";
-    std::vector<uint8_t> seen(tree.nodes.size(), 0);
-    std::string err;
-    walk_cells(tree, [&](uint32_t i, const KdNode& n, const AABB& cell, uint32_t) {
-        const std::string where = "kd node " + std::to_string(i) + ": ";
-        if (seen[i]++)
-            err = where + "reached twice";
-        else if (n.is_leaf() && size_t(n.first()) + n.count() > tree.prim_indices.size())
-            err = where + "leaf range out of range";
-        else if (!n.is_leaf() && size_t(n.child()) + 1 >= tree.nodes.size())
-            err = where + "child out of range";
-        else if (!n.is_leaf() && !(n.split() >= cell.lo[int(n.axis())] && n.split() <= cell.hi[int(n.axis())]))
-            err = where + "split outside its cell";
-        return err.empty();  // stop descending once something is wrong
-    });
-    if (!err.empty()) return err;
-    for (size_t i = 0; i < seen.size(); ++i)
-        if (!seen[i]) return "kd node " + std::to_string(i) + " is unreachable";
-    for (uint32_t id : tree.prim_indices)
-        if (id >= triangles) return "triangle id " + std::to_string(id) + " out of range";
-    return {};
 }
 
 }  // namespace bvhlab::accel

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: MIT
 // SAH kd-tree in O(N log N) (Wald & Havran 2006, "On building fast kd-trees for ray tracing,
 // and on doing that in O(N log N)"): events sorted once, perfect splits with triangles clipped
-// to the voxel, an empty-space bonus, and automatic termination by the SAH.
+// to the voxel, an empty-space bonus, and automatic termination by the SAH. A tree's figures
+// (compute_kd_stats) and structural check (validate_kd) are beside the BVH ones in accel/core/.
 #pragma once
 
 #include <string>
 
 #include "accel/core/mesh.h"
+#include "accel/core/stats.h"
+#include "accel/core/validate.h"
 #include "accel/layouts/kd_node.h"
 
 namespace bvhlab::accel {
@@ -56,24 +59,5 @@ public:
 private:
     Config config_;
 };
-
-/// Size and quality figures of a kd-tree, from one walk over it.
-struct KdTreeStats {
-    uint64_t nodes = 0;
-    uint64_t leaves = 0;
-    uint64_t references = 0;  ///< sum of leaf sizes
-    uint32_t depth = 0;       ///< deepest leaf; the root is at depth 0
-    uint32_t max_leaf_size = 0;
-    /// kd SAH with the given constants, normalised by the root's surface area: Ct per interior
-    /// node, Ci per triangle reference in a leaf, each weighted by its cell's area ratio.
-    double sah = 0.0;
-};
-
-KdTreeStats compute_kd_stats(const KdTree& tree, const KdTreeBuilder::Config& c);
-
-/// Structural check, e.g. of a tree read from a file: every node reached exactly once from the
-/// root, axes in 0..3, splits inside their cells, leaf ranges and triangle ids in range.
-/// Returns "" when valid, otherwise the first problem found.
-std::string validate_kd(const KdTree& tree, size_t triangles);
 
 }  // namespace bvhlab::accel

@@ -10,6 +10,7 @@
 
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
+#include "accel/core/kd_cells.h"
 
 namespace bvhlab::accel {
 namespace {
@@ -105,6 +106,27 @@ TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const B
     }
     s.mean_leaf_size = s.leaves ? double(s.references) / double(s.leaves) : 0.0;
     if (with_epo) s.epo = compute_epo(tree, mesh, costs);
+    return s;
+}
+
+KdTreeStats compute_kd_stats(const KdTree& tree, float traversal_cost, float intersection_cost) {
+    KdTreeStats s;
+    if (tree.nodes.empty()) return s;
+    s.nodes = tree.nodes.size();
+    const double root = tree.bounds.area();
+    walk_kd_cells(tree, [&](uint32_t, const KdNode& n, const AABB& cell, uint32_t depth) {
+        const double rel = root > 0 ? double(cell.area()) / root : 0.0;
+        if (n.is_leaf()) {
+            ++s.leaves;
+            s.references += n.count();
+            s.depth = std::max(s.depth, depth);
+            s.max_leaf_size = std::max(s.max_leaf_size, n.count());
+            s.sah += rel * intersection_cost * n.count();
+        } else {
+            s.sah += rel * traversal_cost;
+        }
+        return true;
+    });
     return s;
 }
 

@@ -7,6 +7,7 @@
 
 #include "accel/core/build_tree.h"
 #include "accel/core/mesh.h"
+#include "accel/layouts/kd_node.h"
 
 namespace bvhlab::accel {
 
@@ -30,5 +31,20 @@ struct TreeStats {
 /// parallel; pass with_epo = false to skip it on huge scenes.
 TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs,
                         bool with_epo = true);
+
+/// Size and quality figures of a kd-tree, from one walk over it.
+struct KdTreeStats {
+    uint64_t nodes = 0;
+    uint64_t leaves = 0;
+    uint64_t references = 0;  ///< sum of leaf sizes
+    uint32_t depth = 0;       ///< deepest leaf; the root is at depth 0
+    uint32_t max_leaf_size = 0;
+    /// kd SAH with the given constants, normalised by the root's surface area: traversal_cost
+    /// per interior node, intersection_cost per triangle reference in a leaf, each weighted by
+    /// its cell's area ratio.
+    double sah = 0.0;
+};
+
+KdTreeStats compute_kd_stats(const KdTree& tree, float traversal_cost, float intersection_cost);
 
 }  // namespace bvhlab::accel

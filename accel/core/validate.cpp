@@ -3,6 +3,8 @@
 
 #include <vector>
 
+#include "accel/core/kd_cells.h"
+
 namespace bvhlab::accel {
 
 std::string validate(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& config,
@@ -55,6 +57,30 @@ std::string validate(const BuildTree& tree, const TriangleMesh& mesh, const Buil
         if (refs[t] > 1 && !options.allow_duplicates)
             return "triangle " + std::to_string(t) + " is referenced " + std::to_string(refs[t]) + " times";
     }
+    return {};
+}
+
+std::string validate_kd(const KdTree& tree, size_t triangles) {
+    if (tree.nodes.empty()) return "kd-tree has no nodes";
+    std::vector<uint8_t> seen(tree.nodes.size(), 0);
+    std::string err;
+    walk_kd_cells(tree, [&](uint32_t i, const KdNode& n, const AABB& cell, uint32_t) {
+        const std::string where = "kd node " + std::to_string(i) + ": ";
+        if (seen[i]++)
+            err = where + "reached twice";
+        else if (n.is_leaf() && size_t(n.first()) + n.count() > tree.prim_indices.size())
+            err = where + "leaf range out of range";
+        else if (!n.is_leaf() && size_t(n.child()) + 1 >= tree.nodes.size())
+            err = where + "child out of range";
+        else if (!n.is_leaf() && !(n.split() >= cell.lo[int(n.axis())] && n.split() <= cell.hi[int(n.axis())]))
+            err = where + "split outside its cell";
+        return err.empty();  // stop descending once something is wrong
+    });
+    if (!err.empty()) return err;
+    for (size_t i = 0; i < seen.size(); ++i)
+        if (!seen[i]) return "kd node " + std::to_string(i) + " is unreachable";
+    for (uint32_t id : tree.prim_indices)
+        if (id >= triangles) return "triangle id " + std::to_string(id) + " out of range";
     return {};
 }
 

@@ -6,6 +6,7 @@
 
 #include "accel/core/build_tree.h"
 #include "accel/core/mesh.h"
+#include "accel/layouts/kd_node.h"
 
 namespace bvhlab::accel {
 
@@ -21,5 +22,10 @@ struct ValidateOptions {
 /// string when valid, otherwise the first problem found.
 std::string validate(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& config,
                      const ValidateOptions& options = {});
+
+/// Structural check of a kd-tree, e.g. one read from a file: every node reached exactly once
+/// from the root, splits inside their cells, leaf ranges and triangle ids in range. Returns ""
+/// when valid, otherwise the first problem found.
+std::string validate_kd(const KdTree& tree, size_t triangles);
 
 }  // namespace bvhlab::accel

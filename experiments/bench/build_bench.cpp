@@ -63,7 +63,8 @@ void bm_build_kd(benchmark::State& state, std::shared_ptr<accel::TriangleMesh> m
         state.SkipWithError(("invalid kd-tree: " + err).c_str());
         return;
     }
-    const accel::KdTreeStats s = accel::compute_kd_stats(last, builder.config());
+    const accel::KdTreeStats s =
+        accel::compute_kd_stats(last, builder.config().traversal_cost, builder.config().intersection_cost);
     state.counters["kd_sah"] = s.sah;
     state.counters["nodes"] = double(s.nodes);
     state.counters["references"] = double(s.references);

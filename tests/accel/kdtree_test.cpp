@@ -167,13 +167,13 @@ TEST(KdTreeBuilder, KeptClippedPartsChangeTheTreeOnlyByRounding) {
         KdTreeBuilder::Config c;
         c.reuse_clipped_polygons = false;
         const KdTree exact = KdTreeBuilder(c).build(m);
-        const KdTreeStats e = compute_kd_stats(exact, c);
+        const KdTreeStats e = compute_kd_stats(exact, c.traversal_cost, c.intersection_cost);
         c.reuse_clipped_polygons = true;
         for (uint32_t small : {8u, 32u, 64u}) {
             c.small_node_size = small;
             const KdTree t = KdTreeBuilder(c).build(m);
             ASSERT_EQ(validate_kd(t, m.triangle_count()), "");
-            const KdTreeStats s = compute_kd_stats(t, c);
+            const KdTreeStats s = compute_kd_stats(t, c.traversal_cost, c.intersection_cost);
             EXPECT_NEAR(double(s.nodes), double(e.nodes), 1e-3 * double(e.nodes)) << "small " << small;
             EXPECT_NEAR(double(s.references), double(e.references), 1e-3 * double(e.references)) << "small " << small;
             EXPECT_NEAR(s.sah, e.sah, 1e-6 * e.sah) << "small " << small;
@@ -185,7 +185,8 @@ TEST(KdTreeBuilder, ValidateAndStats) {
     TriangleMesh m = make_procedural(ProceduralKind::kStructured, 4000, 6);
     KdTree t = KdTreeBuilder().build(m);
     EXPECT_EQ(validate_kd(t, m.triangle_count()), "");
-    const KdTreeStats s = compute_kd_stats(t, KdTreeBuilder::Config{});
+    const KdTreeStats s =
+        compute_kd_stats(t, KdTreeBuilder::Config{}.traversal_cost, KdTreeBuilder::Config{}.intersection_cost);
     EXPECT_EQ(s.nodes, t.nodes.size());
     EXPECT_EQ(s.nodes, 2 * s.leaves - 1);
     EXPECT_EQ(s.references, t.prim_indices.size());

@@ -69,7 +69,8 @@ nlohmann::json measure() {
         }
         const accel::KdTreeBuilder::Config kd_config;
         const accel::KdTree kd_tree = accel::KdTreeBuilder(kd_config).build(mesh);
-        sah[scene.name + "/kdtree"] = accel::compute_kd_stats(kd_tree, kd_config).sah;
+        sah[scene.name + "/kdtree"] =
+            accel::compute_kd_stats(kd_tree, kd_config.traversal_cost, kd_config.intersection_cost).sah;
         const accel::KdLayout kd = accel::convert_to_kd_layout(kd_tree, mesh);
         for (int stack : {64, 2}) {
             record("kdtree-stack" + std::to_string(stack), [&](const RaySet& s, std::vector<TraversalCounters>& c) {
