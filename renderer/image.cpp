@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "accel/core/check.h"
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 
 #if defined(BVHLAB_HAVE_OIIO)
 #include <OpenImageIO/imageio.h>
@@ -28,7 +28,7 @@ std::string extension_of(const std::string& path) {
 }
 
 void write_pfm(const Image& img, const std::string& path) {
-    accel::write_file_atomically(path, [&](std::FILE* f) {
+    scene::write_file_atomically(path, [&](std::FILE* f) {
         // Negative scale: little-endian. PFM stores the bottom row first.
         std::fprintf(f, "PF\n%u %u\n-1.0\n", img.width, img.height);
         for (uint32_t y = img.height; y-- > 0;)

@@ -14,7 +14,7 @@ namespace bvhlab::render {
 RenderMaterial default_material() {
     RenderMaterial m{};
     m.type = BsdfType::kLambert;
-    m.base = accel::Material{}.diffuse;
+    m.base = scene::Material{}.diffuse;
     m.alpha = 1.0f;
     m.ior = 1.5f;
     m.texture = -1;
@@ -25,7 +25,7 @@ float roughness_from_shininess(float ns) {
     return std::clamp(std::sqrt(2.0f / (std::max(ns, 0.0f) + 2.0f)), 0.001f, 1.0f);
 }
 
-RenderMaterial map_material(const accel::Material& in, int32_t texture) {
+RenderMaterial map_material(const scene::Material& in, int32_t texture) {
     RenderMaterial m = default_material();
     m.base = in.diffuse;
     m.specular = in.specular;
@@ -124,11 +124,11 @@ void RenderScene::load_textures(const TextureOptions& opts) {
         opts.warnings->push_back("the scene has map_Kd textures but no texture coordinates (vt): they render with Kd");
 }
 
-RenderScene::RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures)
+RenderScene::RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures)
     : mesh_(mesh) {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot render a scene with no triangles");
     materials_.push_back(default_material());
-    for (const accel::Material& m : mesh.materials) materials_.push_back(map_material(m, -1));
+    for (const scene::Material& m : mesh.materials) materials_.push_back(map_material(m, -1));
     material_ids_ = mesh.material_ids;
     if (material_ids_.size() != mesh.triangle_count()) material_ids_.assign(mesh.triangle_count(), -1);
     load_textures(textures);

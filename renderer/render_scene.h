@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/mesh.h"
 #include "renderer/core/stages.h"
 #include "renderer/core/texture.h"
 #include "renderer/image.h"
+#include "scene/mesh.h"
 #include "traversal/rays/raygen.h"
 
 namespace bvhlab::render {
@@ -38,12 +38,12 @@ public:
     /// Maps the materials, loads their map_Kd textures (through read_image, each file once) and
     /// builds the light table. Throws bvhlab::Error for an empty mesh, a texture that cannot be
     /// read or has a negative or non-finite texel, and a missing one unless warn_missing.
-    RenderScene(const accel::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures = {});
+    RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures = {});
 
     /// Views into this object's arrays (host memory); valid while it lives.
     SceneView view() const;
 
-    const accel::TriangleMesh& mesh() const { return mesh_; }
+    const scene::TriangleMesh& mesh() const { return mesh_; }
     const std::vector<RenderMaterial>& materials() const { return materials_; }
     const std::vector<uint32_t>& light_tris() const { return light_tris_; }
     const std::vector<AliasEntry>& alias_table() const { return alias_; }
@@ -69,7 +69,7 @@ private:
     void build_env_tables();
     void load_textures(const TextureOptions& opts);
 
-    const accel::TriangleMesh& mesh_;
+    const scene::TriangleMesh& mesh_;
     std::vector<RenderMaterial> materials_;  // [0] default
     std::vector<int32_t> material_ids_;
     std::vector<Vec3> texels_;

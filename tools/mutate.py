@@ -30,8 +30,10 @@ import sys
 import tempfile
 import time
 
-CORE_DIRS = ["accel/core", "accel/builders", "accel/layouts", "traversal/reference", "traversal/device",
-             "traversal/oracle"]
+CORE_DIRS = ["accel/core", "accel/builders", "accel/builders/kd", "accel/layouts", "traversal/reference",
+             "traversal/device", "traversal/oracle"]
+# The triangle checks and the scene hash, which every builder and the oracle rely on.
+CORE_FILES = ["scene/mesh.h", "scene/mesh.cpp"]
 # .cuh files hold device-only code: a CPU-only build does not compile them.
 EXTENSIONS = (".h", ".cpp")
 
@@ -78,7 +80,7 @@ def core_files(root):
         for name in sorted(os.listdir(os.path.join(root, d))):
             if name.endswith(EXTENSIONS):
                 files.append(f"{d}/{name}")
-    return files
+    return files + CORE_FILES
 
 
 def changed_files(root, rev):

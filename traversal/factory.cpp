@@ -32,7 +32,7 @@ void check_range(const char* name, T v, T lo, T hi) {
 
 /// The kd-tree path: kd SAH and sizes (no EPO: it is a BVH figure). `tree` is built here
 /// unless a loaded one is given.
-AccelStructure make_kdtree(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
+AccelStructure make_kdtree(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
                            accel::KdTree* loaded, const std::string& path) {
     AccelStructure b;
     b.spec = spec;
@@ -92,7 +92,7 @@ size_t bvh2_layout_bytes(const accel::BuildTree& tree) {
 }
 
 /// The CWBVH path: collapse the binary tree to 8-wide, check it, quantise.
-void convert_cwbvh(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
+void convert_cwbvh(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
                    AccelStructure& b) {
     const auto t0 = std::chrono::steady_clock::now();
     accel::WideTree w;
@@ -127,7 +127,7 @@ void convert_cwbvh(const accel::TriangleMesh& mesh, const StructureSpec& spec, c
 
 /// The BVH path after the binary tree exists (built, or loaded from `path`): validation,
 /// figures, layout.
-AccelStructure finish_bvh(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
+AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
                           AccelStructure b, const std::string& path) {
     const std::string builder = accel::builder_name(spec.kind());
     accel::ValidateOptions vo;
@@ -217,7 +217,7 @@ void StructureSpec::check() const {
     check_range("kd_max_depth", kd.max_depth, -1, 64);
 }
 
-AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {
+AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {
     spec_in.check();
     if (mesh.triangle_count() == 0) throw Error("the mesh has no triangles to build a structure over");
     StructureSpec spec = spec_in;
@@ -233,7 +233,7 @@ AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureS
     return finish_bvh(mesh, spec, stage, std::move(b), "");
 }
 
-AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
+AccelStructure structure_from_file(const scene::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
                                    const std::string& path, const StructureSpec& spec_in, const StageHook& stage) {
     const std::string stale = accel::stale_reason(file.meta, mesh.triangle_count(), scene_hash);
     if (!stale.empty()) throw Error("stale structure file '" + path + "': " + stale);
@@ -258,7 +258,7 @@ AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::s
     return finish_bvh(mesh, spec, stage, std::move(b), path);
 }
 
-AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash, const std::string& path,
+AccelStructure load_structure(const scene::TriangleMesh& mesh, const std::string& scene_hash, const std::string& path,
                               const StructureSpec& spec, const StageHook& stage) {
     accel::TreeFile f;
     {

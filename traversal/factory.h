@@ -16,9 +16,9 @@
 
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
-#include "accel/core/mesh.h"
 #include "accel/core/stats.h"
 #include "accel/io/tree_file.h"
+#include "scene/mesh.h"
 #include "traversal/gpu/device_structure.h"
 #include "traversal/gpu/gpu_tracer.h"
 #include "traversal/gpu/registry.h"
@@ -87,18 +87,18 @@ private:
 
 /// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
 /// figures (SAH, EPO, sizes), and the traversal layout.
-AccelStructure build_structure(const accel::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
+AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
 
 /// The structure of a structure file already read (`path` names it in errors and figures):
 /// its tree, validated, in the layout of `spec` (layout, collapse, cw_tris, kd_stack, epo);
 /// builder and options come from the file. Throws bvhlab::Error for a file whose triangle
 /// count or scene hash differ from the mesh's, or a layout that does not apply.
-AccelStructure structure_from_file(const accel::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
+AccelStructure structure_from_file(const scene::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
                                    const std::string& path, const StructureSpec& spec = {},
                                    const StageHook& stage = {});
 
 /// Reads a structure file and returns structure_from_file of it.
-AccelStructure load_structure(const accel::TriangleMesh& mesh, const std::string& scene_hash, const std::string& path,
+AccelStructure load_structure(const scene::TriangleMesh& mesh, const std::string& scene_hash, const std::string& path,
                               const StructureSpec& spec = {}, const StageHook& stage = {});
 
 /// The layout whose CPU traversal is the one GPU kernel `name` runs (the CPU reference behind

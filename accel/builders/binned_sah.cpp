@@ -305,7 +305,7 @@ private:
 
 }  // namespace
 
-BuildTree BinnedSahBuilder::build(const TriangleMesh& mesh) const { return build(make_prim_refs(mesh)); }
+BuildTree BinnedSahBuilder::build(const scene::TriangleMesh& mesh) const { return build(make_prim_refs(mesh)); }
 
 BuildTree BinnedSahBuilder::build(std::vector<PrimRef> refs) const {
     BVHLAB_CHECK(!refs.empty(), "cannot build a BVH over zero triangles");

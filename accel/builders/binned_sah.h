@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
 #include "accel/core/prim_ref.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -25,7 +25,7 @@ public:
     explicit BinnedSahBuilder(const Config& config) : config_(config) {}
 
     /// Builds over every triangle of `mesh`. Throws bvhlab::Error on an empty mesh or bad config.
-    BuildTree build(const TriangleMesh& mesh) const;
+    BuildTree build(const scene::TriangleMesh& mesh) const;
     /// Builds over arbitrary references (consumed). Used by tests and by later builders.
     BuildTree build(std::vector<PrimRef> refs) const;
 

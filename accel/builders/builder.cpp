@@ -26,7 +26,7 @@ int reinsertion_passes(BuilderKind kind, const BuilderOptions& options) {
     return kind == BuilderKind::kSbvh ? SbvhBuilder::Config{}.reinsertion_passes : 0;
 }
 
-BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const BuilderOptions& options) {
+BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const BuilderOptions& options) {
     BuildResult r;
     const auto t0 = std::chrono::steady_clock::now();
     if (kind == BuilderKind::kBinned) {

@@ -6,7 +6,7 @@
 
 #include "accel/builders/binned_sah.h"
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -37,6 +37,6 @@ struct BuildResult {
     double build_ms = 0.0;  ///< wall time of the builder call alone
 };
 
-BuildResult run_builder(BuilderKind kind, const TriangleMesh& mesh, const BuilderOptions& options);
+BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const BuilderOptions& options);
 
 }  // namespace bvhlab::accel

@@ -147,7 +147,7 @@ struct ThreadState {
 
 class Recursion {
 public:
-    Recursion(const KdTreeBuilder::Config& c, const TriangleMesh& mesh, int max_depth)
+    Recursion(const KdTreeBuilder::Config& c, const scene::TriangleMesh& mesh, int max_depth)
         : c_(c),
           max_depth_(max_depth),
           small_(c.small_node_size),
@@ -628,7 +628,7 @@ int KdTreeBuilder::max_depth_for(size_t n) const {
     return std::min(int(kMaxTreeDepth), int(8.0 + 1.3 * std::log2(double(std::max<size_t>(n, 1)))));
 }
 
-KdTree KdTreeBuilder::build(const TriangleMesh& mesh) const {
+KdTree KdTreeBuilder::build(const scene::TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a kd-tree over zero triangles");
     BVHLAB_CHECK(mesh.triangle_count() <= kd::kSlotMask, "too many triangles for the kd-tree builder");
     BVHLAB_CHECK(config_.traversal_cost > 0 && config_.intersection_cost > 0, "kd-tree costs must be positive");

@@ -7,10 +7,10 @@
 
 #include <string>
 
-#include "accel/core/mesh.h"
 #include "accel/core/stats.h"
 #include "accel/core/validate.h"
 #include "accel/layouts/kd_node.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -50,7 +50,7 @@ public:
     explicit KdTreeBuilder(const Config& c) : config_(c) {}
 
     /// Throws bvhlab::Error on an empty mesh or a bad config.
-    KdTree build(const TriangleMesh& mesh) const;
+    KdTree build(const scene::TriangleMesh& mesh) const;
 
     const Config& config() const { return config_; }
     /// The depth limit for n triangles.

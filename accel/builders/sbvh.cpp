@@ -47,7 +47,7 @@ AABB bounds_of(const std::vector<PrimRef>& refs) {
 
 class Recursion {
 public:
-    Recursion(const SbvhBuilder::Config& c, const TriangleMesh& mesh, float root_half_area)
+    Recursion(const SbvhBuilder::Config& c, const scene::TriangleMesh& mesh, float root_half_area)
         : c_(c), mesh_(mesh), root_area_(root_half_area) {}
 
     /// `budget`: how many more references this subtree may create; on return, what it left
@@ -240,7 +240,7 @@ private:
     }
 
     const SbvhBuilder::Config& c_;
-    const TriangleMesh& mesh_;
+    const scene::TriangleMesh& mesh_;
     const float root_area_;
 };
 
@@ -268,7 +268,7 @@ BuildTree flatten(const TNode& root) {
 
 }  // namespace
 
-BuildTree SbvhBuilder::build(const TriangleMesh& mesh) const {
+BuildTree SbvhBuilder::build(const scene::TriangleMesh& mesh) const {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot build a BVH over zero triangles");
     BVHLAB_CHECK(config_.object_bins >= 2 && config_.object_bins <= kMaxBins && config_.spatial_bins >= 2 &&
                      config_.spatial_bins <= kMaxBins,

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -34,7 +34,7 @@ public:
 
     /// Every triangle is referenced at least once; leaf bounds hold only the clipped parts.
     /// Throws bvhlab::Error on an empty mesh or a bad config.
-    BuildTree build(const TriangleMesh& mesh) const;
+    BuildTree build(const scene::TriangleMesh& mesh) const;
 
     const Config& config() const { return config_; }
 

@@ -122,7 +122,7 @@ private:
 
 }  // namespace
 
-BuildTree SweepSahBuilder::build(const TriangleMesh& mesh) const {
+BuildTree SweepSahBuilder::build(const scene::TriangleMesh& mesh) const {
     std::vector<PrimRef> refs = make_prim_refs(mesh);
     BVHLAB_CHECK(!refs.empty(), "cannot build a BVH over zero triangles");
     SparseTree sparse(refs.size());

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -19,7 +19,7 @@ public:
 
     /// O(N log N): the three centroid orders are sorted once and kept sorted by stable
     /// partitions. Throws bvhlab::Error on an empty mesh.
-    BuildTree build(const TriangleMesh& mesh) const;
+    BuildTree build(const scene::TriangleMesh& mesh) const;
 
     const Config& config() const { return config_; }
 

@@ -2,6 +2,7 @@
 // Error type and invariant checks. Library code throws bvhlab::Error; only tools/ exit.
 #pragma once
 
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -15,7 +16,17 @@ public:
     explicit Error(const std::string& what) : std::runtime_error(what) {}
 };
 
-[[noreturn]] void check_failed(const char* file, int line, const char* expr, const std::string& msg);
+/// BVHLAB_CHECK's failure path, out of line (header-only, so that the scene module, which
+/// sits below the acceleration structures, needs no library of theirs). The user sees what went
+/// wrong, never the source text or location (the error contract); BVHLAB_DEBUG=1 adds them for
+/// a bug report.
+[[noreturn]] __attribute__((noinline, cold)) inline void check_failed(const char* file, int line, const char* expr,
+                                                                      const std::string& msg) {
+    const char* debug = std::getenv("BVHLAB_DEBUG");
+    if (debug && *debug && std::string(debug) != "0")
+        throw Error(msg + " (check '" + expr + "' failed at " + file + ":" + std::to_string(line) + ")");
+    throw Error(msg);
+}
 
 }  // namespace bvhlab
 

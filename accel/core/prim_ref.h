@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "accel/core/aabb.h"
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -20,6 +20,6 @@ struct PrimRef {
 };
 
 /// One reference per triangle of `mesh`, in triangle order (parallel).
-std::vector<PrimRef> make_prim_refs(const TriangleMesh& mesh);
+std::vector<PrimRef> make_prim_refs(const scene::TriangleMesh& mesh);
 
 }  // namespace bvhlab::accel

@@ -54,7 +54,8 @@ inline AABB plane_crossings(const Vec3 (&v)[3], int axis, float pos) {
 /// vertices and its edges' crossings of the plane go to the side(s) they lie on, and each side
 /// is intersected with the reference's current bounds. O(1) per plane, unlike a full polygon
 /// clip against a box; exact up to the reference's earlier splits. Either side may be empty.
-inline void split_reference(const TriangleMesh& mesh, const PrimRef& r, int axis, float pos, AABB& left, AABB& right) {
+inline void split_reference(const scene::TriangleMesh& mesh, const PrimRef& r, int axis, float pos, AABB& left,
+                            AABB& right) {
     const Vec3 v[3] = {mesh.vertex(r.prim_id, 0), mesh.vertex(r.prim_id, 1), mesh.vertex(r.prim_id, 2)};
     left = right = plane_crossings<double>(v, axis, pos);
     for (const Vec3& p : v) {
@@ -92,7 +93,7 @@ struct SpatialBins {
     /// the box of the triangle's part between the bin's planes (its vertices there and its
     /// edges' crossings of both planes), cut to the reference's bounds. Each plane's crossings
     /// are computed once and shared by the bins on either side; the triangle is read once.
-    void add(const TriangleMesh& mesh, const PrimRef& r) {
+    void add(const scene::TriangleMesh& mesh, const PrimRef& r) {
         const int first = bin_of(r.bounds.lo[axis]), last = bin_of(r.bounds.hi[axis]);
         ++entry[first];
         ++exit[last];

@@ -33,7 +33,7 @@ std::vector<std::pair<uint32_t, uint32_t>> subtree_ranges(const BuildTree& tree)
     return range;
 }
 
-double compute_epo(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs) {
+double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs) {
     const auto range = subtree_ranges(tree);
     // CSR list of the positions at which each triangle is referenced (one per triangle for
     // object-split trees, several for spatial splits).
@@ -83,7 +83,8 @@ double compute_epo(const BuildTree& tree, const TriangleMesh& mesh, const BuildC
 
 }  // namespace
 
-TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs, bool with_epo) {
+TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs,
+                        bool with_epo) {
     BVHLAB_CHECK(!tree.empty(), "statistics of an empty tree");
     TreeStats s;
     s.nodes = tree.nodes.size();

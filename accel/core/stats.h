@@ -6,8 +6,8 @@
 #include <cstdint>
 
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
 #include "accel/layouts/kd_node.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -29,7 +29,7 @@ struct TreeStats {
 
 /// Computes every figure. EPO clips each triangle against the nodes its bounds overlap, in
 /// parallel; pass with_epo = false to skip it on huge scenes.
-TreeStats compute_stats(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& costs,
+TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs,
                         bool with_epo = true);
 
 /// Size and quality figures of a kd-tree, from one walk over it.

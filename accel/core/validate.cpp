@@ -7,7 +7,7 @@
 
 namespace bvhlab::accel {
 
-std::string validate(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& config,
+std::string validate(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& config,
                      const ValidateOptions& options) {
     if (tree.nodes.empty()) return "tree has no nodes";
     const size_t nn = tree.nodes.size();

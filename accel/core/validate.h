@@ -5,8 +5,8 @@
 #include <string>
 
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
 #include "accel/layouts/kd_node.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -20,7 +20,7 @@ struct ValidateOptions {
 /// sizes within config, depth below max_depth, leaf bounds containing their triangles, and
 /// every triangle referenced (exactly once unless duplicates are allowed). Returns an empty
 /// string when valid, otherwise the first problem found.
-std::string validate(const BuildTree& tree, const TriangleMesh& mesh, const BuildConfig& config,
+std::string validate(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& config,
                      const ValidateOptions& options = {});
 
 /// Structural check of a kd-tree, e.g. one read from a file: every node reached exactly once

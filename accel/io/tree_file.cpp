@@ -14,7 +14,7 @@
 
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "tree files need a little-endian host");
 
@@ -50,7 +50,7 @@ void write_file(const std::string& path, Header h, const std::vector<Node>& node
     uint64_t sum = fnv1a(&h, sizeof h);
     sum = fnv1a(nodes.data(), nodes.size() * sizeof(Node), sum);
     sum = fnv1a(indices.data(), indices.size() * sizeof(uint32_t), sum);
-    write_file_atomically(path, [&](std::FILE* f) {
+    scene::write_file_atomically(path, [&](std::FILE* f) {
         std::fwrite(&h, sizeof h, 1, f);
         if (!nodes.empty()) std::fwrite(nodes.data(), sizeof(Node), nodes.size(), f);
         if (!indices.empty()) std::fwrite(indices.data(), sizeof(uint32_t), indices.size(), f);

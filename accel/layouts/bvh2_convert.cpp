@@ -65,7 +65,7 @@ void set_child_box(Bvh2Node& n, int slot, const AABB& b) {
 
 }  // namespace
 
-Bvh2 convert_to_bvh2(const BuildTree& tree, const TriangleMesh& mesh) {
+Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh) {
     BVHLAB_CHECK(!tree.empty(), "cannot convert an empty BuildTree");
     Bvh2 out;
     // Interior BuildTree nodes keep their relative order; map each to its Bvh2 index.

@@ -3,13 +3,13 @@
 #pragma once
 
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
 #include "accel/layouts/bvh2_node.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
 /// Converts any BuildTree over `mesh`. A tree whose root is a leaf gets a root node with that
 /// leaf as child 0 and an empty child 1. Node 0 of the result is the root.
-Bvh2 convert_to_bvh2(const BuildTree& tree, const TriangleMesh& mesh);
+Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh);
 
 }  // namespace bvhlab::accel

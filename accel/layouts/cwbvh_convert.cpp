@@ -100,7 +100,7 @@ AABB decode_child_box(const CwbvhNode& node, uint32_t slot, double* lo, double* 
     return b;
 }
 
-Cwbvh convert_to_cwbvh(const WideTree& w, const TriangleMesh& mesh, CwTris tri_format,
+Cwbvh convert_to_cwbvh(const WideTree& w, const scene::TriangleMesh& mesh, CwTris tri_format,
                        std::vector<std::array<AABB, kWideArity>>* slot_boxes) {
     BVHLAB_CHECK(!w.nodes.empty(), "cannot convert an empty WideTree");
     Cwbvh out;

@@ -6,9 +6,9 @@
 #include <array>
 #include <vector>
 
-#include "accel/core/mesh.h"
 #include "accel/layouts/cwbvh_node.h"
 #include "accel/passes/collapse_wide.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -16,7 +16,7 @@ namespace bvhlab::accel {
 /// the traversal's scaled reciprocals can hold (more than 255 * 2^31 on an axis). With
 /// `slot_boxes`, also returns for each output node the exact box of the child in each slot
 /// (empty slots: AABB::empty()), for the conservativeness tests.
-Cwbvh convert_to_cwbvh(const WideTree& tree, const TriangleMesh& mesh, CwTris tri_format = CwTris::kWoop,
+Cwbvh convert_to_cwbvh(const WideTree& tree, const scene::TriangleMesh& mesh, CwTris tri_format = CwTris::kWoop,
                        std::vector<std::array<AABB, kWideArity>>* slot_boxes = nullptr);
 
 /// The box slot `slot` of `node` decodes to, in double precision (exact for every scene the

@@ -8,7 +8,7 @@
 
 namespace bvhlab::accel {
 
-KdLayout convert_to_kd_layout(KdTree tree, const TriangleMesh& mesh) {
+KdLayout convert_to_kd_layout(KdTree tree, const scene::TriangleMesh& mesh) {
     KdLayout out;
     out.tree = std::move(tree);
     out.tris.resize(mesh.triangle_count());

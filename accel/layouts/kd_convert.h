@@ -5,9 +5,9 @@
 
 #include <vector>
 
-#include "accel/core/mesh.h"
 #include "accel/layouts/kd_node.h"
 #include "accel/layouts/woop_tri.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -25,6 +25,6 @@ struct KdLayout {
 };
 
 /// Takes over `tree` (built over `mesh`) and adds the Woop triangles and the depth.
-KdLayout convert_to_kd_layout(KdTree tree, const TriangleMesh& mesh);
+KdLayout convert_to_kd_layout(KdTree tree, const scene::TriangleMesh& mesh);
 
 }  // namespace bvhlab::accel

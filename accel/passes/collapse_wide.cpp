@@ -17,7 +17,7 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 /// centroids along the largest axis, until no leaf is larger. New nodes go at the end, in
 /// sibling pairs, so the BuildTree invariants hold. Child boxes are the references'
 /// triangle boxes clipped to the leaf's box (an SBVH leaf's box is already clipped).
-BuildTree split_large_leaves(const BuildTree& in, const TriangleMesh& mesh) {
+BuildTree split_large_leaves(const BuildTree& in, const scene::TriangleMesh& mesh) {
     BuildTree t = in;
     std::vector<uint32_t> todo;
     for (uint32_t i = 0; i < t.nodes.size(); ++i)
@@ -243,7 +243,8 @@ private:
 
 }  // namespace
 
-WideTree collapse_to_wide(const BuildTree& tree, const TriangleMesh& mesh, CollapseMethod method, WideCost cost) {
+WideTree collapse_to_wide(const BuildTree& tree, const scene::TriangleMesh& mesh, CollapseMethod method,
+                          WideCost cost) {
     BVHLAB_CHECK(!tree.empty(), "cannot collapse an empty BuildTree");
     const BuildTree split = split_large_leaves(tree, mesh);
     return Collapser(split, method, cost).run();

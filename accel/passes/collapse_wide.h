@@ -9,7 +9,7 @@
 
 #include "accel/core/aabb.h"
 #include "accel/core/build_tree.h"
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::accel {
 
@@ -55,7 +55,8 @@ struct WideCost {
 
 /// Collapses a binary tree over `mesh` (leaves of any size: larger than 3 are first split at
 /// their centroid median). The result is at most as deep as the binary tree plus the splits.
-WideTree collapse_to_wide(const BuildTree& tree, const TriangleMesh& mesh, CollapseMethod method, WideCost cost = {});
+WideTree collapse_to_wide(const BuildTree& tree, const scene::TriangleMesh& mesh, CollapseMethod method,
+                          WideCost cost = {});
 
 struct WideStats {
     size_t nodes = 0, leaves = 0, references = 0;

@@ -6,13 +6,13 @@
 
 #include <bvhlab/accel/builders/builder.h>
 #include <bvhlab/accel/core/stats.h>
-#include <bvhlab/accel/io/procedural.h>
+#include <bvhlab/scene/io/procedural.h>
 
 using namespace bvhlab;
 
 int main() {
     try {
-        const accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kSoup, 20000, 7);
+        const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 20000, 7);
         for (accel::BuilderKind kind : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
             const accel::BuildResult r = accel::run_builder(kind, mesh, {});
             const accel::TreeStats s = accel::compute_stats(r.tree, mesh, {}, false);

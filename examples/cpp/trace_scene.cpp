@@ -9,7 +9,7 @@
 #include <vector>
 
 #include <bvhlab/accel/core/check.h>
-#include <bvhlab/accel/io/obj_loader.h>
+#include <bvhlab/scene/io/obj_loader.h>
 #include <bvhlab/traversal/factory.h>
 #include <bvhlab/traversal/oracle/compare.h>
 #include <bvhlab/traversal/oracle/embree_oracle.h>
@@ -20,7 +20,7 @@ using namespace bvhlab;
 namespace {
 
 /// Traces `set` with `tracer`, compares with Embree, prints one line; returns the real mismatches.
-size_t trace_and_check(trav::Tracer& tracer, const accel::TriangleMesh& mesh, const trav::EmbreeOracle& oracle,
+size_t trace_and_check(trav::Tracer& tracer, const scene::TriangleMesh& mesh, const trav::EmbreeOracle& oracle,
                        const trav::RaySet& set, const char* what) {
     tracer.set_rays(set.rays, set.query);
     tracer.run();  // warm-up (a GPU tracer's first launch loads the module)
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
         return 2;
     }
     try {
-        const accel::TriangleMesh mesh = accel::load_obj(argv[1]);
+        const scene::TriangleMesh mesh = scene::load_obj(argv[1]);
         trav::StructureSpec spec;
         spec.builder = argc > 2 ? argv[2] : "sbvh";
         spec.layout = argc > 3 ? argv[3] : "bvh2";

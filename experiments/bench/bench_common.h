@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/mesh.h"
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
+#include "scene/mesh.h"
 #include "traversal/rays/raygen.h"
 #include "traversal/rays/scene_catalogue.h"
 
@@ -26,7 +26,7 @@ namespace bvhlab::bench {
 
 struct BenchScene {
     std::string name;
-    std::function<accel::TriangleMesh()> load;  ///< loads on first use only
+    std::function<scene::TriangleMesh()> load;  ///< loads on first use only
     trav::Camera camera;
     bool has_camera = false;
     float ao_length = 0.0f;
@@ -38,9 +38,9 @@ inline std::vector<BenchScene> bench_scenes(bool with_procedural = true) {
     std::vector<BenchScene> out;
     if (with_procedural) {
         out.push_back(
-            {"soup-1M", [] { return accel::make_procedural(accel::ProceduralKind::kSoup, 1000000, 1); }, {}, false, 0});
+            {"soup-1M", [] { return scene::make_procedural(scene::ProceduralKind::kSoup, 1000000, 1); }, {}, false, 0});
         out.push_back({"structured-1M",
-                       [] { return accel::make_procedural(accel::ProceduralKind::kStructured, 1000000, 1); },
+                       [] { return scene::make_procedural(scene::ProceduralKind::kStructured, 1000000, 1); },
                        {},
                        false,
                        0});
@@ -50,7 +50,7 @@ inline std::vector<BenchScene> bench_scenes(bool with_procedural = true) {
     for (const trav::CatalogueEntry& e : trav::read_catalogue(dir)) {
         BenchScene s;
         s.name = e.name;
-        s.load = [file = e.file] { return accel::load_obj(file); };
+        s.load = [file = e.file] { return scene::load_obj(file); };
         s.file = e.file;
         s.has_camera = e.camera.has_value();
         if (e.camera) s.camera = *e.camera;

@@ -20,7 +20,7 @@ namespace bvhlab::bench {
 namespace {
 
 void bm_build(benchmark::State& state, accel::BuilderKind kind, int reinsertion,
-              std::shared_ptr<accel::TriangleMesh> mesh) {
+              std::shared_ptr<scene::TriangleMesh> mesh) {
     accel::BuilderOptions opts;
     opts.reinsertion_passes = reinsertion;
     accel::BuildResult last;
@@ -50,7 +50,7 @@ void bm_build(benchmark::State& state, accel::BuilderKind kind, int reinsertion,
 }
 
 /// kd-tree builds: kd SAH with the kd constants, nodes, references, bytes.
-void bm_build_kd(benchmark::State& state, std::shared_ptr<accel::TriangleMesh> mesh) {
+void bm_build_kd(benchmark::State& state, std::shared_ptr<scene::TriangleMesh> mesh) {
     accel::KdTreeBuilder builder;
     accel::KdTree last;
     for (auto _ : state) {
@@ -76,7 +76,7 @@ void bm_build_kd(benchmark::State& state, std::shared_ptr<accel::TriangleMesh> m
 /// Embree's own scene build on the same triangles (issue 21's yardstick): rtcCommitScene of one
 /// triangle geometry at RTC_BUILD_QUALITY_MEDIUM on every core, timed alone (the buffers are
 /// shared, set up outside the timed region).
-void bm_build_embree(benchmark::State& state, RTCBuildQuality quality, std::shared_ptr<accel::TriangleMesh> mesh) {
+void bm_build_embree(benchmark::State& state, RTCBuildQuality quality, std::shared_ptr<scene::TriangleMesh> mesh) {
     RTCDevice device = rtcNewDevice(nullptr);
     if (!device) {
         state.SkipWithError("rtcNewDevice failed");
@@ -114,9 +114,9 @@ int main(int argc, char** argv) {
     using namespace bvhlab;
     return bench::bench_main(argc, argv, [](const bench::BenchScene& scene) {
         // Shared, loaded lazily on first use, so filtered-out scenes cost nothing.
-        auto holder = std::make_shared<std::shared_ptr<accel::TriangleMesh>>();
+        auto holder = std::make_shared<std::shared_ptr<scene::TriangleMesh>>();
         auto mesh = [holder, load = scene.load] {
-            if (!*holder) *holder = std::make_shared<accel::TriangleMesh>(load());
+            if (!*holder) *holder = std::make_shared<scene::TriangleMesh>(load());
             return *holder;
         };
         // Every build the same protocol (a warm-up, then 3 repetitions), so that the ratios

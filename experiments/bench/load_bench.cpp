@@ -9,8 +9,8 @@
 
 #include <filesystem>
 
-#include "accel/io/scene_cache.h"
 #include "experiments/bench/bench_common.h"
+#include "scene/io/scene_cache.h"
 
 namespace {
 namespace fs = std::filesystem;
@@ -29,9 +29,9 @@ void tinyobj_parse(benchmark::State& state, const std::string& path) {
 }
 
 void bvhlab_load(benchmark::State& state, const std::string& path, const std::string& cache) {
-    if (!cache.empty()) bvhlab::accel::load_obj_cached(path, cache, "load_bench");  // the entry
+    if (!cache.empty()) bvhlab::scene::load_obj_cached(path, cache, "load_bench");  // the entry
     for (auto _ : state) {
-        const bvhlab::accel::SceneLoad l = bvhlab::accel::load_obj_cached(path, cache, "load_bench");
+        const bvhlab::scene::SceneLoad l = bvhlab::scene::load_obj_cached(path, cache, "load_bench");
         if (!cache.empty() && !l.from_cache) state.SkipWithError("the cache did not serve the load");
         state.counters["triangles"] = double(l.mesh.triangle_count());
     }
@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
     fs::create_directories(tmp);
     std::vector<std::pair<std::string, std::string>> scenes;
     const std::string soup = (tmp / "soup-1M.obj").string();
-    bvhlab::accel::write_obj(bvhlab::accel::make_procedural(bvhlab::accel::ProceduralKind::kSoup, 1000000, 1), soup);
+    bvhlab::scene::write_obj(bvhlab::scene::make_procedural(bvhlab::scene::ProceduralKind::kSoup, 1000000, 1), soup);
     scenes.push_back({"soup-1M", soup});
     for (const auto& scene : bvhlab::bench::bench_scenes(/*with_procedural=*/false))
         scenes.push_back({scene.name, scene.file});

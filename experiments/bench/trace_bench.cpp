@@ -15,7 +15,7 @@ namespace {
 
 /// Everything one scene's benchmarks share, built once on first use.
 struct Prepared {
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     accel::Bvh2 bvh;
     std::unique_ptr<trav::EmbreeOracle> oracle;
     std::vector<trav::RaySet> sets;  // indexed by RayType

@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/render_scene.h"
 #include "renderer/wavefront.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
 #include "traversal/factory.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/oracle/embree_oracle.h"
@@ -36,7 +36,7 @@ namespace {
 
 /// A scene: the mesh, its hash, and an Embree oracle built on first use.
 struct Scene {
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     std::string hash;
     std::string source;
     std::vector<std::string> warnings;
@@ -124,51 +124,51 @@ std::shared_ptr<Scene> scene_from_arrays(py::array_t<float, py::array::c_style |
     // that a triangle's id is its row, unless drop_degenerate removes some (Scene.kept).
     s->mesh.vertices.resize(nv);
     for (size_t i = 0; i < nv; ++i)
-        s->mesh.vertices[i] = accel::flush_denormals(Vec3{v[3 * i], v[3 * i + 1], v[3 * i + 2]});
+        s->mesh.vertices[i] = scene::flush_denormals(Vec3{v[3 * i], v[3 * i + 1], v[3 * i + 2]});
     for (size_t t = 0; t < nt; ++t) {
         for (int c = 0; c < 3; ++c)
             if (ix[3 * t + c] < 0 || size_t(ix[3 * t + c]) >= nv)
                 throw Error("triangle " + std::to_string(t) + " names vertex " + std::to_string(ix[3 * t + c]) +
                             ", but there are " + std::to_string(nv) + " vertices");
         const auto& V = s->mesh.vertices;
-        const accel::TriangleCheck check =
-            accel::check_triangle(V[size_t(ix[3 * t])], V[size_t(ix[3 * t + 1])], V[size_t(ix[3 * t + 2])]);
-        if (check != accel::TriangleCheck::kOk && !drop_degenerate)
+        const scene::TriangleCheck check =
+            scene::check_triangle(V[size_t(ix[3 * t])], V[size_t(ix[3 * t + 1])], V[size_t(ix[3 * t + 2])]);
+        if (check != scene::TriangleCheck::kOk && !drop_degenerate)
             throw Error("triangle " + std::to_string(t) + " has " +
-                        (check == accel::TriangleCheck::kNonFinite ? "a non-finite vertex" : "zero area") +
+                        (check == scene::TriangleCheck::kNonFinite ? "a non-finite vertex" : "zero area") +
                         " (pass drop_degenerate=True to drop such triangles; Scene.kept maps the ids)");
-        if (!accel::count_drop(check, s->mesh.dropped)) continue;
+        if (!scene::count_drop(check, s->mesh.dropped)) continue;
         for (int c = 0; c < 3; ++c) s->mesh.indices.push_back(uint32_t(ix[3 * t + c]));
         s->mesh.material_ids.push_back(-1);
         s->kept.push_back(int64_t(t));
     }
     if (s->mesh.triangle_count() == 0) throw Error("the scene has no usable triangles");
-    s->hash = accel::scene_hash(s->mesh);
+    s->hash = scene::scene_hash(s->mesh);
     s->source = "arrays";
     return s;
 }
 
 std::shared_ptr<Scene> load_scene(const std::string& path) {
     auto s = std::make_shared<Scene>();
-    s->mesh = accel::load_obj(path, &s->warnings);
+    s->mesh = scene::load_obj(path, &s->warnings);
     if (s->mesh.triangle_count() == 0) throw Error("'" + path + "' has no usable triangles");
-    s->hash = accel::scene_hash(s->mesh);
+    s->hash = scene::scene_hash(s->mesh);
     s->source = path;
     return s;
 }
 
 std::shared_ptr<Scene> generate_scene(const std::string& kind, uint64_t triangles, uint64_t seed) {
-    accel::ProceduralKind k;
+    scene::ProceduralKind k;
     if (kind == "soup")
-        k = accel::ProceduralKind::kSoup;
+        k = scene::ProceduralKind::kSoup;
     else if (kind == "structured")
-        k = accel::ProceduralKind::kStructured;
+        k = scene::ProceduralKind::kStructured;
     else
         throw Error("generated scene kind '" + kind + "' is not one of soup, structured");
     if (triangles == 0 || triangles > 100000000ull) throw Error("triangles must be in [1, 100000000]");
     auto s = std::make_shared<Scene>();
-    s->mesh = accel::make_procedural(k, triangles, seed);
-    s->hash = accel::scene_hash(s->mesh);
+    s->mesh = scene::make_procedural(k, triangles, seed);
+    s->hash = scene::scene_hash(s->mesh);
     s->source = "gen:" + kind + ":" + std::to_string(triangles) + ":" + std::to_string(seed);
     return s;
 }

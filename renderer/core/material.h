@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "accel/core/hd.h"
-#include "accel/core/mesh.h"
 #include "accel/core/vec3.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::render {
 
@@ -50,6 +50,6 @@ float roughness_from_shininess(float ns);
 /// Ka above 1 in any channel is read as Ke (tinyobjloader's Cornell box writes its light that
 /// way; no reflectance exceeds 1). Emission leaves both sides of the triangle. `texture` is the
 /// index the caller gave map_Kd, or -1.
-RenderMaterial map_material(const accel::Material& m, int32_t texture);
+RenderMaterial map_material(const scene::Material& m, int32_t texture);
 
 }  // namespace bvhlab::render

@@ -8,19 +8,19 @@
 #include "accel/core/check.h"
 #include "accel/core/stats.h"
 #include "accel/core/validate.h"
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 
 namespace bvhlab::accel {
 namespace {
 
-using Param = std::tuple<BuilderKind, ProceduralKind, uint64_t /*triangles*/, uint64_t /*seed*/>;
+using Param = std::tuple<BuilderKind, scene::ProceduralKind, uint64_t /*triangles*/, uint64_t /*seed*/>;
 
 class BuilderProperty : public ::testing::TestWithParam<Param> {};
 
 TEST_P(BuilderProperty, TreeIsValid) {
     const auto [builder, kind, n, seed] = GetParam();
-    TriangleMesh mesh = make_procedural(kind, n, seed);
+    scene::TriangleMesh mesh = scene::make_procedural(kind, n, seed);
     BuilderOptions opts;
     BuildResult r = run_builder(builder, mesh, opts);
     // validate(): every triangle exactly once, children inside parents, leaf limits, depth.
@@ -39,9 +39,9 @@ TEST(BuilderSah, HandComputedOnTwoTriangles) {
     // Two unit triangles in z = 0, ten units apart along x. Every builder must split them
     // (leaf cost 2 against 1 + 2/11), so SAH = Ct * 1 + Ci * (1/11 + 1/11): the root box has
     // half area 11 x 1, each leaf box 1 x 1 (flat in z).
-    TriangleMesh m;
-    add_triangle_checked(m, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, -1);
-    add_triangle_checked(m, {10, 0, 0}, {11, 0, 0}, {10, 1, 0}, -1);
+    scene::TriangleMesh m;
+    scene::add_triangle_checked(m, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, -1);
+    scene::add_triangle_checked(m, {10, 0, 0}, {11, 0, 0}, {10, 1, 0}, -1);
     for (BuilderKind b : {BuilderKind::kBinned, BuilderKind::kSweep, BuilderKind::kSbvh}) {
         SCOPED_TRACE(builder_name(b));
         BuilderOptions o;
@@ -53,7 +53,7 @@ TEST(BuilderSah, HandComputedOnTwoTriangles) {
 
 TEST_P(BuilderProperty, Deterministic) {
     const auto [builder, kind, n, seed] = GetParam();
-    TriangleMesh mesh = make_procedural(kind, n, seed);
+    scene::TriangleMesh mesh = scene::make_procedural(kind, n, seed);
     BuildResult a = run_builder(builder, mesh, {});
     BuildResult b = run_builder(builder, mesh, {});
     ASSERT_EQ(a.tree.nodes.size(), b.tree.nodes.size());
@@ -66,12 +66,13 @@ TEST_P(BuilderProperty, Deterministic) {
 
 INSTANTIATE_TEST_SUITE_P(Soups, BuilderProperty,
                          ::testing::Combine(::testing::Values(BuilderKind::kBinned, BuilderKind::kSweep),
-                                            ::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured),
+                                            ::testing::Values(scene::ProceduralKind::kSoup,
+                                                              scene::ProceduralKind::kStructured),
                                             ::testing::Values(1, 2, 17, 1000, 50000), ::testing::Values(1, 99)));
 
 TEST(BinnedSahBuilder, IdenticalTrianglesFallBackToMedianSplits) {
-    TriangleMesh m;
-    for (int i = 0; i < 1000; ++i) add_triangle_checked(m, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, -1);
+    scene::TriangleMesh m;
+    for (int i = 0; i < 1000; ++i) scene::add_triangle_checked(m, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, -1);
     for (BuilderKind k : {BuilderKind::kBinned, BuilderKind::kSweep}) {
         BuilderOptions o;
         BuildResult r = run_builder(k, m, o);
@@ -80,7 +81,7 @@ TEST(BinnedSahBuilder, IdenticalTrianglesFallBackToMedianSplits) {
 }
 
 TEST(BinnedSahBuilder, DepthLimitIsKept) {
-    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 20000, 3);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 20000, 3);
     BuilderOptions o;
     o.config.max_depth = 14;  // log2(20000 / 8) = 11.3, so this forces median splits
     o.config.max_leaf_size = 8;
@@ -92,7 +93,7 @@ TEST(BinnedSahBuilder, DepthLimitIsKept) {
 }
 
 TEST(BinnedSahBuilder, LeafSizeOneAndLargeLeaves) {
-    TriangleMesh m = make_procedural(ProceduralKind::kStructured, 3000, 5);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kStructured, 3000, 5);
     for (uint32_t max_leaf : {1u, 3u, 32u}) {
         BuilderOptions o;
         o.config.max_leaf_size = max_leaf;
@@ -103,16 +104,17 @@ TEST(BinnedSahBuilder, LeafSizeOneAndLargeLeaves) {
 }
 
 TEST(BinnedSahBuilder, RejectsEmptyMeshAndBadConfig) {
-    EXPECT_THROW(run_builder(BuilderKind::kBinned, TriangleMesh{}, {}), Error);
-    EXPECT_THROW(run_builder(BuilderKind::kSweep, TriangleMesh{}, {}), Error);
+    EXPECT_THROW(run_builder(BuilderKind::kBinned, scene::TriangleMesh{}, {}), Error);
+    EXPECT_THROW(run_builder(BuilderKind::kSweep, scene::TriangleMesh{}, {}), Error);
     BuilderOptions o;
     o.num_bins = 1;
-    EXPECT_THROW(run_builder(BuilderKind::kBinned, make_procedural(ProceduralKind::kSoup, 10, 1), o), Error);
+    EXPECT_THROW(run_builder(BuilderKind::kBinned, scene::make_procedural(scene::ProceduralKind::kSoup, 10, 1), o),
+                 Error);
 }
 
 TEST(BinnedSahBuilder, SahWithinThreePercentOfFullSweep) {
-    for (ProceduralKind k : {ProceduralKind::kStructured, ProceduralKind::kSoup}) {
-        TriangleMesh m = make_procedural(k, 30000, 4);
+    for (scene::ProceduralKind k : {scene::ProceduralKind::kStructured, scene::ProceduralKind::kSoup}) {
+        scene::TriangleMesh m = scene::make_procedural(k, 30000, 4);
         BuilderOptions o;
         const double binned = compute_stats(run_builder(BuilderKind::kBinned, m, o).tree, m, o.config, false).sah;
         const double sweep = compute_stats(run_builder(BuilderKind::kSweep, m, o).tree, m, o.config, false).sah;
@@ -122,7 +124,7 @@ TEST(BinnedSahBuilder, SahWithinThreePercentOfFullSweep) {
 }
 
 TEST(Validate, CatchesBrokenTrees) {
-    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 100, 1);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 100, 1);
     BuilderOptions o;
     BuildTree t = run_builder(BuilderKind::kBinned, m, o).tree;
     ASSERT_EQ(validate(t, m, o.config), "");

@@ -11,9 +11,9 @@
 
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/passes/collapse_wide.h"
+#include "scene/io/procedural.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/tracer.h"
 
@@ -22,19 +22,19 @@ namespace {
 
 struct Case {
     BuilderKind builder;
-    ProceduralKind kind;
+    scene::ProceduralKind kind;
     uint32_t max_leaf;
 };
 
 std::vector<Case> cases() {
     std::vector<Case> out;
     for (BuilderKind b : {BuilderKind::kBinned, BuilderKind::kSweep, BuilderKind::kSbvh})
-        for (ProceduralKind k : {ProceduralKind::kSoup, ProceduralKind::kStructured})
+        for (scene::ProceduralKind k : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured})
             for (uint32_t leaf : {1u, 8u, 16u}) out.push_back({b, k, leaf});
     return out;
 }
 
-BuildTree build(const TriangleMesh& mesh, BuilderKind builder, uint32_t max_leaf) {
+BuildTree build(const scene::TriangleMesh& mesh, BuilderKind builder, uint32_t max_leaf) {
     BuilderOptions o;
     o.config.max_leaf_size = max_leaf;
     return run_builder(builder, mesh, o).tree;
@@ -43,7 +43,7 @@ BuildTree build(const TriangleMesh& mesh, BuilderKind builder, uint32_t max_leaf
 TEST(Collapse, ValidTreesFromEveryBuilderAndLeafSize) {
     for (const Case& c : cases()) {
         SCOPED_TRACE(std::string(builder_name(c.builder)) + " max leaf " + std::to_string(c.max_leaf));
-        const TriangleMesh mesh = make_procedural(c.kind, 5000, 11);
+        const scene::TriangleMesh mesh = scene::make_procedural(c.kind, 5000, 11);
         const BuildTree tree = build(mesh, c.builder, c.max_leaf);
         for (CollapseMethod m : {CollapseMethod::kSahOptimal, CollapseMethod::kGreedy}) {
             const WideTree w = collapse_to_wide(tree, mesh, m);
@@ -61,7 +61,7 @@ TEST(Collapse, DynamicProgrammeIsNeverWorseThanGreedy) {
     // bounds the optimum from above; on these scenes the optimum is strictly lower.
     for (const Case& c : cases()) {
         SCOPED_TRACE(std::string(builder_name(c.builder)) + " max leaf " + std::to_string(c.max_leaf));
-        const TriangleMesh mesh = make_procedural(c.kind, 5000, 12);
+        const scene::TriangleMesh mesh = scene::make_procedural(c.kind, 5000, 12);
         const BuildTree tree = build(mesh, c.builder, c.max_leaf);
         const double dp = compute_wide_stats(collapse_to_wide(tree, mesh, CollapseMethod::kSahOptimal)).sah;
         const double greedy = compute_wide_stats(collapse_to_wide(tree, mesh, CollapseMethod::kGreedy)).sah;
@@ -73,7 +73,7 @@ TEST(Collapse, DynamicProgrammeIsNeverWorseThanGreedy) {
 TEST(Collapse, TinyMeshes) {
     for (uint64_t n : {1u, 2u, 3u, 4u, 9u, 25u}) {
         SCOPED_TRACE(n);
-        const TriangleMesh mesh = make_procedural(ProceduralKind::kSoup, n, 5);
+        const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, n, 5);
         const BuildTree tree = build(mesh, BuilderKind::kBinned, 8);
         for (CollapseMethod m : {CollapseMethod::kSahOptimal, CollapseMethod::kGreedy}) {
             const WideTree w = collapse_to_wide(tree, mesh, m);
@@ -85,7 +85,7 @@ TEST(Collapse, TinyMeshes) {
 }
 
 TEST(Collapse, ValidatorCatchesDamage) {
-    const TriangleMesh mesh = make_procedural(ProceduralKind::kSoup, 500, 2);
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 500, 2);
     const BuildTree tree = build(mesh, BuilderKind::kBinned, 4);
     const WideTree good = collapse_to_wide(tree, mesh, CollapseMethod::kSahOptimal);
     ASSERT_EQ(validate_wide(good, mesh.triangle_count(), tree.prim_indices), "");
@@ -105,16 +105,16 @@ TEST(Collapse, ValidatorCatchesDamage) {
 
 /// A random tree over a random scene: random extents (2^-12 to 2^12) and offsets of up to 300
 /// times the extent from the origin stress the quantisation's rounding.
-TriangleMesh random_scene(std::mt19937& rng) {
+scene::TriangleMesh random_scene(std::mt19937& rng) {
     std::uniform_real_distribution<float> scale_exp(-12.0f, 12.0f), offset(-300.0f, 300.0f);
     const float scale = std::exp2(scale_exp(rng));
     const Vec3 shift = Vec3{offset(rng), offset(rng), offset(rng)} * scale;
-    TriangleMesh m =
-        make_procedural(rng() % 2 ? ProceduralKind::kSoup : ProceduralKind::kStructured, 200 + rng() % 3000, rng());
+    scene::TriangleMesh m = scene::make_procedural(
+        rng() % 2 ? scene::ProceduralKind::kSoup : scene::ProceduralKind::kStructured, 200 + rng() % 3000, rng());
     for (Vec3& v : m.vertices) v = v * scale + shift;
-    TriangleMesh kept;  // drop the triangles that the shift rounded to zero area
+    scene::TriangleMesh kept;  // drop the triangles that the shift rounded to zero area
     for (size_t t = 0; t < m.triangle_count(); ++t)
-        add_triangle_checked(kept, m.vertex(t, 0), m.vertex(t, 1), m.vertex(t, 2), -1);
+        scene::add_triangle_checked(kept, m.vertex(t, 0), m.vertex(t, 1), m.vertex(t, 2), -1);
     return kept;
 }
 
@@ -122,7 +122,7 @@ TEST(Cwbvh, QuantisedBoxesContainTheExactBoxes) {
     std::mt19937 rng(2017);
     size_t slots = 0;
     for (int trial = 0; trial < 40; ++trial) {
-        const TriangleMesh mesh = random_scene(rng);
+        const scene::TriangleMesh mesh = random_scene(rng);
         const BuilderKind b = trial % 3 == 0 ? BuilderKind::kSbvh : BuilderKind::kBinned;
         const BuildTree tree = build(mesh, b, 1 + rng() % 8);
         const CollapseMethod m = trial % 2 ? CollapseMethod::kGreedy : CollapseMethod::kSahOptimal;
@@ -146,7 +146,7 @@ TEST(Cwbvh, QuantisedBoxesContainTheExactBoxes) {
 }
 
 TEST(Cwbvh, NodeEncoding) {
-    const TriangleMesh mesh = make_procedural(ProceduralKind::kStructured, 20000, 4);
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 20000, 4);
     const BuildTree tree = build(mesh, BuilderKind::kBinned, 8);
     const Cwbvh cw = convert_to_cwbvh(collapse_to_wide(tree, mesh, CollapseMethod::kSahOptimal), mesh);
     std::vector<int> reached(cw.nodes.size(), 0), tri_used(cw.tris.size(), 0);
@@ -185,7 +185,7 @@ TEST(Cwbvh, NodeEncoding) {
 
 TEST(Cwbvh, SmallerThanTheBinaryLayout) {
     // Nodes alone: one 80-byte node per ~6 children against a 64-byte node per 2.
-    const TriangleMesh mesh = make_procedural(ProceduralKind::kStructured, 20000, 9);
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 20000, 9);
     const BuildTree tree = build(mesh, BuilderKind::kBinned, 8);
     const Cwbvh cw = convert_to_cwbvh(collapse_to_wide(tree, mesh, CollapseMethod::kSahOptimal), mesh);
     size_t interior = 0;
@@ -195,7 +195,7 @@ TEST(Cwbvh, SmallerThanTheBinaryLayout) {
 
 TEST(Cwbvh, VertexTrianglesSameTreeFewerBytes) {
     // --cw-tris vertices: the same nodes and leaf order, 36 bytes per triangle instead of 48.
-    const TriangleMesh mesh = make_procedural(ProceduralKind::kSoup, 5000, 4);
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 5000, 4);
     const WideTree w = collapse_to_wide(build(mesh, BuilderKind::kBinned, 8), mesh, CollapseMethod::kSahOptimal);
     const Cwbvh woop = convert_to_cwbvh(w, mesh), vert = convert_to_cwbvh(w, mesh, CwTris::kVertices);
     ASSERT_EQ(vert.tri_format, CwTris::kVertices);
@@ -247,7 +247,7 @@ TEST(VertexTriangle, AgreesWithWoopAwayFromEdges) {
 }
 
 TEST(Cwbvh, DeeperThanTheStackIsRefused) {
-    const TriangleMesh mesh = make_procedural(ProceduralKind::kSoup, 100, 1);
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 100, 1);
     trav::Structure s;
     s.layout = trav::Layout::kCwbvh;
     s.cwbvh = convert_to_cwbvh(

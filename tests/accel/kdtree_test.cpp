@@ -9,9 +9,9 @@
 
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/kd_convert.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/kd_trace.h"
 #include "traversal/oracle/compare.h"
@@ -47,7 +47,7 @@ void for_each_leaf(const KdTree& t, F&& f) {
 
 TEST(KdTreeBuilder, EveryOverlappingTriangleIsInTheLeaf) {
     // A soup has no axis-aligned triangles, so "overlaps the cell" is unambiguous.
-    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 1500, 9);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 1500, 9);
     KdTree t = KdTreeBuilder().build(m);
     size_t leaves = 0, checked = 0;
     std::vector<uint8_t> referenced(m.triangle_count(), 0);
@@ -72,7 +72,7 @@ TEST(KdTreeBuilder, EveryOverlappingTriangleIsInTheLeaf) {
 }
 
 TEST(KdTreeBuilder, DepthLimitAndConfig) {
-    TriangleMesh m = make_procedural(ProceduralKind::kStructured, 5000, 2);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kStructured, 5000, 2);
     KdTreeBuilder::Config c;
     c.max_depth = 6;
     KdTree t = KdTreeBuilder(c).build(m);
@@ -92,7 +92,7 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
     c = {};
     c.empty_bonus = 1.0f;
     EXPECT_THROW(KdTreeBuilder(c).build(m), Error);
-    EXPECT_THROW(KdTreeBuilder().build(TriangleMesh{}), Error);
+    EXPECT_THROW(KdTreeBuilder().build(scene::TriangleMesh{}), Error);
     // A single triangle (a flat scene) becomes one leaf.
     EXPECT_EQ(KdTreeBuilder().build(test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}})).nodes.size(), 1u);
 }
@@ -103,10 +103,11 @@ TEST(KdTreeBuilder, DepthLimitAndConfig) {
 // event positions), axis-aligned (planar) triangles and random soup; the 6000-triangle soup
 // is above the size from which the root's setup runs as parallel tasks.
 TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
-    const TriangleMesh scenes[] = {
-        make_procedural(ProceduralKind::kStructured, 3000, 3), make_procedural(ProceduralKind::kSoup, 2000, 5),
-        make_procedural(ProceduralKind::kSoup, 6000, 7), load_obj(test::data_dir() + "/cornell_box.obj")};
-    for (const TriangleMesh& m : scenes) {
+    const scene::TriangleMesh scenes[] = {scene::make_procedural(scene::ProceduralKind::kStructured, 3000, 3),
+                                          scene::make_procedural(scene::ProceduralKind::kSoup, 2000, 5),
+                                          scene::make_procedural(scene::ProceduralKind::kSoup, 6000, 7),
+                                          scene::load_obj(test::data_dir() + "/cornell_box.obj")};
+    for (const scene::TriangleMesh& m : scenes) {
         KdTreeBuilder::Config c;
         // The plain algorithm: every node is a parallel task (so no counts are carried over
         // an empty-space cut) and has events (no small-node search).
@@ -142,7 +143,7 @@ TEST(KdTreeBuilder, SmallNodeSearchAndThreadingGiveTheSameTree) {
 // the parallel split at 64K triangles, so the scene is larger than that; a 16-thread arena,
 // oversubscribed on a 2-core machine, steals at least as eagerly as 16 cores.
 TEST(KdTreeBuilder, SixteenThreadsBuildTheTreeOneThreadBuilds) {
-    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 300000, 21);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 300000, 21);
     KdTreeBuilder::Config c;
     c.reuse_clipped_polygons = false;  // bit-identical trees across thread counts
     KdTree one, sixteen;
@@ -161,9 +162,9 @@ TEST(KdTreeBuilder, SixteenThreadsBuildTheTreeOneThreadBuilds) {
 // the triangle: the same size to a few nodes, the same SAH to rounding, every triangle that
 // overlaps a leaf cell in the leaf (EveryOverlappingTriangleIsInTheLeaf runs the default).
 TEST(KdTreeBuilder, KeptClippedPartsChangeTheTreeOnlyByRounding) {
-    const TriangleMesh scenes[] = {make_procedural(ProceduralKind::kSoup, 20000, 11),
-                                   make_procedural(ProceduralKind::kStructured, 8000, 12)};
-    for (const TriangleMesh& m : scenes) {
+    const scene::TriangleMesh scenes[] = {scene::make_procedural(scene::ProceduralKind::kSoup, 20000, 11),
+                                          scene::make_procedural(scene::ProceduralKind::kStructured, 8000, 12)};
+    for (const scene::TriangleMesh& m : scenes) {
         KdTreeBuilder::Config c;
         c.reuse_clipped_polygons = false;
         const KdTree exact = KdTreeBuilder(c).build(m);
@@ -182,7 +183,7 @@ TEST(KdTreeBuilder, KeptClippedPartsChangeTheTreeOnlyByRounding) {
 }
 
 TEST(KdTreeBuilder, ValidateAndStats) {
-    TriangleMesh m = make_procedural(ProceduralKind::kStructured, 4000, 6);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kStructured, 4000, 6);
     KdTree t = KdTreeBuilder().build(m);
     EXPECT_EQ(validate_kd(t, m.triangle_count()), "");
     const KdTreeStats s =
@@ -213,10 +214,10 @@ TEST(KdTreeBuilder, ValidateAndStats) {
     EXPECT_NE(validate_kd(bad_split, m.triangle_count()), "");
 }
 
-class KdTraversal : public ::testing::TestWithParam<ProceduralKind> {};
+class KdTraversal : public ::testing::TestWithParam<scene::ProceduralKind> {};
 
 TEST_P(KdTraversal, ShortStackEqualsFullStackAndEmbree) {
-    TriangleMesh m = make_procedural(GetParam(), 30000, 4);
+    scene::TriangleMesh m = scene::make_procedural(GetParam(), 30000, 4);
     KdTree t = KdTreeBuilder().build(m);
     trav::EmbreeOracle oracle(m);
     trav::ProtocolConfig pc;
@@ -244,10 +245,11 @@ TEST_P(KdTraversal, ShortStackEqualsFullStackAndEmbree) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, KdTraversal, ::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured));
+INSTANTIATE_TEST_SUITE_P(Scenes, KdTraversal,
+                         ::testing::Values(scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured));
 
 TEST(KdTraversal, CornellBoxAgreesWithEmbree) {
-    TriangleMesh m = load_obj(test::data_dir() + "/cornell_box.obj");
+    scene::TriangleMesh m = scene::load_obj(test::data_dir() + "/cornell_box.obj");
     trav::EmbreeOracle oracle(m);
     trav::ProtocolConfig pc;
     pc.camera.eye = {278, 273, -800};

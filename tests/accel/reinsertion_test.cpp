@@ -14,7 +14,7 @@
 #include "accel/core/check.h"
 #include "accel/core/stats.h"
 #include "accel/core/validate.h"
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 
 namespace bvhlab::accel {
 namespace {
@@ -61,11 +61,11 @@ bool same_tree(const BuildTree& a, const BuildTree& b) {
 
 }  // namespace
 
-class ReinsertionProperty : public ::testing::TestWithParam<std::tuple<ProceduralKind, BuilderKind>> {};
+class ReinsertionProperty : public ::testing::TestWithParam<std::tuple<scene::ProceduralKind, BuilderKind>> {};
 
 TEST_P(ReinsertionProperty, SameLeavesLowerSahValidTree) {
     const auto [kind, builder] = GetParam();
-    const TriangleMesh m = make_procedural(kind, 20000, 3);
+    const scene::TriangleMesh m = scene::make_procedural(kind, 20000, 3);
     BuilderOptions o;
     o.reinsertion_passes = 0;
     BuildTree t = run_builder(builder, m, o).tree;
@@ -87,13 +87,13 @@ TEST_P(ReinsertionProperty, SameLeavesLowerSahValidTree) {
                 1e-3 * s0.sah);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, ReinsertionProperty,
-                         ::testing::Combine(::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured),
-                                            ::testing::Values(BuilderKind::kBinned, BuilderKind::kSweep,
-                                                              BuilderKind::kSbvh)));
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, ReinsertionProperty,
+    ::testing::Combine(::testing::Values(scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured),
+                       ::testing::Values(BuilderKind::kBinned, BuilderKind::kSweep, BuilderKind::kSbvh)));
 
 TEST(ReinsertionOptimizer, RespectsTheDepthLimit) {
-    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 20000, 4);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 20000, 4);
     BuilderOptions o;
     o.reinsertion_passes = 0;
     BuildTree t = run_builder(BuilderKind::kBinned, m, o).tree;
@@ -116,7 +116,7 @@ TEST(ReinsertionOptimizer, RespectsTheDepthLimit) {
 // the limit one above the built depth, give a tree that validate() accepts (the unlimited
 // passes above deepen it by one, which the limit must refuse).
 TEST(ReinsertionOptimizer, RunBuilderKeepsTheConfiguredDepthLimit) {
-    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 20000, 4);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 20000, 4);
     BuilderOptions o;
     o.reinsertion_passes = 0;
     const uint32_t built = depth_of(run_builder(BuilderKind::kBinned, m, o).tree);
@@ -128,7 +128,7 @@ TEST(ReinsertionOptimizer, RunBuilderKeepsTheConfiguredDepthLimit) {
 }
 
 TEST(ReinsertionOptimizer, SameTreeWithAnyThreadCount) {
-    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 30000, 5);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 30000, 5);
     BuilderOptions o;
     o.reinsertion_passes = 0;
     const BuildTree built = run_builder(BuilderKind::kBinned, m, o).tree;
@@ -146,7 +146,7 @@ TEST(ReinsertionOptimizer, SameTreeWithAnyThreadCount) {
 }
 
 TEST(ReinsertionOptimizer, DefaultsAndBadConfig) {
-    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 500, 6);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 500, 6);
     EXPECT_EQ(reinsertion_passes(BuilderKind::kSbvh, {}), 3);
     EXPECT_EQ(reinsertion_passes(BuilderKind::kBinned, {}), 0);
     EXPECT_EQ(reinsertion_passes(BuilderKind::kSweep, {}), 0);
@@ -161,7 +161,8 @@ TEST(ReinsertionOptimizer, DefaultsAndBadConfig) {
     c.subtree_nodes = 4;
     EXPECT_THROW(ReinsertionOptimizer(c).optimize(t), Error);
     // A single leaf or a three-node tree has nothing to move.
-    BuildTree tiny = run_builder(BuilderKind::kBinned, make_procedural(ProceduralKind::kSoup, 1, 1), o).tree;
+    BuildTree tiny =
+        run_builder(BuilderKind::kBinned, scene::make_procedural(scene::ProceduralKind::kSoup, 1, 1), o).tree;
     EXPECT_EQ(optimize_by_reinsertion(tiny, o.config, 3).moves, 0u);
 }
 

@@ -17,7 +17,7 @@
 #include "accel/core/clip.h"
 #include "accel/core/stats.h"
 #include "accel/core/validate.h"
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 #include "tests/support/edge_rays.h"
 
 namespace bvhlab::accel {
@@ -25,23 +25,23 @@ namespace {
 
 /// Long thin triangles that all pass through the centre in random directions (a "star"):
 /// no object split can separate them, spatial splits can.
-TriangleMesh star_slivers(int n, uint32_t seed) {
+scene::TriangleMesh star_slivers(int n, uint32_t seed) {
     std::mt19937 rng(seed);
     std::normal_distribution<float> g(0.0f, 1.0f);
-    TriangleMesh m;
+    scene::TriangleMesh m;
     const Vec3 c{0.5f, 0.5f, 0.5f};
     for (int i = 0; i < n; ++i) {
         Vec3 d{g(rng), g(rng), g(rng)};
         d = d * (0.5f / length(d));
         Vec3 e = cross(d, Vec3{0.3f, 0.7f, 0.1f});
         e = e * (0.002f / length(e));
-        add_triangle_checked(m, c - d, c + d, c + d + e, -1);
+        scene::add_triangle_checked(m, c - d, c + d, c + d + e, -1);
     }
     return m;
 }
 
 /// Every triangle's area is covered by the clipped parts in the leaves that reference it.
-void expect_full_coverage(const BuildTree& t, const TriangleMesh& m) {
+void expect_full_coverage(const BuildTree& t, const scene::TriangleMesh& m) {
     std::vector<double> covered(m.triangle_count(), 0.0);
     for (const BuildNode& n : t.nodes) {
         if (!n.is_leaf()) continue;
@@ -59,11 +59,11 @@ void expect_full_coverage(const BuildTree& t, const TriangleMesh& m) {
 
 }  // namespace
 
-class SbvhProperty : public ::testing::TestWithParam<std::tuple<ProceduralKind, uint64_t>> {};
+class SbvhProperty : public ::testing::TestWithParam<std::tuple<scene::ProceduralKind, uint64_t>> {};
 
 TEST_P(SbvhProperty, ValidAndCovering) {
     const auto [kind, n] = GetParam();
-    TriangleMesh m = make_procedural(kind, n, 13);
+    scene::TriangleMesh m = scene::make_procedural(kind, n, 13);
     SbvhBuilder::Config c;
     BuildTree t = SbvhBuilder(c).build(m);
     ValidateOptions vo;
@@ -76,7 +76,8 @@ TEST_P(SbvhProperty, ValidAndCovering) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, SbvhProperty,
-                         ::testing::Combine(::testing::Values(ProceduralKind::kSoup, ProceduralKind::kStructured),
+                         ::testing::Combine(::testing::Values(scene::ProceduralKind::kSoup,
+                                                              scene::ProceduralKind::kStructured),
                                             ::testing::Values(1, 7, 500, 20000)));
 
 TEST(SbvhBuilder, LeafBoxesHoldEveryEdgeCrossingExactly) {
@@ -84,7 +85,8 @@ TEST(SbvhBuilder, LeafBoxesHoldEveryEdgeCrossingExactly) {
     // crossing (in double precision) lies in one of those leaf boxes: spatial splits round the
     // clipped bounds outwards. Rounded to nearest, they miss crossings by up to half an ulp,
     // which the traversal's slab widening happens to absorb; the boxes must not rely on it.
-    for (const TriangleMesh& m : {test::make_lattice_scene(1), test::make_lattice_scene(2), star_slivers(300, 5)}) {
+    for (const scene::TriangleMesh& m :
+         {test::make_lattice_scene(1), test::make_lattice_scene(2), star_slivers(300, 5)}) {
         const BuildTree t = run_builder(BuilderKind::kSbvh, m, {}).tree;
         std::vector<std::vector<AABB>> boxes(m.triangle_count());
         for (const BuildNode& n : t.nodes)
@@ -126,7 +128,7 @@ TEST(SbvhBuilder, LeafBoxesHoldEveryEdgeCrossingExactly) {
 }
 
 TEST(SbvhBuilder, SplitsLongThinTriangles) {
-    TriangleMesh m = star_slivers(3000, 5);
+    scene::TriangleMesh m = star_slivers(3000, 5);
     BuilderOptions o;
     const BuildTree sbvh = run_builder(BuilderKind::kSbvh, m, o).tree;
     const BuildTree sweep = run_builder(BuilderKind::kSweep, m, o).tree;
@@ -138,7 +140,7 @@ TEST(SbvhBuilder, SplitsLongThinTriangles) {
 }
 
 TEST(SbvhBuilder, BudgetOfOneMeansNoDuplicates) {
-    TriangleMesh m = star_slivers(2000, 6);
+    scene::TriangleMesh m = star_slivers(2000, 6);
     SbvhBuilder::Config c;
     c.reference_budget = 1.0f;
     BuildTree t = SbvhBuilder(c).build(m);
@@ -149,7 +151,7 @@ TEST(SbvhBuilder, BudgetOfOneMeansNoDuplicates) {
 // When the budget runs out, which references get split must not depend on which thread got
 // there first: the same tree with 1 or 2 threads, run after run.
 TEST(SbvhBuilder, BindingBudgetIsDeterministic) {
-    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 60000, 8);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 60000, 8);
     SbvhBuilder::Config c;
     c.reference_budget = 1.02f;
     c.alpha = 0.0f;  // spatial splits wanted everywhere, so the budget binds
@@ -185,8 +187,8 @@ TEST(SbvhBuilder, BindingBudgetIsDeterministic) {
 // The spatial margin drops the marginal spatial splits that a finely tessellated surface
 // offers everywhere, and keeps the ones long thin triangles need.
 TEST(SbvhBuilder, SpatialMarginDropsMarginalSplits) {
-    const TriangleMesh surface = make_procedural(ProceduralKind::kStructured, 40000, 9);
-    const TriangleMesh star = star_slivers(3000, 9);
+    const scene::TriangleMesh surface = scene::make_procedural(scene::ProceduralKind::kStructured, 40000, 9);
+    const scene::TriangleMesh star = star_slivers(3000, 9);
     SbvhBuilder::Config c;
     c.reinsertion_passes = 0;
     c.spatial_margin = 0.0f;
@@ -203,21 +205,21 @@ TEST(SbvhBuilder, SpatialMarginDropsMarginalSplits) {
 }
 
 TEST(SbvhBuilder, HugeAlphaDisablesSpatialSplits) {
-    TriangleMesh m = star_slivers(2000, 7);
+    scene::TriangleMesh m = star_slivers(2000, 7);
     SbvhBuilder::Config c;
     c.alpha = 1e9f;
     EXPECT_EQ(SbvhBuilder(c).build(m).prim_indices.size(), m.triangle_count());
 }
 
 TEST(SbvhBuilder, RejectsBadConfig) {
-    TriangleMesh m = star_slivers(10, 1);
+    scene::TriangleMesh m = star_slivers(10, 1);
     SbvhBuilder::Config c;
     c.reference_budget = 0.5f;
     EXPECT_THROW(SbvhBuilder(c).build(m), Error);
     c = {};
     c.spatial_bins = 1;
     EXPECT_THROW(SbvhBuilder(c).build(m), Error);
-    EXPECT_THROW(SbvhBuilder().build(TriangleMesh{}), Error);
+    EXPECT_THROW(SbvhBuilder().build(scene::TriangleMesh{}), Error);
 }
 
 }  // namespace bvhlab::accel

@@ -6,7 +6,7 @@
 #include "accel/builders/builder.h"
 #include "accel/core/clip.h"
 #include "accel/core/stats.h"
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 
 namespace bvhlab::accel {
@@ -70,7 +70,7 @@ TEST(ClipTriangle, SplitPolygonAgainMatchesClippingAnew) {
 
 TEST(TreeStats, SahOfHandBuiltTree) {
     // Two unit triangles far apart on x; root over both, one leaf each.
-    TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}, {9, 0, 0, 10, 0, 0, 9, 1, 0}});
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}, {9, 0, 0, 10, 0, 0, 9, 1, 0}});
     BuildTree t;
     t.prim_indices = {0, 1};
     t.nodes = {{{{0, 0, 0}, {10, 1, 0}}, 1, 0}, {m.triangle_bounds(0), 0, 1}, {m.triangle_bounds(1), 1, 1}};
@@ -87,7 +87,7 @@ TEST(TreeStats, SahOfHandBuiltTree) {
 TEST(TreeStats, EpoCountsOverlap) {
     // Triangle 1 crosses leaf 0's box, which does not contain it: its part inside that box
     // counts once (Ci = 1) against the total area.
-    TriangleMesh m = test::mesh_of({{0, 0, 0, 2, 0, 0, 0, 2, 0}, {1, -1, 0, 3, -1, 0, 1, 1, 0}});
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 2, 0, 0, 0, 2, 0}, {1, -1, 0, 3, -1, 0, 1, 1, 0}});
     BuildTree t;
     t.prim_indices = {0, 1};
     AABB root = merge(m.triangle_bounds(0), m.triangle_bounds(1));
@@ -103,7 +103,7 @@ TEST(TreeStats, EpoCountsOverlap) {
 // EPO and SAH summed over many triangles in parallel (TBB joins partial sums of stolen ranges)
 // equal the same figures computed on one thread.
 TEST(TreeStats, ParallelFiguresEqualOneThreadsFigures) {
-    const TriangleMesh m = make_procedural(ProceduralKind::kSoup, 30000, 9);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 30000, 9);
     const BuildTree t = run_builder(BuilderKind::kBinned, m, {}).tree;
     const BuildConfig c;
     TreeStats serial;

@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "accel/core/check.h"
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 
 namespace bvhlab::accel {
@@ -24,7 +24,7 @@ void expect_read_error(const std::string& path, const std::string& what) {
 }
 
 struct Fixture {
-    TriangleMesh mesh = make_procedural(ProceduralKind::kStructured, 2000, 3);
+    scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 2000, 3);
     TreeFileMeta meta;
     BuildTree tree;
     Fixture() {
@@ -32,7 +32,7 @@ struct Fixture {
         meta.options.sbvh_budget = 1.5f;
         meta.options.config.max_leaf_size = 4;
         meta.triangles = mesh.triangle_count();
-        meta.scene_hash = scene_hash(mesh);
+        meta.scene_hash = scene::scene_hash(mesh);
         tree = run_builder(meta.builder, mesh, meta.options).tree;
     }
 };
@@ -50,13 +50,14 @@ TEST(TreeFile, RoundTripKeepsTreeAndProvenance) {
     EXPECT_EQ(r.meta.builder, BuilderKind::kSbvh);
     EXPECT_EQ(r.meta.scene_hash, fx.meta.scene_hash);
     EXPECT_EQ(describe_config(r.meta.builder, r.meta.options), describe_config(fx.meta.builder, fx.meta.options));
-    EXPECT_EQ(stale_reason(r.meta, fx.mesh.triangle_count(), scene_hash(fx.mesh)), "");
+    EXPECT_EQ(stale_reason(r.meta, fx.mesh.triangle_count(), scene::scene_hash(fx.mesh)), "");
 }
 
 TEST(TreeFile, StaleWhenTrianglesDiffer) {
     Fixture fx;
-    TriangleMesh other = make_procedural(ProceduralKind::kStructured, 2000, 4);  // same count, other seed
-    EXPECT_NE(stale_reason(fx.meta, other.triangle_count(), scene_hash(other)), "");
+    scene::TriangleMesh other =
+        scene::make_procedural(scene::ProceduralKind::kStructured, 2000, 4);  // same count, other seed
+    EXPECT_NE(stale_reason(fx.meta, other.triangle_count(), scene::scene_hash(other)), "");
     EXPECT_NE(stale_reason(fx.meta, 1999, fx.meta.scene_hash), "");
 }
 
@@ -100,7 +101,7 @@ TEST(TreeFile, DamagedFiles) {
 }
 
 TEST(TreeFile, KdTreeRoundTripAndCorruption) {
-    TriangleMesh m = make_procedural(ProceduralKind::kSoup, 3000, 8);
+    scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 3000, 8);
     KdTreeBuilder::Config c;
     c.empty_bonus = 0.3f;
     KdTree kd = KdTreeBuilder(c).build(m);
@@ -108,7 +109,7 @@ TEST(TreeFile, KdTreeRoundTripAndCorruption) {
     meta.kdtree = true;
     meta.kd = c;
     meta.triangles = m.triangle_count();
-    meta.scene_hash = scene_hash(m);
+    meta.scene_hash = scene::scene_hash(m);
     test::TempFile f("kd.tree");
     write_kd_file(f.path(), kd, meta);
     TreeFile r = read_tree_file(f.path());

@@ -24,7 +24,7 @@ Counts compare_random(std::mt19937& rng, float sliver, int triangles, int rays_p
         // v2 lies near the line v0-v1 when sliver is small: a near-degenerate triangle.
         Vec3 mid = (v0 + v1) * 0.5f;
         Vec3 v2 = mid + Vec3{u(rng), u(rng), u(rng)} * sliver;
-        if (accel::check_triangle(v0, v1, v2) != accel::TriangleCheck::kOk) continue;
+        if (scene::check_triangle(v0, v1, v2) != scene::TriangleCheck::kOk) continue;
         const accel::WoopTriangle w = accel::make_woop_triangle(v0, v1, v2);
         for (int r = 0; r < rays_per_tri; ++r) {
             // Aim at a point with barycentrics slightly outside [0,1] too.

@@ -205,7 +205,7 @@ TEST(AliasTable, PicksInProportionToWeight) {
 }
 
 TEST(Materials, MtlMappingFollowsTheDocumentedTable) {
-    accel::Material m;
+    scene::Material m;
     m.diffuse = {0.5f, 0.5f, 0.5f};
     EXPECT_EQ(map_material(m, -1).type, BsdfType::kLambert);
     m.illum = 2;
@@ -229,12 +229,12 @@ TEST(Materials, MtlMappingFollowsTheDocumentedTable) {
     m.dissolve = 0.5f;
     EXPECT_EQ(map_material(m, -1).type, BsdfType::kGlass);
     // Ke makes a light; Ka above 1 does only when Ke is black.
-    accel::Material l;
+    scene::Material l;
     l.ambient = {20.0f, 20.0f, 20.0f};
     EXPECT_NEAR(map_material(l, -1).emission.x, 20.0f, 0.0f);
     l.emission = {1.0f, 2.0f, 3.0f};
     EXPECT_NEAR(map_material(l, -1).emission.x, 1.0f, 0.0f);
-    accel::Material ambient_only;
+    scene::Material ambient_only;
     ambient_only.ambient = {0.2f, 0.2f, 0.2f};
     EXPECT_EQ(max3(map_material(ambient_only, -1).emission), 0.0f);
     EXPECT_NEAR(roughness_from_shininess(0.0f), 1.0f, 0.0f);

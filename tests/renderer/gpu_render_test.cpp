@@ -9,11 +9,11 @@
 #include <filesystem>
 
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
 #include "renderer/compare.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
 #include "renderer/testing.h"
+#include "scene/io/obj_loader.h"
 #include "tests/support/gpu_support.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -27,7 +27,7 @@ namespace {
 
 struct Scene {
     std::string name;
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     trav::Camera camera;
 };
 
@@ -40,7 +40,7 @@ std::vector<Scene> scenes(bool with_benchmarks) {
         for (auto& e : trav::read_catalogue(test::scenes_dir()))
             if (e.name != "cornell-box") entries.push_back(e);
     for (const auto& e : entries) {
-        Scene s{e.name, accel::load_obj(e.file), {}};
+        Scene s{e.name, scene::load_obj(e.file), {}};
         s.camera = e.camera ? *e.camera : trav::framing_camera(s.mesh);
         out.push_back(std::move(s));
     }
@@ -216,7 +216,7 @@ TEST(GpuRender, TexturesAgreeWithTheCpu) {
     s.mesh.indices = {0, 1, 2, 0, 2, 3};
     s.mesh.texcoords = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
     s.mesh.material_ids = {0, 0};
-    accel::Material m;
+    scene::Material m;
     m.name = "striped";
     m.diffuse_texture = tex.path();
     s.mesh.materials = {m};

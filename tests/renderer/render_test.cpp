@@ -9,11 +9,11 @@
 #include <map>
 
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
 #include "renderer/compare.h"
 #include "renderer/image.h"
 #include "renderer/testing.h"
 #include "renderer/wavefront.h"
+#include "scene/io/obj_loader.h"
 #include "tests/support/test_support.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/ray_file.h"
@@ -27,8 +27,8 @@ namespace bvhlab::render {
 namespace {
 
 /// A closed icosphere of radius 1 at the origin, subdivided `levels` times, one material.
-accel::TriangleMesh icosphere(int levels, const accel::Material& material) {
-    accel::TriangleMesh m;
+scene::TriangleMesh icosphere(int levels, const scene::Material& material) {
+    scene::TriangleMesh m;
     const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
     std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
@@ -61,11 +61,11 @@ accel::TriangleMesh icosphere(int levels, const accel::Material& material) {
 }
 
 struct SceneSetup {
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     trav::Camera cam;
 };
 
-RenderResult render(const accel::TriangleMesh& mesh, const trav::Camera& cam, uint32_t size, RenderSettings rs,
+RenderResult render(const scene::TriangleMesh& mesh, const trav::Camera& cam, uint32_t size, RenderSettings rs,
                     SkyOption sky = {}) {
     RenderScene scene(mesh, sky);
     trav::EmbreeOracle oracle(mesh);
@@ -106,14 +106,14 @@ TEST(Furnace, DiffuseGlassAndSmoothConductorReturnTheSky) {
     RenderSettings rs;
     rs.spp = 64;
     rs.max_depth = 64;
-    accel::Material white;
+    scene::Material white;
     white.diffuse = splat(1.0f);
     expect_furnace(render(icosphere(3, white), sphere_camera(), 32, rs, sky), 0.5f, "lambertian");
-    accel::Material glass = white;
+    scene::Material glass = white;
     glass.illum = 7;
     glass.ior = 1.5f;
     expect_furnace(render(icosphere(3, glass), sphere_camera(), 32, rs, sky), 0.5f, "glass");
-    accel::Material metal;
+    scene::Material metal;
     metal.illum = 3;
     metal.specular = splat(1.0f);
     metal.shininess = 400.0f;  // alpha 0.07
@@ -141,7 +141,7 @@ TEST(Furnace, ConstantEnvironmentMapReturnsItsRadiance) {
     sky.env_file = write_env(env, 0.5f, 0.5f);
     RenderSettings rs;
     rs.spp = 64;
-    accel::Material white;
+    scene::Material white;
     white.diffuse = splat(1.0f);
     expect_furnace(render(icosphere(3, white), sphere_camera(), 32, rs, sky), 0.5f, "lambertian, map");
     sky.env_scale = 2.0f;
@@ -154,8 +154,8 @@ TEST(Environment, ImportanceSamplingMatchesItsDensity) {
     test::TempFile env("spot_env.pfm");
     SkyOption sky;
     sky.env_file = write_env(env, 0.1f, 50.0f);
-    accel::Material grey;
-    const accel::TriangleMesh mesh = icosphere(0, grey);
+    scene::Material grey;
+    const scene::TriangleMesh mesh = icosphere(0, grey);
     const RenderScene scene(mesh, sky);
     const EnvView e = scene.view().lights.env;
     ASSERT_TRUE(e.present());
@@ -192,9 +192,9 @@ TEST(Estimators, EnvironmentMapStrategiesAgree) {
     test::TempFile env("spot_env2.pfm");
     SkyOption sky;
     sky.env_file = write_env(env, 0.2f, 20.0f);
-    accel::Material grey;
+    scene::Material grey;
     grey.diffuse = splat(0.7f);
-    const accel::TriangleMesh mesh = icosphere(2, grey);
+    const scene::TriangleMesh mesh = icosphere(2, grey);
     RenderSettings rs;
     rs.spp = 256;
     const RenderResult mis = render(mesh, sphere_camera(), 24, rs, sky);
@@ -216,7 +216,7 @@ TEST(Furnace, CatchesAMissingCosine) {
     RenderSettings rs;
     rs.spp = 32;
     const testing::ScopedPlantedBug bug(PlantedBug::kNoCosine);
-    accel::Material white;
+    scene::Material white;
     white.diffuse = splat(1.0f);
     const RenderResult r = render(icosphere(3, white), sphere_camera(), 32, rs, sky);
     double sum = 0.0;
@@ -226,7 +226,7 @@ TEST(Furnace, CatchesAMissingCosine) {
 
 SceneSetup cornell() {
     SceneSetup s;
-    s.mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    s.mesh = scene::load_obj(test::data_dir() + "/cornell_box.obj");
     for (const auto& e : trav::read_catalogue(test::data_dir()))
         if (e.name == "cornell-box" && e.camera) s.cam = *e.camera;
     return s;
@@ -380,7 +380,7 @@ TEST(Render, FirstHitCacheReusesTheCameraRaysHits) {
 
 // A sky-lit scene with no emitters gets the white sky; one with emitters a black sky.
 TEST(Render, DefaultSkyRule) {
-    accel::Material grey;
+    scene::Material grey;
     const RenderScene plain(icosphere(0, grey), {});
     EXPECT_EQ(plain.sky().x, 1.0f);
     EXPECT_NE(plain.lighting().find("white sky"), std::string::npos);
@@ -389,7 +389,7 @@ TEST(Render, DefaultSkyRule) {
     EXPECT_EQ(lit.sky().x, 0.0f);
     EXPECT_EQ(lit.light_tris().size(), 2u);
     EXPECT_NE(lit.lighting().find("black sky"), std::string::npos);
-    accel::TriangleMesh empty;
+    scene::TriangleMesh empty;
     EXPECT_THROW(RenderScene(empty, {}), Error);
 }
 

@@ -7,9 +7,9 @@
 #include <fstream>
 
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
 #include "renderer/image.h"
 #include "renderer/wavefront.h"
+#include "scene/io/obj_loader.h"
 #include "traversal/oracle/embree_oracle.h"
 
 namespace bvhlab::render {
@@ -68,7 +68,7 @@ struct TexturedQuad {
             obj << "usemtl a\nf 1 2 3\nusemtl b\nf 1 3 4\n";
     }
     ~TexturedQuad() { fs::remove_all(dir); }
-    accel::TriangleMesh mesh() const { return accel::load_obj((dir / "quad.obj").string()); }
+    scene::TriangleMesh mesh() const { return scene::load_obj((dir / "quad.obj").string()); }
 };
 
 /// 4 x 1 texels: red, red, green, green (so u in [1/8, 3/8] is pure red, [5/8, 7/8] pure green).
@@ -97,7 +97,7 @@ RenderResult render_quad(const RenderScene& scene, uint32_t spp) {
 TEST(Texture, TexturedQuadShowsTheTextureUnderTheSky) {
     TexturedQuad q("maps\\stripes.pfm");  // written the Windows way
     write_stripes(q.dir / "maps" / "stripes.pfm");
-    const accel::TriangleMesh mesh = q.mesh();
+    const scene::TriangleMesh mesh = q.mesh();
     std::vector<std::string> warnings;
     TextureOptions opts{q.dir.string(), false, &warnings};
     const RenderScene scene(mesh, {}, opts);
@@ -120,7 +120,7 @@ TEST(Texture, TexturedQuadShowsTheTextureUnderTheSky) {
 
 TEST(Texture, MissingTextureIsAnErrorOrAWarningWithKd) {
     TexturedQuad q("maps\\absent.png");
-    const accel::TriangleMesh mesh = q.mesh();
+    const scene::TriangleMesh mesh = q.mesh();
     try {
         RenderScene scene(mesh, {}, {q.dir.string(), false, nullptr});
         FAIL() << "a missing texture must be an error";
@@ -140,12 +140,12 @@ TEST(Texture, UnreadableTextureIsAnErrorAndNoTexcoordsAWarning) {
     {
         TexturedQuad q("maps/broken.pfm");
         std::ofstream(q.dir / "maps" / "broken.pfm") << "PF\n2 2\n-1\nshort";
-        const accel::TriangleMesh mesh = q.mesh();
+        const scene::TriangleMesh mesh = q.mesh();
         EXPECT_THROW(RenderScene(mesh, {}, {q.dir.string(), true, nullptr}), Error);
     }
     TexturedQuad q("maps/stripes.pfm", /*with_texcoords=*/false);
     write_stripes(q.dir / "maps" / "stripes.pfm");
-    const accel::TriangleMesh mesh = q.mesh();
+    const scene::TriangleMesh mesh = q.mesh();
     std::vector<std::string> warnings;
     const RenderScene scene(mesh, {}, {q.dir.string(), false, &warnings});
     ASSERT_EQ(warnings.size(), 1u);

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 #include "traversal/rays/raygen.h"
 
 namespace bvhlab::test {
@@ -39,7 +39,7 @@ struct AdversarialConfig {
 
 struct AdversarialScene {
     std::string name;
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     trav::Camera camera;
     float ao_length = 1.0f;
     /// The share of a ray set that may be ties excusing float error (shared edge, near edge,
@@ -68,7 +68,7 @@ public:
         for (; k < 0; ++k) f = std::nextafter(f, -INFINITY);
         return f;
     }
-    void tri(Vec3 a, Vec3 b, Vec3 c) { accel::add_triangle_checked(mesh_, a, b, c, -1); }
+    void tri(Vec3 a, Vec3 b, Vec3 c) { scene::add_triangle_checked(mesh_, a, b, c, -1); }
     void quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
         tri(a, b, c);
         tri(a, c, d);
@@ -109,7 +109,7 @@ public:
                      corner[size_t((i + 1) * (m + 1) + j + 1)], corner[size_t(i * (m + 1) + j + 1)]);
     }
 
-    accel::TriangleMesh build() {
+    scene::TriangleMesh build() {
         std::uniform_real_distribution<double> r01(0.0, 1.0);
         const int g = c_.grid;
         const double tile = 10.0 / g;
@@ -173,7 +173,7 @@ public:
 private:
     AdversarialConfig c_;
     std::mt19937_64 rng_;
-    accel::TriangleMesh mesh_;
+    scene::TriangleMesh mesh_;
 };
 
 }  // namespace detail

@@ -21,7 +21,7 @@ struct BvhVariant {
     std::string name() const {
         return std::string(accel::builder_name(kind)) + (reinsertion == 0 ? " without reinsertion" : "");
     }
-    accel::BuildTree build(const accel::TriangleMesh& mesh) const {
+    accel::BuildTree build(const scene::TriangleMesh& mesh) const {
         accel::BuilderOptions opts;
         opts.reinsertion_passes = reinsertion;
         return accel::run_builder(kind, mesh, opts).tree;
@@ -38,7 +38,7 @@ inline std::vector<BvhVariant> bvh_variants() {
 
 /// Compares `ours` with `reference` (Embree's hits of the same rays) and expects 0 real
 /// mismatches, printing the first ones with their rays. Returns the report (ties by kind).
-inline trav::CompareReport expect_no_real_mismatch(const accel::TriangleMesh& mesh, const trav::EmbreeOracle& oracle,
+inline trav::CompareReport expect_no_real_mismatch(const scene::TriangleMesh& mesh, const trav::EmbreeOracle& oracle,
                                                    const std::vector<trav::Ray>& rays, trav::Query query,
                                                    const std::vector<trav::Hit>& ours,
                                                    const std::vector<trav::Hit>& reference) {

@@ -15,19 +15,19 @@
 #include <random>
 #include <vector>
 
-#include "accel/core/mesh.h"
 #include "accel/layouts/cwbvh_convert.h"
+#include "scene/mesh.h"
 #include "traversal/device/ray.h"
 #include "traversal/structure.h"
 
 namespace bvhlab::test {
 
 /// Cubes, flat quads and long triangles on the integer planes of [0, 32]^3, seeded.
-inline accel::TriangleMesh make_lattice_scene(uint32_t seed) {
+inline scene::TriangleMesh make_lattice_scene(uint32_t seed) {
     std::mt19937 rng(seed);
     auto ri = [&](int lo, int hi) { return float(std::uniform_int_distribution<int>(lo, hi)(rng)); };
-    accel::TriangleMesh m;
-    auto tri = [&](Vec3 a, Vec3 b, Vec3 c) { accel::add_triangle_checked(m, a, b, c, -1); };
+    scene::TriangleMesh m;
+    auto tri = [&](Vec3 a, Vec3 b, Vec3 c) { scene::add_triangle_checked(m, a, b, c, -1); };
     auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
         tri(a, b, c);
         tri(a, c, d);

@@ -28,7 +28,7 @@ inline bool built_with_cuda() {
     if (const std::string why = ::bvhlab::trav::no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 
 /// A structure of `layout` from the library's factory (no EPO: the tests do not read it).
-inline Structure make_structure(const accel::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder,
+inline Structure make_structure(const scene::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder,
                                 accel::CwTris tris = accel::CwTris::kWoop) {
     StructureSpec spec;
     spec.builder = layout == Layout::kKd ? "kdtree" : accel::builder_name(builder);

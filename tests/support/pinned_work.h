@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 #include "tests/support/adversarial.h"
 #include "tests/support/edge_rays.h"
 #include "traversal/oracle/embree_oracle.h"
@@ -32,7 +32,7 @@ inline std::string pinned_work_path() {
 
 struct PinnedScene {
     std::string name;
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     trav::Camera camera;
 };
 
@@ -41,10 +41,10 @@ inline std::vector<PinnedScene> pinned_scenes() {
     std::vector<PinnedScene> s;
     AdversarialScene room = make_adversarial_scene({7, 0.0, 8, false});
     s.push_back({"room-seed7", std::move(room.mesh), room.camera});
-    accel::TriangleMesh field = accel::make_procedural(accel::ProceduralKind::kStructured, 4000, 5);
+    scene::TriangleMesh field = scene::make_procedural(scene::ProceduralKind::kStructured, 4000, 5);
     const trav::Camera field_camera = trav::framing_camera(field);
     s.push_back({"structured-4000", std::move(field), field_camera});
-    accel::TriangleMesh lattice = make_lattice_scene(1);
+    scene::TriangleMesh lattice = make_lattice_scene(1);
     const trav::Camera lattice_camera = trav::framing_camera(lattice);
     s.push_back({"lattice-1", std::move(lattice), lattice_camera});
     return s;

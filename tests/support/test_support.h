@@ -10,7 +10,7 @@
 #include <iterator>
 #include <string>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 namespace bvhlab::test {
 
@@ -50,10 +50,10 @@ inline std::string read_file_bytes(const std::string& path) {
 }
 
 /// One triangle per entry of `tris` (9 floats each), no materials.
-inline accel::TriangleMesh mesh_of(std::initializer_list<std::array<float, 9>> tris) {
-    accel::TriangleMesh m;
+inline scene::TriangleMesh mesh_of(std::initializer_list<std::array<float, 9>> tris) {
+    scene::TriangleMesh m;
     for (const auto& t : tris)
-        accel::add_triangle_checked(m, {t[0], t[1], t[2]}, {t[3], t[4], t[5]}, {t[6], t[7], t[8]}, -1);
+        scene::add_triangle_checked(m, {t[0], t[1], t[2]}, {t[3], t[4], t[5]}, {t[6], t[7], t[8]}, -1);
     return m;
 }
 

@@ -13,7 +13,7 @@ fail() { echo "package_example: $*" >&2; exit 1; }
 cmake --install "$build" --prefix "$tmp/prefix" --component dev >"$tmp/install.log" || {
     cat "$tmp/install.log"; fail "cmake --install failed"; }
 for f in lib/cmake/bvhlab/bvhlabConfig.cmake lib/cmake/bvhlab/bvhlabConfigVersion.cmake \
-         lib/cmake/bvhlab/bvhlabTargets.cmake include/bvhlab/traversal/factory.h include/bvhlab/accel/core/mesh.h; do
+         lib/cmake/bvhlab/bvhlabTargets.cmake include/bvhlab/traversal/factory.h include/bvhlab/scene/mesh.h; do
     [ -f "$tmp/prefix/$f" ] || fail "the install lacks $f"
 done
 # Nothing of the source or build tree may leak into the installed targets.

@@ -75,7 +75,7 @@ const std::vector<test::AdversarialScene>& scenes() {
 TEST(Adversarial, GeneratorMakesWhatItPromises) {
     for (const auto& s : scenes()) {
         SCOPED_TRACE(s.name);
-        const accel::TriangleMesh& m = s.mesh;
+        const scene::TriangleMesh& m = s.mesh;
         ASSERT_GT(m.triangle_count(), 600u);
         size_t near_flat = 0, axis_aligned = 0;
         float lo = INFINITY, hi = -INFINITY;
@@ -108,8 +108,8 @@ TEST(Adversarial, GeneratorMakesWhatItPromises) {
     const auto a = test::make_adversarial_scene({7, 0.0, 8, false}),
                b = test::make_adversarial_scene({7, 0.0, 8, false});
     const auto c = test::make_adversarial_scene({8, 0.0, 8, false});
-    EXPECT_EQ(accel::scene_hash(a.mesh), accel::scene_hash(b.mesh));
-    EXPECT_NE(accel::scene_hash(a.mesh), accel::scene_hash(c.mesh));
+    EXPECT_EQ(scene::scene_hash(a.mesh), scene::scene_hash(b.mesh));
+    EXPECT_NE(scene::scene_hash(a.mesh), scene::scene_hash(c.mesh));
 }
 
 TEST(Adversarial, EveryBvhAndCwbvhAgreesWithEmbree) {

@@ -11,17 +11,17 @@
 namespace bvhlab::trav {
 namespace {
 
-CompareReport one(const accel::TriangleMesh& m, const Ray& r, Query q, Hit ours, Hit oracle, Hit lookup = Hit::miss()) {
+CompareReport one(const scene::TriangleMesh& m, const Ray& r, Query q, Hit ours, Hit oracle, Hit lookup = Hit::miss()) {
     return compare_hits(m, {r}, q, {ours}, {oracle}, [lookup](const Ray&) { return lookup; });
 }
 
 // Two triangles sharing the edge x = 1 (a unit square split in two), in the z = 0 plane.
-accel::TriangleMesh square() { return test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0}, {1, 0, 0, 2, 0, 0, 1, 1, 0}}); }
+scene::TriangleMesh square() { return test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0}, {1, 0, 0, 2, 0, 0, 1, 1, 0}}); }
 
 }  // namespace
 
 TEST(CompareHits, AgreementAndTSlack) {
-    accel::TriangleMesh m = square();
+    scene::TriangleMesh m = square();
     Ray r{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
     CompareReport rep = one(m, r, Query::kClosest, {0, 1.0f, 0.3f, 0.2f}, {0, 1.0000001f, 0.3f, 0.2f});
     EXPECT_EQ(rep.agree, 1u);
@@ -30,7 +30,7 @@ TEST(CompareHits, AgreementAndTSlack) {
 }
 
 TEST(CompareHits, SharedEdgeTie) {
-    accel::TriangleMesh m = square();
+    scene::TriangleMesh m = square();
     Ray r{{1.0f, 0.5f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
     CompareReport rep = one(m, r, Query::kClosest, {0, 1.0f, 0.5f, 0.5f}, {1, 1.0f, 0.0f, 0.5f});
     EXPECT_EQ(rep.ties, 1u);
@@ -38,7 +38,7 @@ TEST(CompareHits, SharedEdgeTie) {
 }
 
 TEST(CompareHits, NearEdgeMissIsTieButInteriorMissIsNot) {
-    accel::TriangleMesh m = square();
+    scene::TriangleMesh m = square();
     Ray r{{0.99999f, 0.5f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
     CompareReport rep = one(m, r, Query::kClosest, Hit::miss(), {0, 1.0f, 0.49999f, 0.5f});
     EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kNearEdge)], 1u);
@@ -54,7 +54,7 @@ TEST(CompareHits, EdgeWindowScalesWithSliverConditioning) {
     // A sliver 0.05 long and 0.0016 wide, seen from 3.8 away (furball's proportions): a float
     // kernel's barycentrics are off by ~1e-4 here, so a hit just outside the short edge in
     // double precision is a tie, one clearly outside is not.
-    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 0.05f, 0, 0, 0.05f, 0.0016f, 0}});
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 0.05f, 0, 0, 0.05f, 0.0016f, 0}});
     auto ray_at = [](float x, float y) { return Ray{{x, y, 3.8f}, 0.0f, {0, 0, -1}, INFINITY}; };
     // x = 0.05 + 2e-6 is outside the edge x = 0.05 by a barycentric of ~4e-5 of the long side.
     CompareReport rep = one(m, ray_at(0.050002f, 0.0008f), Query::kClosest, {0, 3.8f, 0.5f, 0.5f}, Hit::miss());
@@ -66,7 +66,7 @@ TEST(CompareHits, EdgeWindowScalesWithSliverConditioning) {
 TEST(CompareHits, CoincidentTrianglesNeedADoublePrecisionProof) {
     // Two triangles crossing along the line y = 0.5 in the z = 0 plane's neighbourhood: the
     // first lies in z = 0, the second is tilted through z = 0 at y = 0.5.
-    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 4, 0, 0, 0, 4, 0}, {0, 0, -1, 4, 0, -1, 0, 1, 1}});
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 4, 0, 0, 0, 4, 0}, {0, 0, -1, 4, 0, -1, 0, 1, 1}});
     Ray r{{0.5f, 0.5f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
     CompareReport rep = one(m, r, Query::kClosest, {0, 1.0f, 0.125f, 0.125f}, {1, 1.0f, 0.125f, 0.5f});
     EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kCoincident)], 1u);
@@ -79,7 +79,7 @@ TEST(CompareHits, CoincidentTrianglesNeedADoublePrecisionProof) {
 }
 
 TEST(CompareHits, AnyHitUsesLookupAndIntervalEnd) {
-    accel::TriangleMesh m = square();
+    scene::TriangleMesh m = square();
     Ray r{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, 1.0f};  // tmax exactly at the surface
     CompareReport rep = one(m, r, Query::kAny, Hit::miss(), {0, 0, 0, 0}, {0, 1.0f, 0.3f, 0.2f});
     EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kIntervalEnd)], 1u);
@@ -96,7 +96,7 @@ TEST(CompareHits, AnyHitUsesLookupAndIntervalEnd) {
 TEST(CompareHits, HitAtTminZeroIsTie) {
     // An origin lying on a triangle's plane (a secondary ray leaving through a crossing
     // triangle): one side sees t = 2e-8, the other rounds t below tmin = 0.
-    accel::TriangleMesh m = square();
+    scene::TriangleMesh m = square();
     Ray r{{0.5f, 0.2f, 2e-8f}, 0.0f, {0, 0, -1}, INFINITY};
     CompareReport rep = one(m, r, Query::kClosest, Hit::miss(), {0, 2e-8f, 0.3f, 0.2f});
     EXPECT_EQ(rep.ties_by_kind[size_t(TieKind::kIntervalEnd)], 1u);
@@ -112,7 +112,7 @@ namespace bvhlab::trav {
 TEST(CompareHits, EveryKindOfMadeUpHitIsARealMismatch) {
     // Two stacked unit squares: z = 0 (triangles 0, 1) and z = -1 (triangles 2, 3); a ray
     // straight down through (0.5, 0.2) meets triangle 0 at t = 1 and triangle 2 at t = 2.
-    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0},
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 1, 1, 0},
                                            {1, 0, 0, 2, 0, 0, 1, 1, 0},
                                            {0, 0, -1, 1, 0, -1, 1, 1, -1},
                                            {1, 0, -1, 2, 0, -1, 1, 1, -1}});
@@ -164,7 +164,7 @@ namespace bvhlab::trav {
 TEST(CompareHits, OverlappingTrianglesSharingAVertexAreCoincidentNotASeam) {
     // Two coplanar triangles sharing vertex (0, 0, 0) and overlapping (a duplicate-like pair, as
     // in architectural models): a ray through the middle of both hits each well inside.
-    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 4, 0, 0, 0, 4, 0}, {0, 0, 0, 4, 1, 0, 1, 4, 0}});
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 4, 0, 0, 0, 4, 0}, {0, 0, 0, 4, 1, 0, 1, 4, 0}});
     const Ray r{{1.0f, 1.0f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
     double t, u0, v0, u1, v1;
     ASSERT_TRUE(plane_hit_reference(r, m.vertex(0, 0), m.vertex(0, 1), m.vertex(0, 2), t, u0, v0));

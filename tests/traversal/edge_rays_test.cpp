@@ -25,7 +25,7 @@ namespace {
 using Tracer = std::function<void(const std::vector<Ray>&, Query, std::vector<Hit>&)>;
 
 /// The structure's edge rays, closest and any hit, through `trace`: 0 real mismatches.
-void expect_edge_rays_agree(const accel::TriangleMesh& mesh, const EmbreeOracle& oracle, const Structure& s,
+void expect_edge_rays_agree(const scene::TriangleMesh& mesh, const EmbreeOracle& oracle, const Structure& s,
                             const Tracer& trace, uint32_t seed) {
     const std::vector<Ray> rays = test::edge_rays(test::structure_boxes(s), mesh.bounds(), seed, 400);
     ASSERT_GT(rays.size(), 2000u);
@@ -38,15 +38,15 @@ void expect_edge_rays_agree(const accel::TriangleMesh& mesh, const EmbreeOracle&
     }
 }
 
-const std::vector<accel::TriangleMesh>& lattices() {
-    static const std::vector<accel::TriangleMesh> m{test::make_lattice_scene(1), test::make_lattice_scene(2)};
+const std::vector<scene::TriangleMesh>& lattices() {
+    static const std::vector<scene::TriangleMesh> m{test::make_lattice_scene(1), test::make_lattice_scene(2)};
     return m;
 }
 
 }  // namespace
 
 TEST(EdgeRays, SceneAndRaysAreWhatTheyPromise) {
-    const accel::TriangleMesh& m = lattices()[0];
+    const scene::TriangleMesh& m = lattices()[0];
     const AABB b = m.bounds();
     EXPECT_EQ(b.lo.x, 0.0f);
     EXPECT_EQ(b.hi.z, 32.0f);
@@ -101,7 +101,7 @@ TEST(EdgeRays, SceneAndRaysAreWhatTheyPromise) {
 
 TEST(EdgeRays, EveryBvhAndCwbvhAgreesWithEmbree) {
     for (size_t i = 0; i < lattices().size(); ++i) {
-        const accel::TriangleMesh& mesh = lattices()[i];
+        const scene::TriangleMesh& mesh = lattices()[i];
         SCOPED_TRACE("lattice " + std::to_string(i + 1));
         const EmbreeOracle oracle(mesh);
         for (const test::BvhVariant& v : test::bvh_variants()) {
@@ -132,7 +132,7 @@ TEST(EdgeRays, EveryKdTreeAndStackAgreesWithEmbree) {
     wh.intersection_cost = 20.0f;
     wh.empty_bonus = 0.2f;
     for (size_t i = 0; i < lattices().size(); ++i) {
-        const accel::TriangleMesh& mesh = lattices()[i];
+        const scene::TriangleMesh& mesh = lattices()[i];
         SCOPED_TRACE("lattice " + std::to_string(i + 1));
         const EmbreeOracle oracle(mesh);
         for (const auto& config : {accel::KdTreeBuilder::Config{}, wh}) {
@@ -159,7 +159,7 @@ namespace {
 /// aimed at them. Such a point lies on the edges of every box around it, so a slab test whose
 /// entry and exit round across each other there loses all of them, and with them a hit in the
 /// middle of a triangle: a real mismatch, not a tie.
-std::vector<Ray> sbvh_leaf_edge_rays(const accel::TriangleMesh& mesh, const accel::BuildTree& tree, uint32_t seed,
+std::vector<Ray> sbvh_leaf_edge_rays(const scene::TriangleMesh& mesh, const accel::BuildTree& tree, uint32_t seed,
                                      size_t* points) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -219,7 +219,7 @@ std::vector<Ray> sbvh_leaf_edge_rays(const accel::TriangleMesh& mesh, const acce
 // neighbour at the same edge.
 TEST(EdgeRays, SbvhLeafEdgesInsideTrianglesAgreeWithEmbree) {
     for (size_t i = 0; i < lattices().size(); ++i) {
-        const accel::TriangleMesh& mesh = lattices()[i];
+        const scene::TriangleMesh& mesh = lattices()[i];
         SCOPED_TRACE("lattice " + std::to_string(i + 1));
         const EmbreeOracle oracle(mesh);
         accel::BuilderOptions o;

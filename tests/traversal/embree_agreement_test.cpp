@@ -7,11 +7,11 @@
 
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
 #include "tests/support/agreement.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
@@ -26,7 +26,7 @@ namespace {
 using Tracer = std::function<void(const RaySet&, std::vector<Hit>&)>;
 
 /// Traces all four ray types with `trace` and expects zero real mismatches.
-void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+void expect_agreement_with(const scene::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
                            const Tracer& trace) {
     EmbreeOracle oracle(mesh);
     ProtocolConfig cfg;
@@ -56,7 +56,7 @@ void expect_agreement_with(const accel::TriangleMesh& mesh, const Camera& cam, f
 }
 
 /// The same with a BVH from `builder`.
-void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+void expect_agreement(const scene::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
                       accel::BuilderKind builder) {
     const accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
     expect_agreement_with(mesh, cam, ao_length, w, h, [&](const RaySet& set, std::vector<Hit>& hits) {
@@ -65,7 +65,7 @@ void expect_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float 
 }
 
 /// The same with the CWBVH collapsed from a BVH of `builder` (the CPU reference of 'cwbvh').
-void expect_cwbvh_agreement(const accel::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
+void expect_cwbvh_agreement(const scene::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
                             accel::BuilderKind builder, accel::CollapseMethod method,
                             accel::CwTris tris = accel::CwTris::kWoop) {
     const accel::Cwbvh cw = accel::convert_to_cwbvh(
@@ -79,7 +79,7 @@ void expect_cwbvh_agreement(const accel::TriangleMesh& mesh, const Camera& cam, 
 }  // namespace
 
 TEST(EmbreeAgreement, CornellBox) {
-    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    scene::TriangleMesh mesh = scene::load_obj(test::data_dir() + "/cornell_box.obj");
     Camera cam;
     cam.eye = {278, 273, -800};
     cam.target = {278, 273, 0};
@@ -94,8 +94,8 @@ TEST(EmbreeAgreement, CornellBox) {
 }
 
 TEST(EmbreeAgreement, GeneratedScenes) {
-    for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
-        accel::TriangleMesh mesh = accel::make_procedural(kind, 20000, 3);
+    for (auto kind : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured}) {
+        scene::TriangleMesh mesh = scene::make_procedural(kind, 20000, 3);
         for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh}) {
             expect_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b);
             for (auto m : {accel::CollapseMethod::kSahOptimal, accel::CollapseMethod::kGreedy})
@@ -108,7 +108,7 @@ TEST(EmbreeAgreement, GeneratedScenes) {
 
 TEST(EmbreeAgreement, DetectsABrokenTracer) {
     // The oracle must notice wrong answers: drop every hit on one triangle in ten.
-    accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kStructured, 5000, 1);
+    scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 5000, 1);
     accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, mesh, {}).tree, mesh);
     EmbreeOracle oracle(mesh);
     ProtocolConfig cfg;
@@ -131,7 +131,7 @@ TEST(EmbreeAgreement, BenchmarkScenes) {
     ASSERT_FALSE(cat.empty()) << "no scenes in " << dir << "/scenes.json";
     for (const CatalogueEntry& e : cat) {
         SCOPED_TRACE(e.name);
-        accel::TriangleMesh mesh = accel::load_obj(e.file);
+        scene::TriangleMesh mesh = scene::load_obj(e.file);
         EXPECT_EQ(mesh.triangle_count(), e.triangles);
         ASSERT_TRUE(e.camera.has_value());
         const Camera cam = *e.camera;

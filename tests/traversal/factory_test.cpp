@@ -13,8 +13,8 @@
 #include <set>
 
 #include "accel/core/check.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "scene/io/procedural.h"
 #include "tests/support/agreement.h"
 #include "tests/support/gpu_support.h"
 #include "traversal/factory.h"
@@ -33,12 +33,12 @@ std::string error_of(const std::function<void()>& f) {
     return "";
 }
 
-const accel::TriangleMesh& mesh() {
-    static const accel::TriangleMesh m = accel::make_procedural(accel::ProceduralKind::kStructured, 3000, 5);
+const scene::TriangleMesh& mesh() {
+    static const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kStructured, 3000, 5);
     return m;
 }
 
-std::vector<Ray> camera_rays(const accel::TriangleMesh& m) {
+std::vector<Ray> camera_rays(const scene::TriangleMesh& m) {
     PrimaryConfig pc;
     pc.width = 64;
     pc.height = 48;
@@ -48,7 +48,7 @@ std::vector<Ray> camera_rays(const accel::TriangleMesh& m) {
 }  // namespace
 
 TEST(StructureFactory, EveryBuilderAndLayoutTracesLikeEmbree) {
-    const accel::TriangleMesh& m = mesh();
+    const scene::TriangleMesh& m = mesh();
     const EmbreeOracle oracle(m);
     RaySet set;
     set.rays = camera_rays(m);
@@ -84,7 +84,7 @@ TEST(StructureFactory, EveryBuilderAndLayoutTracesLikeEmbree) {
 }
 
 TEST(StructureFactory, GivesTheTreeTheBuilderGives) {
-    const accel::TriangleMesh& m = mesh();
+    const scene::TriangleMesh& m = mesh();
     StructureSpec spec;
     spec.builder = "sbvh";
     spec.options.config.max_leaf_size = 4;
@@ -102,7 +102,7 @@ TEST(StructureFactory, GivesTheTreeTheBuilderGives) {
 }
 
 TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
-    const accel::TriangleMesh& m = mesh();
+    const scene::TriangleMesh& m = mesh();
     auto refused = [&](const std::function<void(StructureSpec&)>& edit, const std::string& word) {
         StructureSpec spec;
         edit(spec);
@@ -128,13 +128,13 @@ TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
     refused([](StructureSpec& s) { s.options.sbvh_budget = 0.5f; }, "budget");
     refused([](StructureSpec& s) { s.kd.traversal_cost = 0.0f; }, "kd_ct");
     refused([](StructureSpec& s) { s.kd.max_depth = 65; }, "kd_max_depth");
-    const std::string e = error_of([] { build_structure(accel::TriangleMesh{}, StructureSpec{}); });
+    const std::string e = error_of([] { build_structure(scene::TriangleMesh{}, StructureSpec{}); });
     EXPECT_NE(e.find("no triangles"), std::string::npos) << e;
 }
 
 TEST(StructureFactory, StructureFilesRoundTripAndStaleOnesAreRefused) {
-    const accel::TriangleMesh& m = mesh();
-    const std::string hash = accel::scene_hash(m);
+    const scene::TriangleMesh& m = mesh();
+    const std::string hash = scene::scene_hash(m);
     const auto dir = std::filesystem::temp_directory_path() / ("bvhlab_factory_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     for (const char* builder : {"sweep", "kdtree"}) {
@@ -152,8 +152,8 @@ TEST(StructureFactory, StructureFilesRoundTripAndStaleOnesAreRefused) {
         ASSERT_TRUE(loaded.loaded_meta.has_value());
         const std::string stale = error_of([&] { load_structure(m, "0123456789abcdef", path); });
         EXPECT_NE(stale.find("stale structure file"), std::string::npos) << stale;
-        const accel::TriangleMesh other = accel::make_procedural(accel::ProceduralKind::kSoup, 100, 1);
-        EXPECT_NE(error_of([&] { load_structure(other, accel::scene_hash(other), path); }).find("stale"),
+        const scene::TriangleMesh other = scene::make_procedural(scene::ProceduralKind::kSoup, 100, 1);
+        EXPECT_NE(error_of([&] { load_structure(other, scene::scene_hash(other), path); }).find("stale"),
                   std::string::npos);
     }
     // A BVH file loads into the CWBVH layout too; a kd-tree file does not.

@@ -11,11 +11,11 @@
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
 #include "tests/support/adversarial.h"
 #include "tests/support/agreement.h"
 #include "tests/support/edge_rays.h"
@@ -32,22 +32,22 @@ namespace {
 
 struct TestScene {
     std::string name;
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     Camera camera;
     uint32_t width, height;
 };
 
 std::vector<TestScene> test_scenes() {
     std::vector<TestScene> out;
-    TestScene cb{"cornell-box", accel::load_obj(test::data_dir() + "/cornell_box.obj"), {}, 128, 96};
+    TestScene cb{"cornell-box", scene::load_obj(test::data_dir() + "/cornell_box.obj"), {}, 128, 96};
     cb.camera.eye = {278, 273, -800};
     cb.camera.target = {278, 273, 0};
     cb.camera.fov_y_deg = 39.3f;
     out.push_back(std::move(cb));
-    for (auto kind : {accel::ProceduralKind::kSoup, accel::ProceduralKind::kStructured}) {
-        accel::TriangleMesh m = accel::make_procedural(kind, 30000, 7);
+    for (auto kind : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured}) {
+        scene::TriangleMesh m = scene::make_procedural(kind, 30000, 7);
         const Camera cam = framing_camera(m);
-        out.push_back({kind == accel::ProceduralKind::kSoup ? "soup" : "structured", std::move(m), cam, 160, 120});
+        out.push_back({kind == scene::ProceduralKind::kSoup ? "soup" : "structured", std::move(m), cam, 160, 120});
     }
     return out;
 }
@@ -83,7 +83,7 @@ using Variant = std::pair<accel::BuilderKind, accel::CwTris>;
 
 /// Calls fn(structure, tracer) for `kernel` on a structure of each variant, a short-stack
 /// kernel with 1, 2 and 8 entries, each under SCOPED_TRACE.
-void for_each_gpu_tracer(const KernelInfo& kernel, const accel::TriangleMesh& mesh,
+void for_each_gpu_tracer(const KernelInfo& kernel, const scene::TriangleMesh& mesh,
                          const std::vector<Variant>& variants,
                          const std::function<void(const Structure&, Tracer&)>& fn) {
     for (const auto& [builder, tris] : variants) {
@@ -102,7 +102,7 @@ void for_each_gpu_tracer(const KernelInfo& kernel, const accel::TriangleMesh& me
 /// `kernel` on a structure of each variant (a short-stack kernel with 1, 2 and 8 entries), on
 /// the four protocol ray types of `cfg`: every hit written, 0 real mismatches (the first ones
 /// printed), and counted_ties(report) at most max_tie_fraction x rays + slack.
-void expect_kernel_agrees(const KernelInfo& kernel, const accel::TriangleMesh& mesh, const ProtocolConfig& cfg,
+void expect_kernel_agrees(const KernelInfo& kernel, const scene::TriangleMesh& mesh, const ProtocolConfig& cfg,
                           const std::vector<Variant>& variants,
                           const std::function<double(const CompareReport&)>& counted_ties, double max_tie_fraction,
                           double slack) {
@@ -177,7 +177,7 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEdgeAndPlaneRays) {
     const KernelInfo& kernel = find_kernel(GetParam());
     for (uint32_t seed : {1u, 2u}) {
         SCOPED_TRACE("lattice " + std::to_string(seed));
-        const accel::TriangleMesh mesh = test::make_lattice_scene(seed);
+        const scene::TriangleMesh mesh = test::make_lattice_scene(seed);
         const EmbreeOracle oracle(mesh);
         std::vector<Variant> variants{{accel::BuilderKind::kBinned, accel::CwTris::kWoop},
                                       {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
@@ -254,7 +254,7 @@ TEST_P(GpuKernel, CountersEqualTheCpuReferences) {
 TEST_P(GpuKernel, OddCountsEmptySetsAndTheDeviceCount) {
     BVHLAB_SKIP_WITHOUT_GPU();
     const KernelInfo& kernel = find_kernel(GetParam());
-    const accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kSoup, 2000, 3);
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 2000, 3);
     const Structure s = make_structure(mesh, kernel.layout, accel::BuilderKind::kBinned);
     auto device = std::make_shared<const DeviceStructure>(s);
     auto tracer = make_gpu_tracer(device, kernel);
@@ -325,9 +325,9 @@ TEST(GpuTrace, ReportsWhyWithoutDevice) {
     EXPECT_FALSE(why.empty());
     Structure s;
     s.bvh2 = accel::convert_to_bvh2(
-        accel::run_builder(accel::BuilderKind::kBinned, accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1), {})
+        accel::run_builder(accel::BuilderKind::kBinned, scene::make_procedural(scene::ProceduralKind::kSoup, 10, 1), {})
             .tree,
-        accel::make_procedural(accel::ProceduralKind::kSoup, 10, 1));
+        scene::make_procedural(scene::ProceduralKind::kSoup, 10, 1));
     EXPECT_THROW(DeviceStructure d(s), Error);
 }
 

@@ -24,7 +24,7 @@ constexpr double kUlp1 = 5.9604645e-8;  // 2^-24
 
 /// The unit right triangle (0,0,0) (1,0,0) (0,1,0) moved by `offset`; u and v of a point
 /// (offset + (x, y, 0)) are x and y.
-accel::TriangleMesh unit_triangle(Vec3 offset = {0, 0, 0}) {
+scene::TriangleMesh unit_triangle(Vec3 offset = {0, 0, 0}) {
     const Vec3 a = offset, b = offset + Vec3{1, 0, 0}, c = offset + Vec3{0, 1, 0};
     return test::mesh_of({{a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z}});
 }
@@ -35,13 +35,13 @@ Ray down(Vec3 offset, double x, double y, float height) {
 }
 
 /// The kind check_claimed_hit gives (-1: a real hit) under `cfg`.
-int claim(const accel::TriangleMesh& m, const Ray& r, const Hit& h, const CompareConfig& cfg = {}) {
+int claim(const scene::TriangleMesh& m, const Ray& r, const Hit& h, const CompareConfig& cfg = {}) {
     std::string why;
     return check_claimed_hit(m, r, h, &why, cfg);
 }
 
 /// Ties and mismatches of one closest-hit ray where we miss and the oracle reports `oracle`.
-CompareReport one_missed(const accel::TriangleMesh& m, const Ray& r, const Hit& oracle, const CompareConfig& cfg = {}) {
+CompareReport one_missed(const scene::TriangleMesh& m, const Ray& r, const Hit& oracle, const CompareConfig& cfg = {}) {
     return compare_hits(
         m, {r}, Query::kClosest, {Hit::miss()}, {oracle}, [](const Ray&) { return Hit::miss(); }, cfg);
 }
@@ -52,7 +52,7 @@ double altitude_of_unit_triangle() { return 1.0 / std::sqrt(2.0); }  // h_min of
 
 TEST(OracleBounds, RelativeTWindow) {
     // From 1000 above: the t window is 1e-4 x 1000 = 0.1; the absolute part is 1e-6 x 1000 = 1e-3.
-    const accel::TriangleMesh m = unit_triangle();
+    const scene::TriangleMesh m = unit_triangle();
     const Ray r = down({0, 0, 0}, 0.3, 0.2, 1000.0f);
     const double window = kTRel * 1000.0 + kTAbsRel * 1000.0;
     const Hit inside{0, float(1000.0 + 0.5 * window), 0.3f, 0.2f}, outside{0, float(1000.0 + 2.0 * window), 0.3f, 0.2f};
@@ -77,7 +77,7 @@ TEST(OracleBounds, AbsoluteTWindowFarFromTheOrigin) {
     // A triangle 1e4 from the origin, hit from 1 above: t = 1, so the relative part is 1e-4,
     // and the cancellation part is 1e-6 x (|o| + |p|) = 1e-6 x 2e4 = 0.02.
     const Vec3 off{10000.0f, 0.0f, 0.0f};
-    const accel::TriangleMesh m = unit_triangle(off);
+    const scene::TriangleMesh m = unit_triangle(off);
     const Ray r = down(off, 0.25, 0.25, 1.0f);
     const double scale = 2.0 * 10000.25;  // |o|_inf + |p|_inf
     const double window = kTRel * 1.0 + kTAbsRel * scale;
@@ -101,7 +101,7 @@ TEST(OracleBounds, AbsoluteTWindowFarFromTheOrigin) {
 TEST(OracleBounds, FixedBarycentricWindow) {
     // From 1 above a unit triangle: the float part is 32 x 2^-24 x (1 + 0.5) / 0.707 = 4e-6,
     // so the window is edge_eps = 1e-4 to within 5%.
-    const accel::TriangleMesh m = unit_triangle();
+    const scene::TriangleMesh m = unit_triangle();
     const double window = kEdgeEps + kEdgeFloatK * kUlp1 * (1.0 + 0.5) / altitude_of_unit_triangle();
     auto ray_outside_by = [&](double w) {  // through (0.5 + w/2, 0.5 + w/2): 1 - u - v = -w
         return down({0, 0, 0}, 0.5 + 0.5 * w, 0.5 + 0.5 * w, 1.0f);
@@ -134,7 +134,7 @@ TEST(OracleBounds, FixedBarycentricWindow) {
 TEST(OracleBounds, FloatBarycentricWindowGrowsWithDistance) {
     // From 1000 above: the float part is 32 x 2^-24 x 1000.5 / 0.707 = 2.7e-3, 27x edge_eps.
     // Points near 0.5 are placed to 6e-8, far finer than the window.
-    const accel::TriangleMesh m = unit_triangle();
+    const scene::TriangleMesh m = unit_triangle();
     const double window = kEdgeEps + kEdgeFloatK * kUlp1 * (1000.0 + 0.5) / altitude_of_unit_triangle();
     auto ray_outside_by = [&](double w) { return down({0, 0, 0}, 0.5 + 0.5 * w, 0.5 + 0.5 * w, 1000.0f); };
     const Ray near_ray = ray_outside_by(0.5 * window), far_ray = ray_outside_by(2.0 * window);

@@ -18,11 +18,11 @@
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
 #include "accel/core/stats.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
 #include "accel/passes/collapse_wide.h"
+#include "scene/io/procedural.h"
 #include "tests/support/adversarial.h"
 #include "tests/support/edge_rays.h"
 #include "tests/support/pinned_work.h"
@@ -39,7 +39,7 @@ using Counted = std::function<void(const RaySet&, std::vector<TraversalCounters>
 nlohmann::json measure() {
     nlohmann::json work = nlohmann::json::object(), sah = nlohmann::json::object();
     for (const test::PinnedScene& scene : test::pinned_scenes()) {
-        const accel::TriangleMesh& mesh = scene.mesh;
+        const scene::TriangleMesh& mesh = scene.mesh;
         const test::PinnedRays rays(scene);
         auto record = [&](const std::string& structure, const Counted& trace) {
             for (const auto& [type, set] : rays.sets) {

@@ -8,7 +8,7 @@
 #include <set>
 
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
+#include "scene/io/obj_loader.h"
 #include "tests/support/test_support.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/protocol.h"
@@ -74,7 +74,7 @@ TEST(PrimaryRays, RejectsBadArguments) {
 }
 
 TEST(Protocol, SecondaryRaysAreSeededAndGeometricallySound) {
-    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    scene::TriangleMesh mesh = scene::load_obj(test::data_dir() + "/cornell_box.obj");
     EmbreeOracle oracle(mesh);
     ProtocolConfig cfg;
     cfg.camera = cornell_camera();
@@ -107,7 +107,7 @@ TEST(Protocol, SecondaryRaysAreSeededAndGeometricallySound) {
 }
 
 TEST(Protocol, SecondaryOriginsLeaveTheSurfaceOnTheRaySide) {
-    accel::TriangleMesh mesh = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    scene::TriangleMesh mesh = scene::load_obj(test::data_dir() + "/cornell_box.obj");
     EmbreeOracle oracle(mesh);
     std::vector<Ray> prim = generate_primary(cornell_camera(), {32, 24, 1, 0});
     std::vector<Hit> hits;

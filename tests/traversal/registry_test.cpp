@@ -9,8 +9,8 @@
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
 #include "accel/core/stats.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "scene/io/procedural.h"
 #include "tests/support/gpu_support.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/gpu/gpu_tracer.h"
@@ -77,7 +77,7 @@ TEST(Bvh2Layout, PacksLeavesAndRecordsDepth) {
             EXPECT_EQ(accel::Bvh2Node::leaf_first(ref), first);
             EXPECT_EQ(accel::Bvh2Node::leaf_count(ref), count);
         }
-    const accel::TriangleMesh m = accel::make_procedural(accel::ProceduralKind::kSoup, 5000, 2);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 5000, 2);
     const accel::BuildTree tree = accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree;
     const accel::Bvh2 bvh = accel::convert_to_bvh2(tree, m);
     // The deepest leaf's depth (root at 0) is the number of interior nodes above it, which is
@@ -92,7 +92,7 @@ TEST(Bvh2Layout, PacksLeavesAndRecordsDepth) {
 TEST(Bvh2Layout, ADeeperTreeThanTheStackIsRefusedBeforeTracing) {
     // A forged chain of 70 interior nodes, each with one leaf child: deeper than the 64-entry
     // stack. The CPU tracer must refuse it (in Release builds too), not overflow.
-    const accel::TriangleMesh m = accel::make_procedural(accel::ProceduralKind::kSoup, 1, 1);
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 1, 1);
     accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree, m);
     const accel::Bvh2Node leaf_node = bvh.nodes[0];
     bvh.nodes.assign(70, leaf_node);

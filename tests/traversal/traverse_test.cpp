@@ -5,8 +5,8 @@
 #include <random>
 
 #include "accel/builders/builder.h"
-#include "accel/io/procedural.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
 #include "traversal/oracle/compare.h"
@@ -23,11 +23,11 @@ std::vector<Ray> random_rays(size_t n, uint32_t seed, float tmax) {
     return rays;
 }
 
-class TraverseVsBruteForce : public ::testing::TestWithParam<std::tuple<accel::BuilderKind, accel::ProceduralKind>> {};
+class TraverseVsBruteForce : public ::testing::TestWithParam<std::tuple<accel::BuilderKind, scene::ProceduralKind>> {};
 
 TEST_P(TraverseVsBruteForce, ClosestAndAnyHit) {
     const auto [builder, kind] = GetParam();
-    accel::TriangleMesh mesh = accel::make_procedural(kind, 3000, 21);
+    scene::TriangleMesh mesh = scene::make_procedural(kind, 3000, 21);
     accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(builder, mesh, {}).tree, mesh);
     for (float tmax : {INFINITY, 0.3f}) {
         std::vector<Ray> rays = random_rays(4000, 5, tmax);
@@ -68,11 +68,11 @@ TEST_P(TraverseVsBruteForce, ClosestAndAnyHit) {
 
 INSTANTIATE_TEST_SUITE_P(Builders, TraverseVsBruteForce,
                          ::testing::Combine(::testing::Values(accel::BuilderKind::kBinned, accel::BuilderKind::kSweep),
-                                            ::testing::Values(accel::ProceduralKind::kSoup,
-                                                              accel::ProceduralKind::kStructured)));
+                                            ::testing::Values(scene::ProceduralKind::kSoup,
+                                                              scene::ProceduralKind::kStructured)));
 
 TEST(Traverse, SingleTriangleRootLeafAndAxisAlignedRays) {
-    accel::TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}});
+    scene::TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}});
     accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree, m);
     ASSERT_EQ(bvh.nodes.size(), 1u);
     // Axis-aligned direction (zero components) onto a flat box.
@@ -86,7 +86,7 @@ TEST(Traverse, SingleTriangleRootLeafAndAxisAlignedRays) {
 }
 
 TEST(Traverse, CountersCountWork) {
-    accel::TriangleMesh mesh = accel::make_procedural(accel::ProceduralKind::kStructured, 5000, 2);
+    scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 5000, 2);
     accel::Bvh2 bvh = accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, mesh, {}).tree, mesh);
     std::vector<Ray> rays = random_rays(500, 3, INFINITY);
     std::vector<Hit> a, b;

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "accel/core/check.h"
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
 #include "traversal/rays/ray_file.h"
@@ -62,11 +62,11 @@ void register_bench(CLI::App& app, Globals& g) {
         if (!o->hits_out.empty() && o->trace.kernel == "all")
             throw Error("--hits-out writes one tracer's hits; name one --kernel, not all");
         if (!o->hits_out.empty()) {
-            accel::refuse_overwriting_input(o->hits_out, o->rays_file, "--hits-out");
-            accel::refuse_overwriting_input(o->hits_out, o->scene, "--hits-out");
+            scene::refuse_overwriting_input(o->hits_out, o->rays_file, "--hits-out");
+            scene::refuse_overwriting_input(o->hits_out, o->scene, "--hits-out");
         }
         Scene s = load_scene(o->scene, g);
-        if (!o->hits_out.empty()) accel::refuse_overwriting_input(o->hits_out, s.source, "--hits-out");
+        if (!o->hits_out.empty()) scene::refuse_overwriting_input(o->hits_out, s.source, "--hits-out");
         o->build.epo = false;  // EPO is a build figure; bench does not need it
         trav::EmbreeOracle oracle(s.mesh);
         Built b;

@@ -4,8 +4,8 @@
 #include <memory>
 
 #include "accel/core/check.h"
-#include "accel/io/atomic_file.h"
 #include "accel/io/tree_file.h"
+#include "scene/io/atomic_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
 
@@ -67,12 +67,12 @@ void register_build(CLI::App& app, Globals& g) {
     sub->add_option("-o,--out", o->out, "write the tree to this structure file (load it with --structure FILE)");
     sub->callback([o, &g] {
         if (!o->out.empty()) {
-            accel::refuse_overwriting_input(o->out, o->scene, "--out");
+            scene::refuse_overwriting_input(o->out, o->scene, "--out");
             if (!o->build.structure_file().empty())
-                accel::refuse_overwriting_input(o->out, o->build.structure_file(), "--out");
+                scene::refuse_overwriting_input(o->out, o->build.structure_file(), "--out");
         }
         Scene s = load_scene(o->scene, g);
-        if (!o->out.empty()) accel::refuse_overwriting_input(o->out, s.source, "--out");
+        if (!o->out.empty()) scene::refuse_overwriting_input(o->out, s.source, "--out");
         Built b = build_scene(s, o->build, g);
         if (!o->out.empty()) {
             b.save(o->out, s.hash);

@@ -3,7 +3,7 @@
 #include <cstdio>
 
 #include "accel/core/check.h"
-#include "accel/io/scene_cache.h"
+#include "scene/io/scene_cache.h"
 #include "tools/bvhlab/commands.h"
 
 namespace bvhlab::cli {
@@ -16,18 +16,18 @@ void register_cache(CLI::App& app, Globals& g) {
         "~/.cache/bvhlab");
     sub->add_option("action", *action, "info or clear")->required()->check(CLI::IsMember({"info", "clear"}));
     sub->callback([&g, action] {
-        const std::string dir = accel::default_scene_cache_dir();
+        const std::string dir = scene::default_scene_cache_dir();
         if (dir.empty()) throw Error("no scene cache folder: set BVHLAB_CACHE_DIR (or HOME)");
         if (*action == "clear") {
             uint64_t bytes = 0;
-            const size_t n = accel::clear_scene_cache(dir, &bytes);
+            const size_t n = scene::clear_scene_cache(dir, &bytes);
             if (g.json)
                 emit({{"record", "scene_cache_clear"}, {"dir", dir}, {"removed", n}, {"bytes", bytes}});
             else
                 std::printf("removed %zu files (%.1f MB) from %s\n", n, double(bytes) / 1e6, dir.c_str());
             return;
         }
-        const auto entries = accel::list_scene_cache(dir);
+        const auto entries = scene::list_scene_cache(dir);
         uint64_t total = 0;
         for (const auto& e : entries) {
             total += e.bytes;

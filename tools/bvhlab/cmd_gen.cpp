@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
 #include "tools/bvhlab/commands.h"
 
 namespace bvhlab::cli {
@@ -25,17 +25,17 @@ void register_gen(CLI::App& app, Globals& g) {
     sub->add_option("--seed", o->seed, "random seed")->check(UInt64())->capture_default_str();
     sub->add_option("-o,--out", o->out, "OBJ file to write")->required();
     sub->callback([o, &g] {
-        accel::TriangleMesh m;
+        scene::TriangleMesh m;
         {
             Stage st(g, "generating " + std::to_string(o->triangles) + " " + o->kind + " triangles");
-            m = accel::make_procedural(accel::parse_procedural_kind(o->kind), o->triangles, o->seed);
+            m = scene::make_procedural(scene::parse_procedural_kind(o->kind), o->triangles, o->seed);
         }
         {
             Stage st(g, "writing " + o->out);
-            accel::write_obj(m, o->out);
+            scene::write_obj(m, o->out);
         }
         nlohmann::json j{{"record", "gen"}, {"kind", o->kind}, {"triangles", m.triangle_count()},
-                         {"seed", o->seed}, {"file", o->out},  {"scene_hash", accel::scene_hash(m)}};
+                         {"seed", o->seed}, {"file", o->out},  {"scene_hash", scene::scene_hash(m)}};
         if (g.json)
             emit(j);
         else

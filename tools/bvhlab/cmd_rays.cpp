@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "accel/core/check.h"
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 #include "tools/bvhlab/commands.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/ray_file.h"
@@ -49,9 +49,9 @@ void register_rays(CLI::App& app, Globals& g) {
         }
         if (!scene->count()) throw Error("rays needs a scene (or --info FILE)");
         if (!out->count()) throw Error("rays needs --out FILE for the ray set");
-        accel::refuse_overwriting_input(o->out, o->scene, "--out");
+        scene::refuse_overwriting_input(o->out, o->scene, "--out");
         Scene s = load_scene(o->scene, g);
-        accel::refuse_overwriting_input(o->out, s.source, "--out");
+        scene::refuse_overwriting_input(o->out, s.source, "--out");
         trav::EmbreeOracle oracle(s.mesh);
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
         trav::RaySet set;

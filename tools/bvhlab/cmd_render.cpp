@@ -7,10 +7,10 @@
 #include <memory>
 
 #include "accel/core/check.h"
-#include "accel/io/atomic_file.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
 #include "renderer/wavefront.h"
+#include "scene/io/atomic_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
 #include "traversal/oracle/embree_oracle.h"
@@ -164,14 +164,14 @@ void register_render(CLI::App& app, Globals& g) {
         for (const std::string& out : outputs) {
             std::string why;
             if (!render::can_write_image(out, &why)) throw Error("cannot write " + out + ": " + why);
-            accel::refuse_overwriting_input(out, o->scene, "--out");
+            scene::refuse_overwriting_input(out, o->scene, "--out");
             const std::filesystem::path folder = std::filesystem::path(out).parent_path();
             if (!folder.empty() && !std::filesystem::is_directory(folder))
                 throw Error("cannot write " + out + ": its folder " + folder.string() + " does not exist");
         }
         o->rs.aovs = o->aov;
         Scene s = load_scene(o->scene, g);
-        accel::refuse_overwriting_input(o->out, s.source, "--out");
+        scene::refuse_overwriting_input(o->out, s.source, "--out");
         for (const std::string& f : s.missing_material_files) {
             if (o->missing == "error")
                 throw Error("cannot render " + o->scene + ": its material file " + f +

@@ -15,9 +15,9 @@
 #include <sstream>
 
 #include "accel/core/check.h"
-#include "accel/io/obj_loader.h"
-#include "accel/io/procedural.h"
-#include "accel/io/scene_cache.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
+#include "scene/io/scene_cache.h"
 #include "traversal/rays/scene_catalogue.h"
 
 namespace fs = std::filesystem;
@@ -189,7 +189,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         if (n < 1 || n > (1ull << 30))
             throw Error("generated-scene spec '" + spec + "': the triangle count must be 1..2^30, not " + parts[2]);
         Stage st(g, "generating " + spec);
-        s.mesh = accel::make_procedural(accel::parse_procedural_kind(parts[1]), n, seed);
+        s.mesh = scene::make_procedural(scene::parse_procedural_kind(parts[1]), n, seed);
         s.name = spec;
         s.load_ms = 1000.0 * st.seconds();
     } else {
@@ -220,10 +220,10 @@ Scene load_scene(const std::string& spec, const Globals& g) {
                     }
         }
         s.source = file.string();  // what a catalogue name resolved to
-        const std::string cache_dir = g.no_scene_cache ? "" : accel::default_scene_cache_dir();
+        const std::string cache_dir = g.no_scene_cache ? "" : scene::default_scene_cache_dir();
         Stage st(g, "loading " + file.string());
-        accel::SceneLoad load =
-            accel::load_obj_cached(file.string(), cache_dir, git_commit(),
+        scene::SceneLoad load =
+            scene::load_obj_cached(file.string(), cache_dir, git_commit(),
                                    [&st](size_t done, size_t total) { st.progress_bytes(done, total); });
         s.mesh = std::move(load.mesh);
         s.hash = load.scene_hash;
@@ -251,7 +251,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
     if (entry) apply_entry(s, *entry);
     if (!s.camera_from_catalogue) s.camera = trav::framing_camera(s.mesh);
     if (s.ao_length <= 0.0f) s.ao_length = 0.05f * s.mesh.diagonal();
-    if (s.hash.empty()) s.hash = accel::scene_hash(s.mesh);  // the cache gives it with the mesh
+    if (s.hash.empty()) s.hash = scene::scene_hash(s.mesh);  // the cache gives it with the mesh
     if (!g.quiet) {
         std::fprintf(stderr, "[bvhlab] %s: %zu triangles, dropped %llu (%llu non-finite, %llu zero-area)\n",
                      s.name.c_str(), s.mesh.triangle_count(), (unsigned long long)s.mesh.dropped.total(),

@@ -12,8 +12,8 @@
 
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
-#include "accel/core/mesh.h"
 #include "accel/core/stats.h"
+#include "scene/mesh.h"
 #include "traversal/factory.h"
 #include "traversal/rays/protocol.h"
 #include "traversal/rays/ray_file.h"
@@ -73,7 +73,7 @@ std::string failed_stage_clause();
 struct Scene {
     std::string name;
     std::string source;  ///< the OBJ file read (a catalogue name resolved to its file), or the gen: spec
-    accel::TriangleMesh mesh;
+    scene::TriangleMesh mesh;
     trav::Camera camera;
     bool camera_from_catalogue = false;
     float ao_length = 0.0f;

@@ -35,7 +35,7 @@ double rel_dt(float a, float b) {
 
 class Classifier {
 public:
-    Classifier(const accel::TriangleMesh& mesh, const CompareConfig& cfg) : mesh_(mesh), cfg_(cfg) {}
+    Classifier(const scene::TriangleMesh& mesh, const CompareConfig& cfg) : mesh_(mesh), cfg_(cfg) {}
 
     /// The barycentric window of float error for a hit of `r` at t on triangle `tri`: the
     /// near-edge rule's, and the slack allowed on reported u and v.
@@ -131,7 +131,7 @@ public:
     }
 
 private:
-    const accel::TriangleMesh& mesh_;
+    const scene::TriangleMesh& mesh_;
     const CompareConfig& cfg_;
 };
 
@@ -144,7 +144,7 @@ const char* mismatch_kind_name(MismatchKind k) {
     return names[size_t(k)];
 }
 
-int check_claimed_hit(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& h, std::string* why,
+int check_claimed_hit(const scene::TriangleMesh& mesh, const Ray& ray, const Hit& h, std::string* why,
                       const CompareConfig& cfg) {
     return Classifier(mesh, cfg).claim(h, ray, why);
 }
@@ -158,7 +158,7 @@ double t_tolerance(const Ray& r, float t, Vec3 a, Vec3 b, Vec3 c, const CompareC
     return cfg.t_rel_tol * double(t) + cfg.t_abs_rel * scale / (dl * std::max(cosv, 1e-6));
 }
 
-CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
+CompareReport compare_hits(const scene::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
                            const std::vector<Hit>& ours, const std::vector<Hit>& oracle, const ClosestLookup& lookup,
                            const CompareConfig& cfg) {
     BVHLAB_CHECK(ours.size() == rays.size() && oracle.size() == rays.size(), "hit sets and ray set differ in size");

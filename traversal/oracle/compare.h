@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 #include "traversal/device/ray.h"
 
 namespace bvhlab::trav {
@@ -73,7 +73,7 @@ const char* mismatch_kind_name(MismatchKind k);
 /// triangle, and u, v are the barycentrics of that point (Embree's convention), each within
 /// the tolerances of `cfg` (the t window of t_tolerance, the barycentric window of the
 /// near-edge rule). Returns the kind of lie, or -1 for a real hit; `why` gets the details.
-int check_claimed_hit(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& h, std::string* why = nullptr,
+int check_claimed_hit(const scene::TriangleMesh& mesh, const Ray& ray, const Hit& h, std::string* why = nullptr,
                       const CompareConfig& cfg = {});
 /// One disagreement, kept for the report.
 struct Disagreement {
@@ -104,7 +104,7 @@ using ClosestLookup = std::function<Hit(const Ray&)>;
 /// Compares `ours` and `oracle` ray by ray. Every hit of `ours` must pass check_claimed_hit;
 /// then for closest-hit queries the triangle and t must agree, for any-hit queries hit/miss.
 /// `oracle` is trusted. `lookup` is needed for any-hit queries.
-CompareReport compare_hits(const accel::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
+CompareReport compare_hits(const scene::TriangleMesh& mesh, const std::vector<Ray>& rays, Query query,
                            const std::vector<Hit>& ours, const std::vector<Hit>& oracle, const ClosestLookup& lookup,
                            const CompareConfig& cfg = {});
 

@@ -45,7 +45,7 @@ RTCRay to_rtc(const Ray& r) {
 
 }  // namespace
 
-EmbreeOracle::EmbreeOracle(const accel::TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
+EmbreeOracle::EmbreeOracle(const scene::TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
     impl_->device = rtcNewDevice(nullptr);
     BVHLAB_CHECK(impl_->device != nullptr, "rtcNewDevice failed");
     rtcSetDeviceErrorFunction(impl_->device, on_error, impl_.get());

@@ -6,7 +6,7 @@
 #include <memory>
 #include <vector>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 #include "traversal/device/ray.h"
 #include "traversal/tracer.h"
 
@@ -16,7 +16,7 @@ class EmbreeOracle {
 public:
     /// Builds an Embree scene over `mesh` (triangle ids = Embree primIDs). Throws bvhlab::Error
     /// if Embree reports an error.
-    explicit EmbreeOracle(const accel::TriangleMesh& mesh);
+    explicit EmbreeOracle(const scene::TriangleMesh& mesh);
     ~EmbreeOracle();
     EmbreeOracle(const EmbreeOracle&) = delete;
     EmbreeOracle& operator=(const EmbreeOracle&) = delete;

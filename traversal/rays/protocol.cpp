@@ -24,7 +24,7 @@ Query ray_type_query(RayType type) {
     return (type == RayType::kAo || type == RayType::kShadow) ? Query::kAny : Query::kClosest;
 }
 
-RayProtocol::RayProtocol(const accel::TriangleMesh& mesh, const EmbreeOracle& oracle, const ProtocolConfig& cfg)
+RayProtocol::RayProtocol(const scene::TriangleMesh& mesh, const EmbreeOracle& oracle, const ProtocolConfig& cfg)
     : mesh_(mesh), oracle_(oracle), cfg_(cfg), diagonal_(mesh.diagonal()) {
     primary_ = generate_primary(cfg_.camera, cfg_.primary);
 }

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/ray_file.h"
 #include "traversal/rays/raygen.h"
@@ -35,11 +35,11 @@ struct ProtocolConfig {
 /// the rays do not depend on the structure under test) and shared by the secondary types.
 class RayProtocol {
 public:
-    RayProtocol(const accel::TriangleMesh& mesh, const EmbreeOracle& oracle, const ProtocolConfig& cfg);
+    RayProtocol(const scene::TriangleMesh& mesh, const EmbreeOracle& oracle, const ProtocolConfig& cfg);
     RaySet make(RayType type);
 
 private:
-    const accel::TriangleMesh& mesh_;
+    const scene::TriangleMesh& mesh_;
     const EmbreeOracle& oracle_;
     ProtocolConfig cfg_;
     float diagonal_;

@@ -12,7 +12,7 @@
 
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 
 // Records are written as the in-memory structs, which is the little-endian file layout only on
 // little-endian hosts (x86-64, AArch64 Linux).
@@ -64,7 +64,7 @@ void write_records(const std::string& path, const char* magic, uint32_t version,
     const std::string w = writer.empty() ? "unknown" : writer.substr(0, kFileWriterBytes);
     std::memcpy(h.writer, w.data(), w.size());
     const uint64_t sum = content_checksum(h, records);
-    accel::write_file_atomically(path, [&](std::FILE* f) {
+    scene::write_file_atomically(path, [&](std::FILE* f) {
         std::fwrite(&h, sizeof h, 1, f);
         if (!records.empty()) std::fwrite(records.data(), sizeof(T), records.size(), f);
         std::fwrite(&sum, sizeof sum, 1, f);

@@ -35,7 +35,7 @@ struct HitSet {
 
 /// Writes `BVHLRAYS`, version, flags (bit 0 = any-hit), count, the writer, then 32 bytes per
 /// ray and a 64-bit checksum of all that came before, whole or not at all
-/// (accel::write_file_atomically). Throws bvhlab::Error when it cannot.
+/// (scene::write_file_atomically). Throws bvhlab::Error when it cannot.
 void write_ray_file(const std::string& path, const RaySet& set);
 /// Reads a ray file. Throws bvhlab::Error naming the problem on a missing file, wrong magic,
 /// unknown version or flags, a size that does not match the count, a checksum that does not

@@ -37,7 +37,7 @@ std::vector<size_t> hit_offsets(const std::vector<Hit>& hits, size_t per_hit, si
     return off;
 }
 
-std::vector<Ray> hemisphere_rays(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> hemisphere_rays(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                                  const std::vector<Hit>& hits, const SecondaryConfig& cfg, float tmax) {
     BVHLAB_CHECK(primary.size() == hits.size(), "primary rays and hits differ in count");
     BVHLAB_CHECK(cfg.per_hit > 0, "rays per hit must be at least 1");
@@ -65,7 +65,7 @@ std::vector<Ray> hemisphere_rays(const accel::TriangleMesh& mesh, const std::vec
 
 }  // namespace
 
-void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point, Vec3& normal) {
+void hit_frame(const scene::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point, Vec3& normal) {
     const Vec3 v0 = mesh.vertex(hit.tri, 0), v1 = mesh.vertex(hit.tri, 1), v2 = mesh.vertex(hit.tri, 2);
     // Barycentric interpolation lands on the triangle's plane more precisely than o + t d.
     const double w = 1.0 - double(hit.u) - double(hit.v);
@@ -75,7 +75,7 @@ void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, 
     normal = dot(n, ray.dir) > 0.0f ? n * -1.0f : n;
 }
 
-Camera framing_camera(const accel::TriangleMesh& mesh) {
+Camera framing_camera(const scene::TriangleMesh& mesh) {
     const AABB b = mesh.bounds();
     const Vec3 c = b.center();
     const float radius = 0.5f * length(b.extent());
@@ -134,17 +134,17 @@ std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg) {
     return rays;
 }
 
-std::vector<Ray> generate_ao(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> generate_ao(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                              const std::vector<Hit>& hits, const SecondaryConfig& cfg) {
     return hemisphere_rays(mesh, primary, hits, cfg, cfg.tmax);
 }
 
-std::vector<Ray> generate_diffuse(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> generate_diffuse(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                                   const std::vector<Hit>& hits, const SecondaryConfig& cfg) {
     return hemisphere_rays(mesh, primary, hits, cfg, INFINITY);
 }
 
-std::vector<Ray> generate_shadow(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> generate_shadow(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                                  const std::vector<Hit>& hits, Vec3 light, float offset) {
     BVHLAB_CHECK(primary.size() == hits.size(), "primary rays and hits differ in count");
     size_t total = 0;

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 #include "traversal/device/ray.h"
 
 namespace bvhlab::trav {
@@ -23,7 +23,7 @@ struct Camera {
 
 /// A camera for scenes without one: looks at the bounds' centre from a raised diagonal
 /// (direction (0.5, 0.7, 1)), far enough that the bounding sphere fills the 45-degree view.
-Camera framing_camera(const accel::TriangleMesh& mesh);
+Camera framing_camera(const scene::TriangleMesh& mesh);
 
 struct PrimaryConfig {
     uint32_t width = 1024;
@@ -46,16 +46,16 @@ struct SecondaryConfig {
 
 /// Cosine-weighted hemisphere rays around each hit's geometric normal (facing the incoming
 /// ray), tmax = cfg.tmax. For any-hit queries.
-std::vector<Ray> generate_ao(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> generate_ao(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                              const std::vector<Hit>& hits, const SecondaryConfig& cfg);
 /// Like generate_ao with tmax = +inf. For closest-hit queries.
-std::vector<Ray> generate_diffuse(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> generate_diffuse(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                                   const std::vector<Hit>& hits, const SecondaryConfig& cfg);
 /// One ray per hit towards `light`, tmax = the distance to it. For any-hit queries.
-std::vector<Ray> generate_shadow(const accel::TriangleMesh& mesh, const std::vector<Ray>& primary,
+std::vector<Ray> generate_shadow(const scene::TriangleMesh& mesh, const std::vector<Ray>& primary,
                                  const std::vector<Hit>& hits, Vec3 light, float offset);
 
 /// Hit point and the unit geometric normal turned towards the ray's origin side.
-void hit_frame(const accel::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point, Vec3& normal);
+void hit_frame(const scene::TriangleMesh& mesh, const Ray& ray, const Hit& hit, Vec3& point, Vec3& normal);
 
 }  // namespace bvhlab::trav

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstddef>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 #include "traversal/device/ray.h"
 
 namespace bvhlab::trav {
@@ -39,7 +39,7 @@ inline bool intersect_reference(const Ray& ray, Vec3 v0, Vec3 v1, Vec3 v2, doubl
 }
 
 /// Closest hit over every triangle of `mesh`, in double precision. O(triangles) per ray.
-inline Hit trace_brute_force(const accel::TriangleMesh& mesh, const Ray& ray) {
+inline Hit trace_brute_force(const scene::TriangleMesh& mesh, const Ray& ray) {
     Hit best = Hit::miss();
     double best_t = INFINITY;
     for (size_t i = 0; i < mesh.triangle_count(); ++i) {

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/mesh.h"
-#include "accel/io/obj_loader.h"
+#include "scene/io/obj_loader.h"
+#include "scene/mesh.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 constexpr uint32_t kSceneCacheVersion = 3;  // 2: the renderer's material parameters; 3: texcoords
 
@@ -66,4 +66,4 @@ std::vector<SceneCacheEntry> list_scene_cache(const std::string& dir);
 /// files were removed and their bytes in `bytes`.
 size_t clear_scene_cache(const std::string& dir, uint64_t* bytes = nullptr);
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

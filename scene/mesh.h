@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Indexed triangle mesh: the input of every builder and of the Embree oracle.
+// Indexed triangle mesh: the input of every builder, of the Embree oracle and of the renderer.
 #pragma once
 
 #include <cmath>
@@ -9,24 +9,9 @@
 
 #include "accel/core/aabb.h"
 #include "accel/core/vec3.h"
+#include "scene/material.h"
 
-namespace bvhlab::accel {
-
-/// A material as the OBJ's MTL file gives it: the parameters the renderer maps to a BSDF
-/// (renderer/core/material.h says how). A loaded material has tinyobjloader's values for
-/// absent keys (Kd 0, Ns 1, Ni 1, d 1, illum 0); the defaults below are for made-up materials.
-struct Material {
-    std::string name;
-    Vec3 diffuse{0.8f, 0.8f, 0.8f};   ///< Kd
-    Vec3 emission{0.0f, 0.0f, 0.0f};  ///< Ke
-    Vec3 specular{0.0f, 0.0f, 0.0f};  ///< Ks
-    Vec3 ambient{0.0f, 0.0f, 0.0f};   ///< Ka (read as emission when above 1 and Ke is black)
-    float shininess = 1.0f;           ///< Ns (Phong exponent)
-    float ior = 1.0f;                 ///< Ni
-    float dissolve = 1.0f;            ///< d (1 - Tr)
-    int32_t illum = 0;                ///< illumination model
-    std::string diffuse_texture;      ///< map_Kd as written in the MTL, backslashes included
-};
+namespace bvhlab::scene {
 
 /// Triangles that the loader or a generator dropped, with the reason.
 struct DropCounts {
@@ -87,4 +72,4 @@ bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t ma
 /// Two meshes with the same triangles give the same hash whatever their vertex sharing.
 std::string scene_hash(const TriangleMesh& mesh);
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 /// Loads and triangulates `path`, keeping material ids and names (from its .mtl files).
 /// Triangles with non-finite vertices or zero area are dropped and counted in mesh.dropped.
@@ -34,4 +34,4 @@ constexpr uint32_t kObjLoaderVersion = 5;
 /// Writes `mesh` as OBJ (v and f lines, usemtl per material run). Throws on I/O errors.
 void write_obj(const TriangleMesh& mesh, const std::string& path);
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The binary scene cache: a hit gives the mesh a parse gives; a changed OBJ or material file, or
 // another loader version, is never served; a damaged or foreign entry is rebuilt with a warning.
-#include "accel/io/scene_cache.h"
+#include "scene/io/scene_cache.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -12,10 +12,10 @@
 
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
-#include "accel/io/obj_loader.h"
+#include "scene/io/obj_loader.h"
 #include "tests/support/test_support.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 namespace {
 namespace fs = std::filesystem;
 
@@ -146,7 +146,7 @@ TEST(SceneCache, AnotherLoaderVersionIsNotServed) {
     std::string bytes = test::read_file_bytes(first.cache_file);
     const uint32_t other = kObjLoaderVersion + 1;
     std::memcpy(&bytes[12], &other, 4);
-    const uint64_t sum = fnv1a_words(bytes.data(), bytes.size() - 8);
+    const uint64_t sum = accel::fnv1a_words(bytes.data(), bytes.size() - 8);
     std::memcpy(&bytes[bytes.size() - 8], &sum, 8);
     Fixture::write(first.cache_file, bytes);
     const SceneLoad l = fx.load();
@@ -224,4 +224,4 @@ TEST(SceneCache, FileHashSeesEveryByte) {
     EXPECT_FALSE(exists);
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // OBJ loading: good files, every kind of bad file (written by the test), dropped triangles.
-#include "accel/io/obj_loader.h"
+#include "scene/io/obj_loader.h"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +20,7 @@ using test::TempFile;
 void expect_load_error(const std::string& name, const std::string& text, const std::string& what) {
     TempFile f(name, text);
     try {
-        accel::load_obj(f.path());
+        scene::load_obj(f.path());
         FAIL() << "no error for " << name;
     } catch (const Error& e) {
         const std::string msg = e.what();
@@ -34,9 +34,9 @@ const char* kTri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
 }  // namespace
 
 TEST(ObjLoader, MissingFileAndDirectory) {
-    EXPECT_THROW(accel::load_obj("/nonexistent/bvhlab/scene.obj"), Error);
+    EXPECT_THROW(scene::load_obj("/nonexistent/bvhlab/scene.obj"), Error);
     try {
-        accel::load_obj("/tmp");
+        scene::load_obj("/tmp");
         FAIL();
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("directory"), std::string::npos);
@@ -69,7 +69,7 @@ TEST(ObjLoader, DropsNonFiniteAndZeroAreaTriangles) {
     TempFile f("drops.obj", std::string(kTri) +
                                 "v nan 0 0\nv 1 1 1\nv 2 2 2\nv inf 0 1\n"
                                 "f 1 2 3\nf 4 2 3\nf 1 5 6\nf 7 2 3\nf 1 2 3\n");
-    accel::TriangleMesh m = accel::load_obj(f.path());
+    scene::TriangleMesh m = scene::load_obj(f.path());
     EXPECT_EQ(m.triangle_count(), 2u);
     EXPECT_EQ(m.dropped.non_finite, 2u);
     EXPECT_EQ(m.dropped.zero_area, 1u);
@@ -77,7 +77,7 @@ TEST(ObjLoader, DropsNonFiniteAndZeroAreaTriangles) {
 
 TEST(ObjLoader, TriangulatesPolygonsAndNegativeIndices) {
     TempFile f("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf -4 -3 -2\n");
-    accel::TriangleMesh m = accel::load_obj(f.path());
+    scene::TriangleMesh m = scene::load_obj(f.path());
     ASSERT_EQ(m.triangle_count(), 3u);
     EXPECT_NEAR(m.surface_area(), 1.5, 1e-6);
 }
@@ -94,7 +94,7 @@ TEST(ObjLoader, LargePolygonsAreFannedInPlaceAndFullyChecked) {
     for (int i = 0; i < n; ++i) text += " " + std::to_string(4 + i) + (i % 2 ? "//" + std::to_string(1 + i % 3) : "");
     text += "  # a comment\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1 3 2\n";
     TempFile f("ngon.obj", text);
-    accel::TriangleMesh m = accel::load_obj(f.path());
+    scene::TriangleMesh m = scene::load_obj(f.path());
     ASSERT_EQ(m.triangle_count(), 1u + (n - 2) + 1u);
     const double ngon = 0.5 * n * std::sin(2 * M_PI / n);
     EXPECT_NEAR(m.surface_area(), 0.5 + ngon + 0.5, 1e-3);
@@ -118,7 +118,7 @@ TEST(ObjLoader, ProgressReportsBytesUpToTheWholeFile) {
     while (text.size() < (size_t(20) << 20)) text += "v 0.123456 0.654321 0.5\n# padding padding padding\nf 1 2 3\n";
     TempFile f("progress.obj", text);
     std::vector<std::pair<size_t, size_t>> calls;
-    accel::load_obj(f.path(), nullptr, nullptr, [&](size_t done, size_t total) { calls.push_back({done, total}); });
+    scene::load_obj(f.path(), nullptr, nullptr, [&](size_t done, size_t total) { calls.push_back({done, total}); });
     ASSERT_GE(calls.size(), 3u);
     for (size_t i = 1; i < calls.size(); ++i) EXPECT_GE(calls[i].first, calls[i - 1].first);
     EXPECT_EQ(calls.back().first, text.size());
@@ -126,7 +126,7 @@ TEST(ObjLoader, ProgressReportsBytesUpToTheWholeFile) {
 }
 
 TEST(ObjLoader, CornellBoxKeepsMaterialsAndEmission) {
-    accel::TriangleMesh m = accel::load_obj(test::data_dir() + "/cornell_box.obj");
+    scene::TriangleMesh m = scene::load_obj(test::data_dir() + "/cornell_box.obj");
     EXPECT_EQ(m.triangle_count(), 32u);
     EXPECT_EQ(m.dropped.total(), 0u);
     int light = -1;
@@ -146,9 +146,9 @@ TEST(ObjLoader, KeepsTheRenderersMaterialParameters) {
                        "map_Kd textures\\wood.png\n");
     test::TempFile obj("params.obj", "mtllib " + std::filesystem::path(mtl.path()).filename().string() +
                                          "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
-    const accel::TriangleMesh m = accel::load_obj(obj.path());
+    const scene::TriangleMesh m = scene::load_obj(obj.path());
     ASSERT_EQ(m.materials.size(), 1u);
-    const accel::Material& x = m.materials[0];
+    const scene::Material& x = m.materials[0];
     EXPECT_EQ(x.specular.z, 0.75f);
     EXPECT_EQ(x.ambient.x, 20.0f);
     EXPECT_EQ(x.shininess, 250.0f);
@@ -164,28 +164,28 @@ TEST(ObjLoader, KeepsTextureCoordinatesPerCorner) {
     test::TempFile obj("uv.obj",
                        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\n"
                        "f 1/1 2/2 3/3\nf 2 4 3\nf 2/3 4/2 3/-3\n");
-    const accel::TriangleMesh m = accel::load_obj(obj.path());
+    const scene::TriangleMesh m = scene::load_obj(obj.path());
     ASSERT_EQ(m.triangle_count(), 3u);
     const std::vector<float> want = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f, 0,    0,    0,
                                      0,    0,    0,    0.5f, 0.6f, 0.3f, 0.4f, 0.1f, 0.2f};
     EXPECT_EQ(m.texcoords, want);
     test::TempFile plain("no_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    EXPECT_TRUE(accel::load_obj(plain.path()).texcoords.empty());
+    EXPECT_TRUE(scene::load_obj(plain.path()).texcoords.empty());
     test::TempFile bad("bad_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/5 3/1\n");
-    EXPECT_THROW(accel::load_obj(bad.path()), Error);
+    EXPECT_THROW(scene::load_obj(bad.path()), Error);
 }
 
 TEST(ObjLoader, WriteThenLoadIsExact) {
-    accel::TriangleMesh a = test::mesh_of({{0.1f, 0.2f, 0.3f, 1.0f / 3.0f, 0, 0, 0, 1e-7f, 5}});
+    scene::TriangleMesh a = test::mesh_of({{0.1f, 0.2f, 0.3f, 1.0f / 3.0f, 0, 0, 0, 1e-7f, 5}});
     TempFile f("roundtrip.obj");
-    accel::write_obj(a, f.path());
-    accel::TriangleMesh b = accel::load_obj(f.path());
-    EXPECT_EQ(accel::scene_hash(a), accel::scene_hash(b));
+    scene::write_obj(a, f.path());
+    scene::TriangleMesh b = scene::load_obj(f.path());
+    EXPECT_EQ(scene::scene_hash(a), scene::scene_hash(b));
 }
 
 }  // namespace bvhlab
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 TEST(ObjLoader, DenormalCoordinatesBecomeZero) {
     // Embree's threads read denormals as 0 (DAZ); a mesh holds none, so every thread and
@@ -206,4 +206,4 @@ TEST(ObjLoader, DenormalCoordinatesBecomeZero) {
     EXPECT_TRUE(std::signbit(flush_denormals({-0.0f, 0.0f, 0.0f}).x));  // -0 is not a denormal
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 /// Calls `write(f)` on a temporary file beside `path` and renames it to `path` when `write`
 /// returns and every byte reached the disk. On any failure (the temporary cannot be created,
@@ -21,4 +21,4 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 /// when both exist, else by normalised path): `what` names the output option.
 void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what);
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

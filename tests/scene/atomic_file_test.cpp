@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Output files are written whole or not at all, and never over the command's own input.
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include "accel/core/check.h"
 #include "tests/support/test_support.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 namespace {
 
 namespace fs = std::filesystem;
@@ -72,4 +72,4 @@ TEST(AtomicFile, OutputThatIsAnInputIsRefused) {
 }
 
 }  // namespace
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // TriangleMesh helpers: bounds, the checked append that drops bad triangles, the scene hash.
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
 #include <cmath>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 AABB TriangleMesh::triangle_bounds(size_t tri) const {
     AABB b = AABB::empty();
@@ -69,14 +69,14 @@ bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t ma
 }
 
 std::string scene_hash(const TriangleMesh& mesh) {
-    uint64_t h = kFnvOffset;
+    uint64_t h = accel::kFnvOffset;
     for (size_t i = 0; i < mesh.triangle_count(); ++i) {
         for (int k = 0; k < 3; ++k) {
             const Vec3 v = mesh.vertex(i, k);
-            h = fnv1a(&v, 12, h);
+            h = accel::fnv1a(&v, 12, h);
         }
     }
-    return hash_hex(h);
+    return accel::hash_hex(h);
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -5,9 +5,9 @@
 #include <cstdint>
 #include <string>
 
-#include "accel/core/mesh.h"
+#include "scene/mesh.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 enum class ProceduralKind {
     kSoup,        ///< random triangles in the unit cube, edge length ~ 2 / cbrt(n)
@@ -20,4 +20,4 @@ ProceduralKind parse_procedural_kind(const std::string& name);
 /// Exactly `triangles` triangles (>= 1), the same for the same (kind, triangles, seed).
 TriangleMesh make_procedural(ProceduralKind kind, uint64_t triangles, uint64_t seed);
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -11,7 +11,7 @@
 
 #include "accel/core/check.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
     namespace fs = std::filesystem;
@@ -65,4 +65,4 @@ void refuse_overwriting_input(const std::string& out, const std::string& in, con
     if (same) throw Error(what + " '" + out + "' is this command's input; choose another file");
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

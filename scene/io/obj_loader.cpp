@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // OBJ loading: one read of the file, a strict syntax scan (tinyobjloader reads `v 1 0 abc`
 // as a zero and only warns about out-of-range indices), then tinyobjloader's parser.
-#include "accel/io/obj_loader.h"
+#include "scene/io/obj_loader.h"
 
 #include <tiny_obj_loader.h>
 
@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "accel/core/check.h"
-#include "accel/io/atomic_file.h"
+#include "scene/io/atomic_file.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 namespace {
 
 std::string read_file(const std::string& path) {
@@ -387,4 +387,4 @@ void write_obj(const TriangleMesh& mesh, const std::string& path) {
     });
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

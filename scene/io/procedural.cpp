@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "accel/io/procedural.h"
+#include "scene/io/procedural.h"
 
 #include <tbb/parallel_for.h>
 
@@ -8,7 +8,7 @@
 #include "accel/core/check.h"
 #include "accel/core/random.h"
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 namespace {
 
 float unit(uint64_t seed, uint64_t i, uint64_t k) { return unit_float(splitmix64(seed ^ splitmix64(i * 16 + k))); }
@@ -101,4 +101,4 @@ TriangleMesh make_procedural(ProceduralKind kind, uint64_t triangles, uint64_t s
     return kind == ProceduralKind::kSoup ? soup(triangles, seed) : structured(triangles, seed);
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Scene cache entries: a fixed header, the dependencies (the OBJ's and each material file's
 // content hash), the mesh, and a checksum of everything before it. Little-endian.
-#include "accel/io/scene_cache.h"
+#include "scene/io/scene_cache.h"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -17,12 +17,12 @@
 
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
-#include "accel/io/atomic_file.h"
-#include "accel/io/obj_loader.h"
+#include "scene/io/atomic_file.h"
+#include "scene/io/obj_loader.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "scene cache files need a little-endian host");
 
-namespace bvhlab::accel {
+namespace bvhlab::scene {
 namespace fs = std::filesystem;
 namespace {
 
@@ -116,7 +116,8 @@ std::string entry_path(const std::string& dir, const std::string& obj) {
     fs::path abs = fs::weakly_canonical(fs::absolute(obj), ec);
     if (ec) abs = fs::absolute(obj);
     const std::string key = abs.string() + '\0' + std::to_string(kObjLoaderVersion);
-    return (fs::path(dir) / (abs.stem().string() + "-" + hash_hex(fnv1a(key.data(), key.size())) + kExtension))
+    return (fs::path(dir) /
+            (abs.stem().string() + "-" + accel::hash_hex(accel::fnv1a(key.data(), key.size())) + kExtension))
         .string();
 }
 
@@ -149,7 +150,7 @@ Entry parse_entry(const std::string& data) {
                        std::to_string(kSceneCacheVersion)};
     uint64_t stored;
     std::memcpy(&stored, data.data() + data.size() - 8, 8);
-    if (fnv1a_words(data.data(), data.size() - 8) != stored) throw Unusable{"it is damaged (checksum mismatch)"};
+    if (accel::fnv1a_words(data.data(), data.size() - 8) != stored) throw Unusable{"it is damaged (checksum mismatch)"};
     In in(data.data() + sizeof(Header), data.size() - sizeof(Header) - 8);
     e.source = in.str();
     for (uint32_t i = 0; i < e.h.dependencies; ++i) {
@@ -209,7 +210,7 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
     h.version = kSceneCacheVersion;
     h.loader_version = kObjLoaderVersion;
     h.obj_hash = obj_hash;
-    h.scene_hash = hash_from_hex(load.scene_hash);
+    h.scene_hash = accel::hash_from_hex(load.scene_hash);
     h.vertices = load.mesh.vertices.size();
     h.triangles = load.mesh.triangle_count();
     h.materials = load.mesh.materials.size();
@@ -243,7 +244,7 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
     out.array(load.mesh.material_ids);
     out.pod(uint8_t(!load.mesh.texcoords.empty()));
     out.array(load.mesh.texcoords);
-    const uint64_t sum = fnv1a_words(out.bytes().data(), out.bytes().size());
+    const uint64_t sum = accel::fnv1a_words(out.bytes().data(), out.bytes().size());
     out.pod(sum);
     std::error_code ec;
     fs::create_directories(fs::path(path).parent_path(), ec);
@@ -281,7 +282,7 @@ uint64_t hash_file(const std::string& path, bool* exists) {
     const size_t size = size_t(st.st_size);
     if (size == 0) {
         ::close(fd);
-        return fnv1a_words(nullptr, 0);
+        return accel::fnv1a_words(nullptr, 0);
     }
     void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
     ::close(fd);
@@ -292,11 +293,11 @@ uint64_t hash_file(const std::string& path, bool* exists) {
     const auto* base = static_cast<const char*>(map);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         const size_t b = c * kChunk;
-        part[c] = fnv1a_words(base + b, std::min(kChunk, size - b));
+        part[c] = accel::fnv1a_words(base + b, std::min(kChunk, size - b));
     });
     ::munmap(map, size);
-    uint64_t h = fnv1a_words(&size, sizeof size);
-    return fnv1a_words(part.data(), part.size() * sizeof(uint64_t), h);
+    uint64_t h = accel::fnv1a_words(&size, sizeof size);
+    return accel::fnv1a_words(part.data(), part.size() * sizeof(uint64_t), h);
 }
 
 SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
@@ -325,7 +326,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
             if (e.h.loader_version == kObjLoaderVersion && e.h.obj_hash == obj_hash && dependencies_unchanged(e.deps)) {
                 r.mesh = std::move(e.mesh);
                 r.warnings = std::move(e.warnings);
-                r.scene_hash = hash_hex(e.h.scene_hash);
+                r.scene_hash = accel::hash_hex(e.h.scene_hash);
                 r.from_cache = true;
                 std::vector<std::string> files;
                 for (const Dependency& d : e.deps) files.push_back(d.path);
@@ -398,4 +399,4 @@ size_t clear_scene_cache(const std::string& dir, uint64_t* bytes) {
     return n;
 }
 
-}  // namespace bvhlab::accel
+}  // namespace bvhlab::scene
