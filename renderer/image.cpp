@@ -105,8 +105,8 @@ void write_image(const Image& img, const std::string& path) {
 }
 
 Image read_image(const std::string& path) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) throw Error("cannot open " + path + ": no such file");
+    if (const std::string problem = scene::regular_file_problem(path); !problem.empty())
+        throw Error("cannot read " + path + ": " + (problem == "does not exist" ? "no such file" : problem));
     if (extension_of(path) == ".pfm") return read_pfm(path);
 #if defined(BVHLAB_HAVE_OIIO)
     auto in = OIIO::ImageInput::open(path);
@@ -146,6 +146,16 @@ Image read_pfm(const std::string& path) {
         throw Error(path + " is not a PFM file (bad header)");
     in.get();  // the single whitespace after the scale
     const int channels = magic == "PF" ? 3 : 1;
+    // The header's size against the file's, before anything is allocated (a 20-byte file can
+    // claim 65536 x 65536 pixels, 51.5 GB).
+    const auto header = std::streamoff(in.tellg());
+    in.seekg(0, std::ios::end);
+    const auto bytes = uint64_t(std::streamoff(in.tellg()) - header);
+    in.seekg(header);
+    const uint64_t need = uint64_t(w) * uint64_t(h) * uint64_t(channels) * sizeof(float);
+    if (!in || bytes < need)
+        throw Error(path + " is truncated: its header says " + std::to_string(w) + " x " + std::to_string(h) +
+                    " pixels (" + std::to_string(need) + " bytes), the file holds " + std::to_string(bytes));
     std::vector<float> data(size_t(w) * size_t(h) * size_t(channels));
     in.read(reinterpret_cast<char*>(data.data()), std::streamsize(data.size() * sizeof(float)));
     if (size_t(in.gcount()) != data.size() * sizeof(float))

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "accel/core/check.h"
+#include "scene/io/atomic_file.h"
 
 namespace bvhlab::render {
 
@@ -95,8 +96,8 @@ void RenderScene::load_textures(const TextureOptions& opts) {
         auto it = loaded.find(path);
         if (it == loaded.end()) {
             int32_t index = -1;
-            std::error_code ec;
-            if (std::filesystem::is_regular_file(path, ec)) {
+            const std::string problem = scene::regular_file_problem(path);
+            if (problem.empty()) {
                 const Image img = read_image(path);
                 for (const Vec3& p : img.pixels)
                     if (!std::isfinite(p.x + p.y + p.z) || p.x < 0.0f || p.y < 0.0f || p.z < 0.0f)
@@ -106,6 +107,8 @@ void RenderScene::load_textures(const TextureOptions& opts) {
                 index = int32_t(textures_.size());
                 textures_.push_back({uint32_t(texels_.size()), img.width, img.height, 0});
                 texels_.insert(texels_.end(), img.pixels.begin(), img.pixels.end());
+            } else if (problem != "does not exist") {  // a folder or a device: an error either way
+                throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name + "'): " + problem);
             } else if (!opts.warn_missing) {
                 throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name +
                             "') does not exist (--missing-textures warn renders with its Kd)");

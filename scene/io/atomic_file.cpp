@@ -15,8 +15,17 @@ namespace bvhlab::scene {
 
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
     namespace fs = std::filesystem;
-    const fs::path target(path);
-    if (fs::is_directory(target)) throw Error("cannot write '" + path + "': it is a folder");
+    fs::path target(path);
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) throw Error("cannot write '" + path + "': it is a folder");
+        if (!S_ISREG(st.st_mode))
+            throw Error("cannot write '" + path + "': " + not_regular_reason(st.st_mode) +
+                        "; bvhlab writes regular files only");
+        std::error_code ec;
+        if (fs::is_symlink(target, ec)) target = fs::canonical(target, ec);  // the link stays
+        if (ec) throw Error("cannot write '" + path + "': " + ec.message());
+    }
     // mkstemp in the target's folder, so that the rename stays on one file system.
     std::string tmpl = (target.parent_path().empty() ? fs::path(".") : target.parent_path()) /
                        ("." + target.filename().string() + ".tmp-XXXXXX");
@@ -51,7 +60,7 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     const int closed = std::fclose(f);
     f = nullptr;
     if (closed != 0) fail(errno);
-    if (std::rename(tmpl.c_str(), path.c_str()) != 0) fail(errno);
+    if (std::rename(tmpl.c_str(), target.c_str()) != 0) fail(errno);
 }
 
 void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what) {
@@ -63,6 +72,21 @@ void refuse_overwriting_input(const std::string& out, const std::string& in, con
         same = !e1 && !e2 && !a.empty() && a == b;
     }
     if (same) throw Error(what + " '" + out + "' is this command's input; choose another file");
+}
+
+std::string not_regular_reason(unsigned mode) {
+    if (S_ISREG(mode)) return "";
+    if (S_ISDIR(mode)) return "it is a directory";
+    if (S_ISFIFO(mode)) return "it is a pipe (FIFO)";
+    if (S_ISCHR(mode) || S_ISBLK(mode)) return "it is a device";
+    if (S_ISSOCK(mode)) return "it is a socket";
+    return "it is not a regular file";
+}
+
+std::string regular_file_problem(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return errno == ENOENT ? "does not exist" : std::string(std::strerror(errno));
+    return not_regular_reason(st.st_mode);
 }
 
 }  // namespace bvhlab::scene

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Output files written whole or not at all: into a temporary file in the same folder, flushed
 // to disk, then renamed over the final name. A killed run or a full disk leaves the old file
-// (or none), never a half-written one under the final name.
+// (or none), never a half-written one under the final name. Also the checks of what a path
+// is, for the one-line messages about inputs and outputs that are not regular files.
 #pragma once
 
 #include <cstdio>
@@ -11,7 +12,9 @@
 namespace bvhlab::scene {
 
 /// Calls `write(f)` on a temporary file beside `path` and renames it to `path` when `write`
-/// returns and every byte reached the disk. On any failure (the temporary cannot be created,
+/// returns and every byte reached the disk. A `path` that is a symbolic link is written
+/// through it (the link stays, its target is replaced); one that is (or links to) a folder,
+/// pipe, device or socket is refused, never replaced. On any failure (the temporary cannot be created,
 /// `write` throws, a write, flush, sync or the rename fails) the temporary is removed, `path`
 /// is left as it was, and bvhlab::Error names `path` and the reason (strerror). `write`
 /// reports its own failures by throwing, or by a failed stdio call (checked with ferror).
@@ -20,5 +23,13 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 /// Throws bvhlab::Error when the output `out` is the same file as the input `in` (by inode
 /// when both exist, else by normalised path): `what` names the output option.
 void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what);
+
+/// Why a file of stat mode `mode` cannot be read or written as a file: "it is a directory",
+/// "it is a pipe (FIFO)", "it is a device", "it is a socket"; "" for a regular file.
+std::string not_regular_reason(unsigned mode);
+
+/// "" when `path` is a regular file (through links); otherwise why it cannot be read, as a
+/// phrase for "'path' ...": "does not exist", "it is a directory", "it is a pipe (FIFO)", ...
+std::string regular_file_problem(const std::string& path);
 
 }  // namespace bvhlab::scene

@@ -13,8 +13,10 @@
 #include <cstring>
 #include <fstream>
 #include <future>
+#include <map>
 #include <sstream>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "accel/core/check.h"
@@ -26,7 +28,12 @@ namespace {
 std::string read_file(const std::string& path) {
     struct stat st {};
     if (stat(path.c_str(), &st) != 0) throw Error("cannot open '" + path + "': " + std::strerror(errno));
-    if (S_ISDIR(st.st_mode)) throw Error("cannot read '" + path + "': it is a directory");
+    // A pipe's size is unknown until it is read through; bvhlab reads scenes from files.
+    if (!S_ISREG(st.st_mode)) {
+        const std::string why = not_regular_reason(st.st_mode);
+        throw Error("cannot read '" + path + "': " + why +
+                    (S_ISDIR(st.st_mode) ? "" : "; save it to a file and give its path"));
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open '" + path + "': " + std::strerror(errno));
     std::string data(size_t(st.st_size), '\0');
@@ -51,8 +58,9 @@ bool is_number(const char* b, const char* e, double& value) {
     return end == tok.c_str() + tok.size();
 }
 
-/// One face-vertex token by strtol on a copy: v, v/vt, v//vn or v/vt/vn with non-zero integers.
-bool parse_face_token_slow(const char* b, const char* e, long& vi);
+/// One face-vertex token by strtol on a copy: v, v/vt, v//vn or v/vt/vn with non-zero integers;
+/// ref gets the v, vt and vn references (0 where absent).
+bool parse_face_token_slow(const char* b, const char* e, long (&ref)[3]);
 
 /// [-]digits with at most 10 digits at p, or false (p unmoved).
 bool fast_int(const char*& p, const char* e, long& v) {
@@ -76,36 +84,38 @@ bool fast_int(const char*& p, const char* e, long& v) {
     return true;
 }
 
-/// One face-vertex token: v, v/vt, v//vn or v/vt/vn with non-zero integers. Plain decimal
-/// tokens are read in place; anything else goes to parse_face_token_slow, which decides, so
-/// both paths accept the same tokens with the same value.
-bool parse_face_token(const char* b, const char* e, long& vi) {
+/// One face-vertex token: v, v/vt, v//vn or v/vt/vn with non-zero integers; ref gets the v,
+/// vt and vn references (0 where absent). Plain decimal tokens are read in place; anything
+/// else goes to parse_face_token_slow, which decides, so both paths accept the same tokens
+/// with the same values.
+bool parse_face_token(const char* b, const char* e, long (&ref)[3]) {
     constexpr long kMaxRef = 2147483647L;
     const char* p = b;
     auto ok = [](long x) { return x != 0 && x <= kMaxRef && x >= -kMaxRef; };
-    if (fast_int(p, e, vi) && ok(vi)) {
+    ref[1] = ref[2] = 0;
+    if (fast_int(p, e, ref[0]) && ok(ref[0])) {
         bool fine = true;
         for (int part = 0; part < 2 && fine && p < e && *p == '/'; ++part) {
             ++p;
             if (part == 0 && p < e && *p == '/') continue;  // v//vn
-            long x = 0;
-            fine = fast_int(p, e, x) && ok(x);
+            fine = fast_int(p, e, ref[1 + part]) && ok(ref[1 + part]);
         }
         if (fine && p == e) return true;
     }
-    return parse_face_token_slow(b, e, vi);
+    return parse_face_token_slow(b, e, ref);
 }
 
-bool parse_face_token_slow(const char* b, const char* e, long& vi) {
+bool parse_face_token_slow(const char* b, const char* e, long (&ref)[3]) {
     std::string tok(b, e);
     const char* p = tok.c_str();
     char* end = nullptr;
     // References beyond int (what tinyobjloader stores) are bad references, never negated:
     // -LONG_MIN overflowed here before (found by the OBJ fuzz target).
     constexpr long kMaxRef = 2147483647L;
+    ref[1] = ref[2] = 0;
     errno = 0;
-    vi = std::strtol(p, &end, 10);
-    if (end == p || vi == 0 || errno == ERANGE || vi > kMaxRef || vi < -kMaxRef) return false;
+    ref[0] = std::strtol(p, &end, 10);
+    if (end == p || ref[0] == 0 || errno == ERANGE || ref[0] > kMaxRef || ref[0] < -kMaxRef) return false;
     for (int part = 0; part < 2 && *end == '/'; ++part) {
         p = end + 1;
         if (*p == '/' && part == 0) {  // v//vn
@@ -113,8 +123,9 @@ bool parse_face_token_slow(const char* b, const char* e, long& vi) {
             continue;
         }
         errno = 0;
-        long x = std::strtol(p, &end, 10);
+        const long x = std::strtol(p, &end, 10);
         if (end == p || x == 0 || errno == ERANGE || x > kMaxRef || x < -kMaxRef) return false;
+        ref[1 + part] = x;
     }
     return *end == '\0';
 }
@@ -146,9 +157,14 @@ using LineRanges = std::vector<std::pair<size_t, size_t>>;
 /// text as written.
 std::vector<size_t> scan_obj(const std::string& path, const std::string& text, std::vector<std::string>& mtllibs) {
     std::vector<size_t> non_finite;
-    size_t line_no = 0, nv = 0, pos = 0;
-    long max_index = 0;
-    size_t max_line = 0;
+    size_t line_no = 0, pos = 0;
+    // Per kind of reference (v, vt, vn): the count so far, the largest positive reference and
+    // its line. Negative references count back from the lines read so far.
+    size_t count[3] = {0, 0, 0};
+    long max_index[3] = {0, 0, 0};
+    size_t max_line[3] = {0, 0, 0};
+    static constexpr const char* kRefName[3] = {"face index", "texture coordinate index", "normal index"};
+    static constexpr const char* kRefOf[3] = {"vertices", "texture coordinates", "normals"};
     auto fail = [&](size_t ln, const std::string& what) {
         throw Error("'" + path + "' line " + std::to_string(ln) + ": " + what);
     };
@@ -177,10 +193,8 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, s
                                       "' is not a number");
                 if (i <= 3 && !std::isfinite(value)) finite = false;
             }
-            if (key == "v") {
-                if (!finite) non_finite.push_back(nv);
-                ++nv;
-            }
+            if (key == "v" && !finite) non_finite.push_back(count[0]);
+            ++count[key == "v" ? 0 : key == "vt" ? 1 : 2];
         } else if (key == "mtllib") {
             for (int i = 1; i < nt; ++i) mtllibs.emplace_back(toks[i][0], toks[i][1]);
         } else if (key == "f") {
@@ -188,20 +202,25 @@ std::vector<size_t> scan_obj(const std::string& path, const std::string& text, s
             // Every reference, however many (toks holds only the first 31).
             const char* s = nullptr;
             for (const char* p = toks[1][0]; next_token(p, e, s);) {
-                long vi = 0;
-                if (!parse_face_token(s, p, vi))
+                long ref[3];
+                if (!parse_face_token(s, p, ref))
                     fail(line_no, "malformed 'f' line: bad vertex reference '" + std::string(s, p) + "'");
-                if (vi < 0 && size_t(-vi) > nv) fail(line_no, "face index " + std::to_string(vi) + " out of range");
-                if (vi > max_index) {
-                    max_index = vi;
-                    max_line = line_no;
+                for (int r = 0; r < 3; ++r) {
+                    if (ref[r] < 0 && size_t(-ref[r]) > count[r])
+                        fail(line_no, std::string(kRefName[r]) + " " + std::to_string(ref[r]) + " out of range (" +
+                                          std::to_string(count[r]) + " " + kRefOf[r] + " before this line)");
+                    if (ref[r] > max_index[r]) {
+                        max_index[r] = ref[r];
+                        max_line[r] = line_no;
+                    }
                 }
             }
         }
     }
-    if (size_t(max_index) > nv)
-        fail(max_line, "face index " + std::to_string(max_index) + " out of range (the file has " + std::to_string(nv) +
-                           " vertices)");
+    for (int r = 0; r < 3; ++r)
+        if (size_t(max_index[r]) > count[r])
+            fail(max_line[r], std::string(kRefName[r]) + " " + std::to_string(max_index[r]) +
+                                  " out of range (the file has " + std::to_string(count[r]) + " " + kRefOf[r] + ")");
     return non_finite;
 }
 
@@ -254,6 +273,36 @@ std::string fan_huge_faces(const std::string& text, const LineRanges& huge) {
     return out;
 }
 
+/// The `mtllib` file `name` of an OBJ in `base_dir`: a relative name from the OBJ's folder, an
+/// absolute one as it is. (tinyobjloader's MaterialFileReader prepends the folder to both, and
+/// splits the folder at every ':' as a search path.)
+std::string mtl_path(const std::string& base_dir, const std::string& name) {
+    return !name.empty() && name[0] == '/' ? name : base_dir + name;
+}
+
+/// Reads `mtllib` files by mtl_path(); one that is missing or not a regular file is a warning
+/// (the renderer decides what a missing material file means), as with tinyobjloader's reader.
+class MtlReader : public tinyobj::MaterialReader {
+public:
+    explicit MtlReader(std::string base_dir) : base_dir_(std::move(base_dir)) {}
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* names, std::string* warn, std::string* err) override {
+        const std::string path = mtl_path(base_dir_, name);
+        const std::string problem = regular_file_problem(path);
+        std::ifstream in;
+        if (problem.empty()) in.open(path);
+        if (!problem.empty() || !in) {
+            if (warn) *warn += "material file '" + path + "' " + (problem.empty() ? "cannot be opened" : problem) + "\n";
+            return false;
+        }
+        tinyobj::LoadMtl(names, materials, &in, warn, err);
+        return true;
+    }
+
+private:
+    std::string base_dir_;
+};
+
 }  // namespace
 
 TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warnings, std::vector<std::string>* mtl_files,
@@ -272,7 +321,7 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     std::string warn, err;
     const size_t slash = path.find_last_of('/');
     const std::string base_dir = slash == std::string::npos ? "./" : path.substr(0, slash + 1);
-    tinyobj::MaterialFileReader mtl_reader(base_dir);
+    MtlReader mtl_reader(base_dir);
     // tinyobjloader reads the text in place (an istringstream copied all of it: 0.14 s on
     // furball), 8 MiB at a time, so that each refill can report progress.
     struct TextBuf : std::streambuf {
@@ -294,7 +343,7 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
                                      /*triangulate=*/true, /*default_vcols_fallback=*/false);
     const std::vector<size_t> non_finite = scan.get();  // the scan's error, if any, first
     if (mtl_files)
-        for (const std::string& m : mtllibs) mtl_files->push_back(base_dir + m);
+        for (const std::string& m : mtllibs) mtl_files->push_back(mtl_path(base_dir, m));
     if (!ok || !err.empty()) {
         while (!err.empty() && (err.back() == '\n' || err.back() == '.')) err.pop_back();
         for (char& ch : err)

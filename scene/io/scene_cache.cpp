@@ -193,10 +193,21 @@ Entry parse_entry(const std::string& data) {
 }
 
 /// Whether every dependency still has the bytes it had (or is still missing).
+/// A material file's hash, or exists = false when it is missing or not a regular file (the
+/// loader reads neither, and reports both as missing).
+uint64_t dependency_hash(const std::string& path, bool* exists) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) {
+        *exists = false;
+        return 0;
+    }
+    return hash_file(path, exists);
+}
+
 bool dependencies_unchanged(const std::vector<Dependency>& deps) {
     for (const Dependency& d : deps) {
         bool exists = false;
-        const uint64_t h = hash_file(d.path, &exists);
+        const uint64_t h = dependency_hash(d.path, &exists);
         if (exists != d.exists || (exists && h != d.hash)) return false;
     }
     return true;
@@ -266,18 +277,23 @@ std::string default_scene_cache_dir() {
 
 uint64_t hash_file(const std::string& path, bool* exists) {
     if (exists) *exists = true;
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
+    // Checked before opening: opening a FIFO would wait for a writer.
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
         if (errno == ENOENT && exists) {
             *exists = false;
             return 0;
         }
         throw Error("cannot open '" + path + "': " + std::strerror(errno));
     }
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || S_ISDIR(st.st_mode)) {
+    if (!S_ISREG(st.st_mode))
+        throw Error("cannot read '" + path + "': " + not_regular_reason(st.st_mode) +
+                    (S_ISDIR(st.st_mode) ? "" : "; save it to a file and give its path"));
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw Error("cannot open '" + path + "': " + std::strerror(errno));
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {  // replaced in between
         ::close(fd);
-        throw Error("cannot read '" + path + "'" + (S_ISDIR(st.st_mode) ? ": it is a directory" : ""));
+        throw Error("cannot read '" + path + "': it is not a regular file");
     }
     const size_t size = size_t(st.st_size);
     if (size == 0) {
@@ -320,7 +336,18 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
     const uint64_t obj_hash = hash_file(obj_path, &exists);
     if (!exists) throw Error("cannot open '" + obj_path + "': " + std::strerror(ENOENT));
     r.cache_file = entry_path(cache_dir, obj_path);
-    if (fs::exists(r.cache_file)) {
+    std::error_code ec;
+    const fs::file_status entry = fs::symlink_status(r.cache_file, ec);
+    if (fs::exists(entry) && !fs::is_regular_file(entry)) {
+        // Never read (a FIFO would hang) and never replaced: the cache's files are its own.
+        std::vector<std::string> mtl_files;
+        r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
+        r.scene_hash = scene_hash(r.mesh);
+        note_materials(mtl_files);
+        r.cache_warning = "scene cache entry '" + r.cache_file + "' is not a regular file: ignored, and not written";
+        return r;
+    }
+    if (fs::exists(entry)) {
         try {
             Entry e = parse_entry(read_whole(r.cache_file));
             if (e.h.loader_version == kObjLoaderVersion && e.h.obj_hash == obj_hash && dependencies_unchanged(e.deps)) {
@@ -344,7 +371,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
     std::vector<Dependency> deps;
     for (const std::string& m : mtl_files) {
         Dependency d{m, false, 0};
-        d.hash = hash_file(m, &d.exists);
+        d.hash = dependency_hash(m, &d.exists);
         deps.push_back(std::move(d));
     }
     try {
@@ -363,6 +390,11 @@ std::vector<SceneCacheEntry> list_scene_cache(const std::string& dir) {
         if (de.path().extension() != kExtension || de.path().filename().string()[0] == '.') continue;
         SceneCacheEntry s;
         s.file = de.path().string();
+        if (!de.is_regular_file(ec) || de.is_symlink(ec)) {
+            s.problem = "not a regular file";
+            out.push_back(std::move(s));
+            continue;
+        }
         s.bytes = de.file_size(ec);
         try {
             const Entry e = parse_entry(read_whole(s.file));
@@ -387,7 +419,8 @@ size_t clear_scene_cache(const std::string& dir, uint64_t* bytes) {
             const std::string name = de.path().filename().string();
             const bool entry = de.path().extension() == kExtension && name[0] != '.';
             const bool temporary = name[0] == '.' && name.find(kExtension + std::string(".tmp-")) != std::string::npos;
-            if (!entry && !temporary) continue;  // never anything but the cache's own files
+            if ((!entry && !temporary) || !de.is_regular_file(ec) || de.is_symlink(ec))
+                continue;  // never anything but the cache's own files
             const uint64_t size = de.file_size(ec);
             if (fs::remove(de.path(), ec)) {
                 ++n;

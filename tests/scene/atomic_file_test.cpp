@@ -56,6 +56,30 @@ TEST(AtomicFile, UnwritablePlacesAreErrorsNamingThePath) {
     EXPECT_TRUE(fs::is_directory(dir));
 }
 
+// A symbolic link is written through (the link stays, its target gets the contents); a
+// device or a pipe is refused and left as it is, never replaced by a regular file.
+TEST(AtomicFile, LinksAreWrittenThroughAndSpecialFilesRefused) {
+    test::TempFile target("atomic_target.txt", "old");
+    const fs::path link = fs::path(target.path()).parent_path() / "atomic_link.txt";
+    fs::remove(link);
+    fs::create_symlink(target.path(), link);
+    write_file_atomically(link.string(), [](std::FILE* out) { std::fputs("through the link", out); });
+    EXPECT_TRUE(fs::is_symlink(link));
+    EXPECT_EQ(test::read_file_bytes(target.path()), "through the link");
+    fs::remove(link);
+    try {
+        write_file_atomically("/dev/null", [](std::FILE*) {});
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("it is a device"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(fs::is_character_file("/dev/null"));
+    EXPECT_EQ(regular_file_problem("/dev/null"), "it is a device");
+    EXPECT_EQ(regular_file_problem(fs::temp_directory_path().string()), "it is a directory");
+    EXPECT_EQ(regular_file_problem("/nonexistent-bvhlab-dir/x"), "does not exist");
+    EXPECT_EQ(regular_file_problem(target.path()), "");
+}
+
 TEST(AtomicFile, OutputThatIsAnInputIsRefused) {
     test::TempFile f("input.obj", "v 0 0 0\n");
     const fs::path p(f.path());

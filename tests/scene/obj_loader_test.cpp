@@ -158,6 +158,46 @@ TEST(ObjLoader, KeepsTheRenderersMaterialParameters) {
     EXPECT_EQ(x.diffuse_texture, "textures\\wood.png");
 }
 
+// An absolute mtllib path is read as it is (it had the OBJ's folder put in front); a relative
+// one from the OBJ's folder; a missing one is a warning naming the resolved path.
+TEST(ObjLoader, AbsoluteAndRelativeMaterialFiles) {
+    test::TempFile mtl("absolute.mtl", "newmtl red\nKd 1 0 0\n");
+    const std::string abs = std::filesystem::absolute(mtl.path()).string();
+    test::TempFile obj("absolute.obj", "mtllib " + abs + "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n");
+    std::vector<std::string> warnings, files;
+    const scene::TriangleMesh m = scene::load_obj(obj.path(), &warnings, &files);
+    ASSERT_EQ(m.materials.size(), 1u);
+    EXPECT_EQ(m.materials[0].diffuse.x, 1.0f);
+    EXPECT_EQ(m.material_ids[0], 0);
+    ASSERT_EQ(files.size(), 1u);
+    EXPECT_EQ(files[0], abs);
+    EXPECT_TRUE(warnings.empty());
+    test::TempFile gone("gone_mtl.obj", "mtllib no-such.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    warnings.clear();
+    files.clear();
+    scene::load_obj(gone.path(), &warnings, &files);
+    ASSERT_EQ(files.size(), 1u);
+    EXPECT_EQ(files[0], std::filesystem::path(gone.path()).parent_path().string() + "/no-such.mtl");
+    ASSERT_FALSE(warnings.empty());
+    EXPECT_NE(warnings[0].find("no-such.mtl' does not exist"), std::string::npos) << warnings[0];
+}
+
+// vt and vn references are checked like v ones: negative beyond what was read so far, positive
+// beyond the file's count.
+TEST(ObjLoader, TextureAndNormalReferencesOutOfRange) {
+    expect_load_error("negvt.obj", std::string(kTri) + "vt 0 0\nf 1/-2 2/1 3/1\n",
+                      "line 5: texture coordinate index -2 out of range");
+    expect_load_error("bigvt.obj", std::string(kTri) + "vt 0 0\nf 1/1 2/2 3/1\n",
+                      "line 5: texture coordinate index 2 out of range (the file has 1 texture coordinates)");
+    expect_load_error("negvn.obj", std::string(kTri) + "vn 0 0 1\nf 1//1 2//-2 3//1\n",
+                      "line 5: normal index -2 out of range");
+    expect_load_error("bigvn.obj", std::string(kTri) + "vn 0 0 1\nf 1/1/1 2/1/3 3/1/1\nvt 0 0\n",
+                      "normal index 3 out of range (the file has 1 normals)");
+    // A later vt makes a forward reference valid, as in any OBJ reader.
+    TempFile later("latervt.obj", std::string(kTri) + "f 1/1 2/1 3/1\nvt 0.5 0.5\n");
+    EXPECT_EQ(scene::load_obj(later.path()).triangle_count(), 1u);
+}
+
 // Texture coordinates per corner, as the faces reference them; a face without vt gets zeros,
 // a file without vt none at all, and a vt reference past the end is an error.
 TEST(ObjLoader, KeepsTextureCoordinatesPerCorner) {

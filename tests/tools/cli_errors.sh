@@ -43,6 +43,38 @@ printf '{"scenes": {"a": {"file": "cornell_box.obj", "ao_length": 1e39}}}' >"$tm
 BVHLAB_SCENES=$tmp/cat expect_error catalogue-ao-length "scene 'a': field 'ao_length' is 1e\+39, outside" build a
 rm "$tmp/cat/scenes.json" && mkdir "$tmp/cat/scenes.json"
 BVHLAB_SCENES=$tmp/cat expect_error catalogue-folder "scenes.json' is not a regular file" build a
+# Texture-coordinate and normal references are range-checked like vertex ones, negative too.
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-2 2/1 3/1\n' >"$tmp/negvt.obj"
+expect_error obj-negative-vt "line 5: texture coordinate index -2 out of range [(]1 texture coordinates before" build "$tmp/negvt.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n' >"$tmp/bigvt.obj"
+expect_error obj-large-vt "line 5: texture coordinate index 2 out of range [(]the file has 1" build "$tmp/bigvt.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//-3 3//1\n' >"$tmp/negvn.obj"
+expect_error obj-negative-vn "line 5: normal index -3 out of range" build "$tmp/negvn.obj"
+# A scene must be a regular file: a pipe is refused by name (it was "no usable triangles").
+mkfifo "$tmp/pipe.obj"
+expect_error obj-fifo "cannot read '.*pipe.obj': it is a pipe [(]FIFO[)]; save it to a file" build "$tmp/pipe.obj"
+# Outputs are regular files: a device or a pipe is refused, never replaced by a file.
+expect_error build-out-device "cannot write '/dev/null': it is a device" build "$data/cornell_box.obj" -o /dev/null
+expect_error rays-out-fifo "cannot write '.*pipe.obj': it is a pipe" rays "$data/cornell_box.obj" --width 4 --height 4 \
+    -o "$tmp/pipe.obj"
+# A PFM whose header claims more pixels than the file holds is refused before any allocation.
+printf 'PF\n65536 65536\n-1.0\n' >"$tmp/huge.pfm"
+expect_error pfm-huge-header "huge.pfm is truncated: its header says 65536 x 65536 pixels" render \
+    "$data/cornell_box.obj" --width 4 --height 4 --spp 1 --env "$tmp/huge.pfm" -o "$tmp/huge-out.pfm"
+# A folder or a device as an environment map, texture or material file says what it is.
+mkdir -p "$tmp/envdir"
+expect_error render-env-folder "cannot render with --env .*envdir: it is a directory" render "$data/cornell_box.obj" \
+    --width 4 --height 4 --spp 1 --env "$tmp/envdir" -o "$tmp/envdir-out.pfm"
+expect_error render-env-device "cannot render with --env /dev/null: it is a device" render "$data/cornell_box.obj" \
+    --width 4 --height 4 --spp 1 --env /dev/null -o "$tmp/envdev-out.pfm"
+mkdir -p "$tmp/texdir/maps/wall.png" "$tmp/mtldir/dir.mtl"
+printf 'newmtl w\nKd 1 1 1\nmap_Kd maps/wall.png\n' >"$tmp/texdir/t.mtl"
+printf 'mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl w\nf 1/1 2/1 3/1\n' >"$tmp/texdir/t.obj"
+expect_error render-texture-folder "texture .*wall.png [(]map_Kd of material 'w'[)]: it is a directory" render \
+    "$tmp/texdir/t.obj" --width 4 --height 4 --spp 1 -o "$tmp/texdir-out.pfm"
+printf 'mtllib dir.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/mtldir/m.obj"
+expect_error render-mtl-folder "its material file .*dir.mtl: it is a directory" render "$tmp/mtldir/m.obj" --width 4 \
+    --height 4 --spp 1 -o "$tmp/mtldir-out.pfm"
 printf 'v 0x10 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/hex.obj"
 expect_error obj-hex "line 1: malformed 'v' line: '0x10' is not a number" build "$tmp/hex.obj"
 expect_error render-env-scale-alone "--env-scale requires --env" render "$data/cornell_box.obj" --width 4 --height 4 \

@@ -52,6 +52,24 @@ check "a damaged entry does not fail the run (rc $rc)" [ "$rc" -eq 0 ]
 check "a damaged entry is one warning" grep -q "warning: scene cache entry .* ignored and rebuilt: it is damaged" "$tmp/dmg.err"
 check "and the run parsed the OBJ" [ "$(field scene_cache <"$tmp/dmg.json")" = miss ]
 
+# Entries that are not regular files are ignored with a warning, never read (a FIFO would
+# hang), never replaced, and left alone by `cache clear`.
+rm -f "$entry" && mkdir "$entry"
+"$bin" build "$tmp/soup.obj" --no-epo --json >"$tmp/dir.json" 2>"$tmp/dir.err"
+check "an entry that is a folder does not fail the run (rc $?)" [ -s "$tmp/dir.json" ]
+check "an entry that is a folder is one warning" grep -q "warning: scene cache entry .* is not a regular file: ignored" "$tmp/dir.err"
+check "and stays a folder" [ -d "$entry" ]
+rmdir "$entry" && mkfifo "$entry"
+timeout 60 "$bin" build "$tmp/soup.obj" --no-epo --json >"$tmp/fifo.json" 2>"$tmp/fifo.err"
+rc=$?
+check "an entry that is a FIFO neither hangs nor fails the run (rc $rc)" [ "$rc" -eq 0 ]
+check "an entry that is a FIFO is one warning" grep -q "is not a regular file: ignored" "$tmp/fifo.err"
+timeout 60 "$bin" cache info --json >"$tmp/fifo-info.json"
+check "cache info lists the FIFO as unusable without reading it (rc $?)" grep -q "not a regular file" "$tmp/fifo-info.json"
+timeout 60 "$bin" cache clear >/dev/null
+check "cache clear leaves the FIFO" [ -p "$entry" ]
+rm -f "$entry"
+
 "$bin" cache clear >/dev/null
 left=$("$bin" cache info --json | tail -1 | field entries)
 check "cache clear empties it ($left entries)" [ "$left" -eq 0 ]

@@ -173,6 +173,9 @@ void register_render(CLI::App& app, Globals& g) {
         Scene s = load_scene(o->scene, g);
         scene::refuse_overwriting_input(o->out, s.source, "--out");
         for (const std::string& f : s.missing_material_files) {
+            // A folder or a device is an error whatever --missing-textures says.
+            if (const std::string problem = scene::regular_file_problem(f); problem != "does not exist")
+                throw Error("cannot render " + o->scene + ": its material file " + f + ": " + problem);
             if (o->missing == "error")
                 throw Error("cannot render " + o->scene + ": its material file " + f +
                             " does not exist (--missing-textures warn renders with the default material)");
@@ -206,10 +209,12 @@ void register_render(CLI::App& app, Globals& g) {
             sky.radiance = vec3_of(o->sky);
         }
         if (!o->env.empty()) {
-            std::error_code ec;
-            if (std::filesystem::is_regular_file(o->env, ec)) {
+            const std::string problem = scene::regular_file_problem(o->env);
+            if (problem.empty()) {
                 sky.env_file = o->env;
                 sky.env_scale = o->env_scale;
+            } else if (problem != "does not exist") {
+                throw Error("cannot render with --env " + o->env + ": " + problem);
             } else if (o->missing == "error") {
                 throw Error("cannot render with --env " + o->env +
                             ": no such file (--missing-textures warn renders with the default sky)");
