@@ -23,13 +23,6 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-template <typename T>
-void check_range(const char* name, T v, T lo, T hi) {
-    if (!(v >= lo && v <= hi))  // NaN fails too
-        throw Error(std::string(name) + " " + std::to_string(v) + " is not in [" + std::to_string(lo) + ", " +
-                    std::to_string(hi) + "]");
-}
-
 /// The kd-tree path: kd SAH and sizes (no EPO: it is a BVH figure). `tree` is built here
 /// unless a loaded one is given.
 AccelStructure make_kdtree(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
@@ -201,20 +194,8 @@ void StructureSpec::check() const {
         throw Error("cw_tris '" + cw_tris + "' is not one of woop, vertices");
     if (kd_stack != kKdFullStack && (kd_stack < 1 || kd_stack > 8))
         throw Error("kd_stack " + std::to_string(kd_stack) + " is neither 64 (full stack) nor in [1, 8] (short stack)");
-    check_range("bins", options.num_bins, 2, 256);
-    check_range("max_leaf", options.config.max_leaf_size, 1u, 64u);
-    check_range("min_leaf", options.config.min_leaf_size, 1u, 64u);
-    if (options.config.min_leaf_size > options.config.max_leaf_size)
-        throw Error("min_leaf " + std::to_string(options.config.min_leaf_size) + " is larger than max_leaf " +
-                    std::to_string(options.config.max_leaf_size));
-    check_range("alpha", options.sbvh_alpha, 0.0f, 1.0f);
-    check_range("budget", options.sbvh_budget, 1.0f, 16.0f);
-    check_range("spatial_bins", options.sbvh_spatial_bins, 2, 256);
-    check_range("reinsertion_passes", options.reinsertion_passes, -1, 16);
-    check_range("kd_ct", kd.traversal_cost, 0.001f, 1e6f);
-    check_range("kd_ci", kd.intersection_cost, 0.001f, 1e6f);
-    check_range("kd_bonus", kd.empty_bonus, 0.0f, 0.99f);
-    check_range("kd_max_depth", kd.max_depth, -1, 64);
+    if (const std::string p = accel::options_problem(options); !p.empty()) throw Error(p);
+    if (const std::string p = accel::kd_config_problem(kd); !p.empty()) throw Error(p);
 }
 
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {

@@ -10,6 +10,23 @@
 
 namespace bvhlab::accel {
 
+std::string options_problem(const BuilderOptions& o) {
+    const BuildConfig& c = o.config;
+    for (const std::string& p :
+         {range_problem("bins", o.num_bins, 2, 256), range_problem("max_leaf", c.max_leaf_size, 1u, 64u),
+          range_problem("min_leaf", c.min_leaf_size, 1u, 64u),
+          range_problem("max_depth", c.max_depth, 1u, kMaxTreeDepth),
+          range_problem("ct", c.traversal_cost, 0.001f, 1e6f), range_problem("ci", c.intersection_cost, 0.001f, 1e6f),
+          range_problem("alpha", o.sbvh_alpha, 0.0f, 1.0f), range_problem("budget", o.sbvh_budget, 1.0f, 16.0f),
+          range_problem("spatial_bins", o.sbvh_spatial_bins, 2, 256),
+          range_problem("reinsertion_passes", o.reinsertion_passes, -1, 16)})
+        if (!p.empty()) return p;
+    if (c.min_leaf_size > c.max_leaf_size)
+        return "min_leaf " + std::to_string(c.min_leaf_size) + " is larger than max_leaf " +
+               std::to_string(c.max_leaf_size);
+    return "";
+}
+
 BuilderKind parse_builder_kind(const std::string& name) {
     if (name == "binned") return BuilderKind::kBinned;
     if (name == "sweep") return BuilderKind::kSweep;

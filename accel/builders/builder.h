@@ -29,6 +29,11 @@ struct BuilderOptions {
     int reinsertion_passes = -1;
 };
 
+/// "" when every option is in its range, else one line naming the first that is not, by its
+/// structure-spec name ("bins 300 is not in [2, 256]"). Structure specs and structure-file
+/// headers are checked with it.
+std::string options_problem(const BuilderOptions& options);
+
 /// The reinsertion passes `options` ask of builder `kind`, with -1 resolved.
 int reinsertion_passes(BuilderKind kind, const BuilderOptions& options);
 

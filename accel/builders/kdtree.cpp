@@ -623,6 +623,15 @@ private:
 
 namespace bvhlab::accel {
 
+std::string kd_config_problem(const KdTreeBuilder::Config& c) {
+    for (const std::string& p : {range_problem("kd_ct", c.traversal_cost, 0.001f, 1e6f),
+                                 range_problem("kd_ci", c.intersection_cost, 0.001f, 1e6f),
+                                 range_problem("kd_bonus", c.empty_bonus, 0.0f, 0.99f),
+                                 range_problem("kd_max_depth", c.max_depth, -1, int(kMaxTreeDepth))})
+        if (!p.empty()) return p;
+    return "";
+}
+
 int KdTreeBuilder::max_depth_for(size_t n) const {
     if (config_.max_depth >= 0) return std::min(config_.max_depth, int(kMaxTreeDepth));
     return std::min(int(kMaxTreeDepth), int(8.0 + 1.3 * std::log2(double(std::max<size_t>(n, 1)))));

@@ -60,4 +60,8 @@ private:
     Config config_;
 };
 
+/// "" when every value of `c` is in its range, else one line naming the first that is not
+/// (kd_ct, kd_ci, kd_bonus, kd_max_depth, as structure specs name them).
+std::string kd_config_problem(const KdTreeBuilder::Config& c);
+
 }  // namespace bvhlab::accel

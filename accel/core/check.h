@@ -30,6 +30,19 @@ public:
 
 }  // namespace bvhlab
 
+namespace bvhlab {
+
+/// "" when lo <= v <= hi, else "<name> <v> is not in [<lo>, <hi>]" (NaN is never in range):
+/// the one-line form of every option range check.
+template <typename T>
+std::string range_problem(const char* name, T v, T lo, T hi) {
+    if (v >= lo && v <= hi) return "";
+    return std::string(name) + " " + std::to_string(v) + " is not in [" + std::to_string(lo) + ", " +
+           std::to_string(hi) + "]";
+}
+
+}  // namespace bvhlab
+
 /// Always-on invariant check; throws bvhlab::Error with file:line on failure.
 #define BVHLAB_CHECK(expr, msg)                                              \
     do {                                                                     \

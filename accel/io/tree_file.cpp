@@ -178,6 +178,10 @@ TreeFile read_tree_file(const std::string& path) {
     o.sbvh_budget = h.sbvh_budget;
     o.sbvh_spatial_bins = int(h.spatial_bins);
     o.reinsertion_passes = int(h.reinsertion);
+    // The header's configuration is shown and reused as it is (a NaN Ct printed "SAH nan", a
+    // max depth of 0 "depth 9 of 0"): the ranges a build accepts.
+    if (const std::string bad = kd ? kd_config_problem(f.meta.kd) : options_problem(o); !bad.empty())
+        throw Error("structure file '" + path + "' has a header value out of range: " + bad);
     return f;
 }
 

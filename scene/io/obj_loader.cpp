@@ -292,7 +292,8 @@ public:
         std::ifstream in;
         if (problem.empty()) in.open(path);
         if (!problem.empty() || !in) {
-            if (warn) *warn += "material file '" + path + "' " + (problem.empty() ? "cannot be opened" : problem) + "\n";
+            if (warn)
+                *warn += "material file '" + path + "' " + (problem.empty() ? "cannot be opened" : problem) + "\n";
             return false;
         }
         tinyobj::LoadMtl(names, materials, &in, warn, err);

@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
 #include "accel/core/check.h"
+#include "accel/core/checksum.h"
 #include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 
@@ -92,6 +94,25 @@ TEST(TreeFile, DamagedFiles) {
         expect_read_error(f.path(), "claims");
         expect_read_error(f.path(), std::to_string(huge));
     }
+    // Header values out of range, with the checksum made right again: refused by name.
+    // (Ct is at byte 48, max_depth at 44.)
+    const auto with_checksum = [](std::string b) {
+        const uint64_t sum = fnv1a(b.data(), b.size() - 8);
+        std::memcpy(&b[b.size() - 8], &sum, 8);
+        return b;
+    };
+    bad = good;
+    const float nan = std::nanf("");
+    std::memcpy(&bad[48], &nan, 4);
+    write(with_checksum(bad));
+    expect_read_error(f.path(), "header value out of range: ct nan");
+    bad = good;
+    const uint32_t zero = 0;
+    std::memcpy(&bad[44], &zero, 4);
+    write(with_checksum(bad));
+    expect_read_error(f.path(), "header value out of range: max_depth 0 is not in [1, 64]");
+    write(with_checksum(good));
+    EXPECT_NO_THROW(read_tree_file(f.path()));
     for (size_t pos : {size_t(100), good.size() / 2, good.size() - 20}) {
         bad = good;
         bad[pos] = char(bad[pos] ^ 0x40);
