@@ -63,15 +63,37 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     if (std::rename(tmpl.c_str(), target.c_str()) != 0) fail(errno);
 }
 
-void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what) {
+namespace {
+
+/// Whether paths a and b name one file: by device and inode when both exist, else by their
+/// normalised absolute paths.
+bool same_file(const std::string& a, const std::string& b) {
     namespace fs = std::filesystem;
     std::error_code e1, e2, e3;
-    bool same = fs::exists(out, e1) && fs::exists(in, e2) && fs::equivalent(out, in, e3) && !e3;
-    if (!same) {
-        const fs::path a = fs::weakly_canonical(out, e1), b = fs::weakly_canonical(in, e2);
-        same = !e1 && !e2 && !a.empty() && a == b;
+    if (fs::exists(a, e1) && fs::exists(b, e2)) return fs::equivalent(a, b, e3) && !e3;
+    const fs::path x = fs::weakly_canonical(a, e1), y = fs::weakly_canonical(b, e2);
+    return !e1 && !e2 && !x.empty() && x == y;
+}
+
+}  // namespace
+
+void refuse_clashing_files(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs) {
+    for (size_t i = 0; i < outputs.size(); ++i) {
+        const NamedFile& out = outputs[i];
+        if (out.path.empty()) continue;
+        for (const NamedFile& in : inputs)
+            if (!in.path.empty() && same_file(out.path, in.path))
+                throw Error(out.what + " '" + out.path + "' is this command's input (" + in.what +
+                            "); choose another file");
+        for (size_t j = 0; j < i; ++j)
+            if (!outputs[j].path.empty() && same_file(out.path, outputs[j].path))
+                throw Error(out.what + " '" + out.path + "' is also " + outputs[j].what +
+                            "; two outputs cannot share a file");
     }
-    if (same) throw Error(what + " '" + out + "' is this command's input; choose another file");
+}
+
+void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what) {
+    refuse_clashing_files({{what, out}}, {{"the scene", in}});
 }
 
 std::string not_regular_reason(unsigned mode) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace bvhlab::scene {
 
@@ -20,8 +21,20 @@ namespace bvhlab::scene {
 /// reports its own failures by throwing, or by a failed stdio call (checked with ferror).
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
 
-/// Throws bvhlab::Error when the output `out` is the same file as the input `in` (by inode
-/// when both exist, else by normalised path): `what` names the output option.
+/// A file of a command and the option that names it ("--env", "texture of material 'wood'").
+struct NamedFile {
+    std::string what;
+    std::string path;  ///< empty: no file, skipped
+};
+
+/// Throws bvhlab::Error when an output is the same file as an input, or as another output:
+/// by device and inode when both exist (through links and other names), else by normalised
+/// path. The message names both roles: "--cost-image 'a.pfm' is also --env; choose another
+/// file". Called before anything is written.
+void refuse_clashing_files(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs);
+
+/// refuse_clashing_files() for one output `out` (option `what`) and one input `in`, the
+/// command's scene or other main input.
 void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what);
 
 /// Why a file of stat mode `mode` cannot be read or written as a file: "it is a directory",

@@ -249,6 +249,41 @@ expect_error build-out-is-input "--out .* is this command's input" build "$tmp/c
 expect_error rays-out-is-input "--out .* is this command's input" rays "$tmp/cb_in.obj" --type primary -o "$tmp/cb_in.obj"
 "$bin" -q rays "$tmp/cb_in.obj" --type primary --width 8 --height 8 -o "$tmp/small.rays" >/dev/null
 expect_error hits-out-is-rays "--hits-out .* is this command's input" bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.rays"
+# Every output against every input (environment map, textures, material files, structure
+# file, other names of one file) and against every other output.
+mkdir -p "$tmp/clash"
+printf 'PF\n1 1\n-1.0\n' >"$tmp/clash/env.pfm" && head -c 12 /dev/zero >>"$tmp/clash/env.pfm"
+cp "$tmp/clash/env.pfm" "$tmp/clash/wood.pfm"
+printf 'newmtl w\nKd 1 1 1\nmap_Kd wood.pfm\n' >"$tmp/clash/c.mtl"
+printf 'mtllib c.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl w\nf 1/1 2/1 3/1\n' >"$tmp/clash/c.obj"
+cp "$tmp/clash/env.pfm" "$tmp/clash/env.keep"
+cp "$tmp/clash/c.mtl" "$tmp/clash/mtl.keep"
+r=(render "$tmp/clash/c.obj" --width 4 --height 4 --spp 1)
+expect_error render-out-is-env "--out .*env.pfm' is this command's input [(]--env[)]" "${r[@]}" --env "$tmp/clash/env.pfm" \
+    -o "$tmp/clash/env.pfm"
+expect_error render-out-is-texture "--out .*wood.pfm' is this command's input [(]the texture of material 'w'[)]" \
+    "${r[@]}" -o "$tmp/clash/wood.pfm"
+expect_error render-cost-is-env "--cost-image .* is this command's input [(]--env[)]" "${r[@]}" --env "$tmp/clash/env.pfm" \
+    -o "$tmp/clash/out.pfm" --cost-image "$tmp/clash/env.pfm"
+expect_error render-cost-is-out "--cost-image .* is also --out; two outputs cannot share a file" "${r[@]}" \
+    -o "$tmp/clash/out.pfm" --cost-image "$tmp/clash/out.pfm"
+expect_error render-cost-is-aov "--cost-image .* is also the albedo AOV" "${r[@]}" -o "$tmp/clash/out.pfm" --aov \
+    --cost-image "$tmp/clash/out-albedo.pfm"
+expect_error build-out-is-mtl "--out .*c.mtl' is this command's input [(]material file[)]" build "$tmp/clash/c.obj" \
+    -o "$tmp/clash/c.mtl"
+ln "$tmp/clash/c.obj" "$tmp/clash/hardlink.obj"
+expect_error build-out-is-hardlink "--out .*hardlink.obj' is this command's input [(]the scene[)]" build \
+    "$tmp/clash/c.obj" -o "$tmp/clash/hardlink.obj"
+"$bin" -q build "$tmp/clash/c.obj" -o "$tmp/clash/c.bvh" >/dev/null
+"$bin" -q rays "$tmp/clash/c.obj" --type primary --width 4 --height 4 -o "$tmp/clash/c.rays" >/dev/null
+cp "$tmp/clash/c.bvh" "$tmp/clash/bvh.keep"
+expect_error hits-out-is-structure "--hits-out .* is this command's input [(]--structure[)]" bench "$tmp/clash/c.obj" \
+    --rays "$tmp/clash/c.rays" --structure "$tmp/clash/c.bvh" --device cpu --kernel plain --hits-out "$tmp/clash/c.bvh"
+for k in env:env.pfm mtl:c.mtl bvh:c.bvh; do
+    if cmp -s "$tmp/clash/${k%%:*}.keep" "$tmp/clash/${k#*:}"; then pass=$((pass + 1)); else
+        fail=$((fail + 1)); echo "FAIL ${k#*:} was changed"; fi
+done
+if [ ! -e "$tmp/clash/out.pfm" ]; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL out.pfm was written"; fi
 # A catalogue name is the file it names: an output onto that file is refused too.
 mkdir -p "$tmp/cbcat"
 cp "$data/cornell_box.obj" "$tmp/cbcat/cb.obj"

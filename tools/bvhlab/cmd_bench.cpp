@@ -61,12 +61,13 @@ void register_bench(CLI::App& app, Globals& g) {
         if (!runs->count()) o->bench.runs = o->trace.device == "cpu" ? 5 : 10;
         if (!o->hits_out.empty() && o->trace.kernel == "all")
             throw Error("--hits-out writes one tracer's hits; name one --kernel, not all");
-        if (!o->hits_out.empty()) {
-            scene::refuse_overwriting_input(o->hits_out, o->rays_file, "--hits-out");
-            scene::refuse_overwriting_input(o->hits_out, o->scene, "--hits-out");
-        }
+        const std::vector<scene::NamedFile> outputs{{"--hits-out", o->hits_out}};
+        std::vector<scene::NamedFile> inputs{
+            {"the scene", o->scene}, {"--rays", o->rays_file}, {"--structure", o->build.structure_file()}};
+        scene::refuse_clashing_files(outputs, inputs);  // before the load, and again with its files
         Scene s = load_scene(o->scene, g);
-        if (!o->hits_out.empty()) scene::refuse_overwriting_input(o->hits_out, s.source, "--hits-out");
+        for (auto& f : s.input_files()) inputs.push_back(std::move(f));
+        scene::refuse_clashing_files(outputs, inputs);
         o->build.epo = false;  // EPO is a build figure; bench does not need it
         trav::EmbreeOracle oracle(s.mesh);
         Built b;

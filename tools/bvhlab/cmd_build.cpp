@@ -66,13 +66,12 @@ void register_build(CLI::App& app, Globals& g) {
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
     sub->add_option("-o,--out", o->out, "write the tree to this structure file (load it with --structure FILE)");
     sub->callback([o, &g] {
-        if (!o->out.empty()) {
-            scene::refuse_overwriting_input(o->out, o->scene, "--out");
-            if (!o->build.structure_file().empty())
-                scene::refuse_overwriting_input(o->out, o->build.structure_file(), "--out");
-        }
+        const std::vector<scene::NamedFile> outputs{{"--out", o->out}};
+        std::vector<scene::NamedFile> inputs{{"the scene", o->scene}, {"--structure", o->build.structure_file()}};
+        scene::refuse_clashing_files(outputs, inputs);  // before the load, and again with its files
         Scene s = load_scene(o->scene, g);
-        if (!o->out.empty()) scene::refuse_overwriting_input(o->out, s.source, "--out");
+        for (auto& f : s.input_files()) inputs.push_back(std::move(f));
+        scene::refuse_clashing_files(outputs, inputs);
         Built b = build_scene(s, o->build, g);
         if (!o->out.empty()) {
             b.save(o->out, s.hash);

@@ -49,9 +49,10 @@ void register_rays(CLI::App& app, Globals& g) {
         }
         if (!scene->count()) throw Error("rays needs a scene (or --info FILE)");
         if (!out->count()) throw Error("rays needs --out FILE for the ray set");
-        scene::refuse_overwriting_input(o->out, o->scene, "--out");
+        const std::vector<scene::NamedFile> outputs{{"--out", o->out}};
+        scene::refuse_clashing_files(outputs, {{"the scene", o->scene}});
         Scene s = load_scene(o->scene, g);
-        scene::refuse_overwriting_input(o->out, s.source, "--out");
+        scene::refuse_clashing_files(outputs, s.input_files());
         trav::EmbreeOracle oracle(s.mesh);
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
         trav::RaySet set;

@@ -155,23 +155,27 @@ void register_render(CLI::App& app, Globals& g) {
         const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
         if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
         if (!reference) o->trace.validate(o->build);
-        std::vector<std::string> outputs{o->out};
+        std::vector<scene::NamedFile> outputs{{"--out", o->out}};
         if (o->aov) {
-            outputs.push_back(aov_path(o->out, "albedo"));
-            outputs.push_back(aov_path(o->out, "normal"));
+            outputs.push_back({"the albedo AOV", aov_path(o->out, "albedo")});
+            outputs.push_back({"the normal AOV", aov_path(o->out, "normal")});
         }
-        if (!o->cost_image.empty()) outputs.push_back(o->cost_image);
-        for (const std::string& out : outputs) {
+        outputs.push_back({"--cost-image", o->cost_image});
+        for (const scene::NamedFile& f : outputs) {
+            if (f.path.empty()) continue;
             std::string why;
-            if (!render::can_write_image(out, &why)) throw Error("cannot write " + out + ": " + why);
-            scene::refuse_overwriting_input(out, o->scene, "--out");
-            const std::filesystem::path folder = std::filesystem::path(out).parent_path();
+            if (!render::can_write_image(f.path, &why)) throw Error("cannot write " + f.path + ": " + why);
+            const std::filesystem::path folder = std::filesystem::path(f.path).parent_path();
             if (!folder.empty() && !std::filesystem::is_directory(folder))
-                throw Error("cannot write " + out + ": its folder " + folder.string() + " does not exist");
+                throw Error("cannot write " + f.path + ": its folder " + folder.string() + " does not exist");
         }
+        std::vector<scene::NamedFile> inputs{
+            {"the scene", o->scene}, {"--env", o->env}, {"--structure", o->build.structure_file()}};
+        scene::refuse_clashing_files(outputs, inputs);  // before the load, and again with its files
         o->rs.aovs = o->aov;
         Scene s = load_scene(o->scene, g);
-        scene::refuse_overwriting_input(o->out, s.source, "--out");
+        for (auto& f : s.input_files()) inputs.push_back(std::move(f));
+        scene::refuse_clashing_files(outputs, inputs);
         for (const std::string& f : s.missing_material_files) {
             // A folder or a device is an error whatever --missing-textures says.
             if (const std::string problem = scene::regular_file_problem(f); problem != "does not exist")
@@ -274,8 +278,8 @@ void register_render(CLI::App& app, Globals& g) {
         }
         render::write_image(res.mean, o->out);
         if (o->aov) {
-            render::write_image(res.albedo, outputs[1]);
-            render::write_image(res.normal, outputs[2]);
+            render::write_image(res.albedo, outputs[1].path);
+            render::write_image(res.normal, outputs[2].path);
         }
         nlohmann::json cost;
         if (!o->cost_image.empty()) {
@@ -328,7 +332,7 @@ void register_render(CLI::App& app, Globals& g) {
                    {"accumulate", res.ms_accumulate}, {"setup", res.ms_setup}};
         j["mrays_per_s"] = res.ms_total > 0.0 ? double(res.rays()) / (res.ms_total * 1e3) : 0.0;
         j["bounces"] = bounces;
-        if (o->aov) j["aov"] = {outputs[1], outputs[2]};
+        if (o->aov) j["aov"] = {outputs[1].path, outputs[2].path};
         if (!cost.is_null()) j["primary_cost"] = cost;
         if (g.json)
             emit(j);

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "accel/core/check.h"
+#include "renderer/render_scene.h"
 #include "scene/io/obj_loader.h"
 #include "scene/io/procedural.h"
 #include "scene/io/scene_cache.h"
@@ -165,6 +166,18 @@ std::vector<std::string> catalogue_scene_names() {
     return names;
 }
 
+std::vector<scene::NamedFile> Scene::input_files() const {
+    if (source.rfind("gen:", 0) == 0) return {};  // generated: no files
+    std::vector<scene::NamedFile> files{{"the scene", source}};
+    for (const std::string& m : material_files) files.push_back({"material file", m});
+    const std::string dir = std::filesystem::path(source).parent_path().string();
+    for (const scene::Material& m : mesh.materials)
+        if (!m.diffuse_texture.empty())
+            files.push_back(
+                {"the texture of material '" + m.name + "'", render::resolve_texture_path(dir, m.diffuse_texture)});
+    return files;
+}
+
 Scene load_scene(const std::string& spec, const Globals& g) {
     Scene s;
     s.source = spec;
@@ -229,6 +242,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         s.hash = load.scene_hash;
         s.load_ms = 1000.0 * st.seconds();
         s.scene_cache = cache_dir.empty() ? "off" : load.from_cache ? "hit" : "miss";
+        s.material_files = load.material_files;
         s.missing_material_files = load.missing_material_files;
         if (!g.quiet) {
             if (load.from_cache)

@@ -13,6 +13,7 @@
 #include "accel/builders/builder.h"
 #include "accel/builders/kdtree.h"
 #include "accel/core/stats.h"
+#include "scene/io/atomic_file.h"
 #include "scene/mesh.h"
 #include "traversal/factory.h"
 #include "traversal/rays/protocol.h"
@@ -78,9 +79,14 @@ struct Scene {
     bool camera_from_catalogue = false;
     float ao_length = 0.0f;
     std::string hash;
-    double load_ms = 0.0;             ///< loading (or generating) the mesh
-    std::string scene_cache = "off";  ///< hit (the cache served the load), miss (parsed, then cached) or off
-    std::vector<std::string> missing_material_files;  ///< `mtllib` files that do not exist
+    double load_ms = 0.0;                     ///< loading (or generating) the mesh
+    std::string scene_cache = "off";          ///< hit (the cache served the load), miss (parsed, then cached) or off
+    std::vector<std::string> material_files;  ///< the `mtllib` files it names
+    std::vector<std::string> missing_material_files;  ///< those that do not exist
+
+    /// The files it was read from (the scene file, its material files and map_Kd textures),
+    /// named for scene::refuse_clashing_files().
+    std::vector<scene::NamedFile> input_files() const;
 };
 
 /// Resolves SPEC: an OBJ path, a scene name from $BVHLAB_SCENES/scenes.json or data/scenes.json,
