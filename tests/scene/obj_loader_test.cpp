@@ -215,6 +215,29 @@ TEST(ObjLoader, KeepsTextureCoordinatesPerCorner) {
     EXPECT_THROW(scene::load_obj(bad.path()), Error);
 }
 
+// write_obj with materials: every triangle is written, a usemtl line only where the material
+// changes, and the triangles load back in order (without an MTL file, as material -1).
+TEST(ObjLoader, WriteKeepsEveryTriangleAcrossMaterialChanges) {
+    scene::TriangleMesh a = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0},
+                                           {0, 0, 1, 1, 0, 1, 0, 1, 1},
+                                           {0, 0, 2, 1, 0, 2, 0, 1, 2},
+                                           {0, 0, 3, 1, 0, 3, 0, 1, 3}});
+    a.materials.resize(2);
+    a.materials[0].name = "red";
+    a.materials[1].name = "blue";
+    a.material_ids = {0, 0, 1, 0};
+    TempFile f("materials_roundtrip.obj");
+    scene::write_obj(a, f.path());
+    const std::string text = test::read_file_bytes(f.path());
+    size_t usemtl = 0;
+    for (size_t at = text.find("usemtl"); at != std::string::npos; at = text.find("usemtl", at + 1)) ++usemtl;
+    EXPECT_EQ(usemtl, 3u) << text;
+    EXPECT_LT(text.find("usemtl red"), text.find("usemtl blue"));
+    const scene::TriangleMesh b = scene::load_obj(f.path());
+    ASSERT_EQ(b.triangle_count(), 4u);
+    EXPECT_EQ(scene::scene_hash(a), scene::scene_hash(b));
+}
+
 TEST(ObjLoader, WriteThenLoadIsExact) {
     scene::TriangleMesh a = test::mesh_of({{0.1f, 0.2f, 0.3f, 1.0f / 3.0f, 0, 0, 0, 1e-7f, 5}});
     TempFile f("roundtrip.obj");
