@@ -3,11 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <numeric>
 
 #include "accel/core/check.h"
+#include "scene/domain.h"
 #include "scene/io/atomic_file.h"
 
 namespace bvhlab::render {
@@ -131,7 +133,11 @@ RenderScene::RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, 
     : mesh_(mesh) {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot render a scene with no triangles");
     materials_.push_back(default_material());
-    for (const scene::Material& m : mesh.materials) materials_.push_back(map_material(m, -1));
+    for (const scene::Material& m : mesh.materials) {
+        if (const std::string p = scene::material_problem(m); !p.empty())
+            throw Error("material '" + m.name + "': " + p);
+        materials_.push_back(map_material(m, -1));
+    }
     material_ids_ = mesh.material_ids;
     if (material_ids_.size() != mesh.triangle_count()) material_ids_.assign(mesh.triangle_count(), -1);
     load_textures(textures);
@@ -159,6 +165,13 @@ RenderScene::RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, 
             if (!std::isfinite(p.x + p.y + p.z) || p.x < 0.0f || p.y < 0.0f || p.z < 0.0f)
                 throw Error("environment map " + sky.env_file + " has a negative, NaN or infinite pixel");
             p = p * sky.env_scale;
+            if (!(std::max(p.x, std::max(p.y, p.z)) <= scene::kMaxRadiance)) {
+                char b[128];
+                std::snprintf(b, sizeof b, " times --env-scale %g has a texel of radiance %g, above %g",
+                              double(sky.env_scale), double(std::max(p.x, std::max(p.y, p.z))),
+                              double(scene::kMaxRadiance));
+                throw Error("environment map " + sky.env_file + b + ", the numeric domain bvhlab supports");
+            }
         }
         build_env_tables();
         lighting_ = std::to_string(n) + " emissive triangles, environment map " + sky.env_file + " (" +

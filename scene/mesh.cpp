@@ -8,6 +8,7 @@
 
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
+#include "scene/domain.h"
 
 namespace bvhlab::scene {
 
@@ -77,6 +78,47 @@ std::string scene_hash(const TriangleMesh& mesh) {
         }
     }
     return accel::hash_hex(h);
+}
+
+std::string vec_problem(const char* what, Vec3 v, float limit) {
+    const auto in = [limit](float x) { return x >= -limit && x <= limit; };
+    if (in(v.x) && in(v.y) && in(v.z)) return "";
+    char b[160];
+    std::snprintf(b, sizeof b, "%s (%g, %g, %g) is outside [-%g, %g], the numeric domain bvhlab supports", what, v.x,
+                  v.y, v.z, limit, limit);
+    return b;
+}
+
+std::string domain_problem(const TriangleMesh& mesh) {
+    for (size_t i = 0; i < mesh.vertices.size(); ++i)
+        if (std::string p = vec_problem(("vertex " + std::to_string(i + 1)).c_str(), mesh.vertices[i]); !p.empty())
+            return p;
+    if (mesh.triangle_count() > 0 && !(mesh.diagonal() >= kMinSceneDiagonal)) {
+        char b[160];
+        std::snprintf(b, sizeof b,
+                      "the scene's bounding-box diagonal %g is below %g, the numeric domain bvhlab supports",
+                      mesh.diagonal(), kMinSceneDiagonal);
+        return b;
+    }
+    return "";
+}
+
+std::string material_problem(const Material& m) {
+    const auto color = [](const char* key, Vec3 c, float hi) {
+        for (float x : {c.x, c.y, c.z})
+            if (!(x >= 0.0f && x <= hi)) {
+                char b[128];
+                std::snprintf(b, sizeof b, "%s %g %g %g is not in [0, %g]", key, c.x, c.y, c.z, hi);
+                return std::string(b);
+            }
+        return std::string();
+    };
+    for (const std::string& p :
+         {color("Kd", m.diffuse, 1.0f), color("Ks", m.specular, 1.0f), color("Ka", m.ambient, kMaxRadiance),
+          color("Ke", m.emission, kMaxRadiance), range_problem("Ns", m.shininess, 0.0f, 1e30f),
+          range_problem("Ni", m.ior, 0.0f, 100.0f), range_problem("d", m.dissolve, 0.0f, 1.0f)})
+        if (!p.empty()) return p;
+    return "";
 }
 
 }  // namespace bvhlab::scene

@@ -68,6 +68,16 @@ inline Vec3 flush_denormals(Vec3 v) {
 /// the triangle was kept.
 bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t material);
 
+/// "" when the mesh is inside the numeric domain (scene/domain.h): every vertex coordinate
+/// within +-kMaxCoordinate and a bounding-box diagonal of at least kMinSceneDiagonal; else one
+/// line naming the first vertex or the diagonal that is not.
+std::string domain_problem(const TriangleMesh& mesh);
+
+/// "" when a material's values are ones the renderer can use: Kd and Ks in [0, 1], Ka and Ke
+/// in [0, kMaxRadiance], Ns >= 0, Ni in [0, 100] (up to 1 means the default 1.5), d in [0, 1],
+/// all finite; else one line naming the key and value.
+std::string material_problem(const Material& m);
+
 /// 64-bit FNV-1a over the triangles' vertex coordinates in triangle order, as 16 hex digits.
 /// Two meshes with the same triangles give the same hash whatever their vertex sharing.
 std::string scene_hash(const TriangleMesh& mesh);

@@ -201,6 +201,7 @@ void StructureSpec::check() const {
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {
     spec_in.check();
     if (mesh.triangle_count() == 0) throw Error("the mesh has no triangles to build a structure over");
+    if (const std::string p = scene::domain_problem(mesh); !p.empty()) throw Error(p);
     StructureSpec spec = spec_in;
     if (spec.is_kdtree()) return make_kdtree(mesh, spec, stage, nullptr, "");
     spec.builder = accel::builder_name(spec.kind());  // "bvh" -> "binned"

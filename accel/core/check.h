@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdlib>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -37,8 +38,9 @@ namespace bvhlab {
 template <typename T>
 std::string range_problem(const char* name, T v, T lo, T hi) {
     if (v >= lo && v <= hi) return "";
-    return std::string(name) + " " + std::to_string(v) + " is not in [" + std::to_string(lo) + ", " +
-           std::to_string(hi) + "]";
+    std::ostringstream s;  // floats as %g: 1e+20, not 100000002004087734272.000000
+    s << name << " " << v << " is not in [" << lo << ", " << hi << "]";
+    return s.str();
 }
 
 }  // namespace bvhlab

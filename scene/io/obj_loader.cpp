@@ -296,8 +296,41 @@ public:
                 *warn += "material file '" + path + "' " + (problem.empty() ? "cannot be opened" : problem) + "\n";
             return false;
         }
-        tinyobj::LoadMtl(names, materials, &in, warn, err);
+        std::stringstream text;
+        text << in.rdbuf();
+        scan_mtl(path, text.str());
+        tinyobj::LoadMtl(names, materials, &text, warn, err);
         return true;
+    }
+
+    /// Throws on a numeric MTL value that is not a finite number: tinyobjloader reads `Kd nan`
+    /// or `Ns 0x10` as 0, which would silently change the material.
+    static void scan_mtl(const std::string& path, const std::string& text) {
+        size_t line_no = 0;
+        for (size_t pos = 0; pos < text.size();) {
+            size_t eol = text.find('\n', pos);
+            if (eol == std::string::npos) eol = text.size();
+            ++line_no;
+            const char* p = text.data() + pos;
+            const char* const e = text.data() + eol;
+            pos = eol + 1;
+            const char* s = nullptr;
+            if (!next_token(p, e, s)) continue;
+            const std::string_view key(s, size_t(p - s));
+            const char* const values = p;
+            if (key != "Ka" && key != "Kd" && key != "Ks" && key != "Ke" && key != "Kt" && key != "Tf" && key != "Ns" &&
+                key != "Ni" && key != "d" && key != "Tr")
+                continue;
+            if ((key == "Kd" || key == "Ka" || key == "Ks" || key == "Tf") && next_token(p, e, s) &&
+                std::string_view(s, size_t(p - s)) == "spectral")
+                continue;  // Kd spectral file.rfl: not numbers
+            for (p = values; next_token(p, e, s);) {
+                double v = 0.0;
+                if (!is_number(s, p, v) || !std::isfinite(v))
+                    throw Error("material file '" + path + "' line " + std::to_string(line_no) + ": " +
+                                std::string(key) + " value '" + std::string(s, p) + "' is not a finite number");
+            }
+        }
     }
 
 private:

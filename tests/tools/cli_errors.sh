@@ -116,7 +116,7 @@ expect_error hits-needs-rays "requires|needs" verify "$data/cornell_box.obj" --h
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n' >"$tmp/long_min.obj"
 expect_error face-index-long-min "bad vertex reference '-9223372036854775808'" build "$tmp/long_min.obj"
 printf 'v 1e38 1e38 1e38\nv -1e38 1e38 -1e38\nv 0 -1e38 0\nf 1 2 3\n' >"$tmp/huge.obj"
-expect_error huge-coordinates "overflows float surface areas" build "$tmp/huge.obj"
+expect_error huge-coordinates "vertex 1 [(]1e[+]38, 1e[+]38, 1e[+]38[)] is outside [[]-1e[+]10, 1e[+]10[]], the numeric domain" build "$tmp/huge.obj"
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100
@@ -202,7 +202,7 @@ fi
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n' >"$tmp/long_min.obj"
 expect_error face-index-long-min "bad vertex reference '-9223372036854775808'" build "$tmp/long_min.obj"
 printf 'v 1e38 1e38 1e38\nv -1e38 1e38 -1e38\nv 0 -1e38 0\nf 1 2 3\n' >"$tmp/huge.obj"
-expect_error huge-coordinates "overflows float surface areas" build "$tmp/huge.obj"
+expect_error huge-coordinates "vertex 1 [(]1e[+]38, 1e[+]38, 1e[+]38[)] is outside [[]-1e[+]10, 1e[+]10[]], the numeric domain" build "$tmp/huge.obj"
 expect_error spp-not-square "--spp 2 is not a perfect square" rays "$data/cornell_box.obj" --type primary --spp 2 -o "$tmp/x.rays"
 expect_error min-leaf-above-max "--min-leaf 16 is larger than --max-leaf 4" build "$data/cornell_box.obj" --min-leaf 16 --max-leaf 4
 expect_error gen-zero "triangle count must be 1..2\^30, not 0" build gen:soup:0
@@ -243,6 +243,37 @@ else
     fail=$((fail + 1)); echo "FAIL build --layout cwbvh --cw-tris vertices --json"
 fi
 
+# The numeric domain (README): values Embree or float32 traversal cannot handle are refused by
+# name before any work (they aborted inside Embree, or gave empty or NaN images).
+expect_error domain-eye "the camera's eye [(]1e[+]19, 0, 0[)] is outside" verify "$data/cornell_box.obj" --eye 1e19 0 0 \
+    --width 4 --height 4
+expect_error domain-target "the camera's target" rays "$data/cornell_box.obj" --target 0 -2e10 0 -o "$tmp/d.rays"
+expect_error domain-focus "--focus 1e[+]20 is not in [[]0, 1e[+]10[]]" render "$data/cornell_box.obj" --aperture 0.1 \
+    --focus 1e20 --width 4 --height 4 --spp 1 -o "$tmp/d.pfm"
+expect_error domain-aperture "--aperture 1e[+]12 is not in" render "$data/cornell_box.obj" --aperture 1e12 --width 4 \
+    --height 4 --spp 1 -o "$tmp/d.pfm"
+expect_error domain-eye-end "--eye-end [(]0, 5e[+]10, 0[)] is outside" render "$data/cornell_box.obj" --eye-end 0 5e10 0 \
+    --width 4 --height 4 --spp 1 -o "$tmp/d.pfm"
+printf 'v 0 0 0\nv 1e-10 0 0\nv 0 1e-10 0\nf 1 2 3\n' >"$tmp/tiny.obj"
+expect_error domain-tiny-scene "bounding-box diagonal 1.41421e-10 is below 1e-08" verify "$tmp/tiny.obj" --width 4 --height 4
+printf 'v 0 0 0\nv 2e12 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/far.obj"
+expect_error domain-far-vertex "vertex 2 [(]2e[+]12, 0, 0[)] is outside" build "$tmp/far.obj"
+printf 'PF\n1 1\n-1.0\n' >"$tmp/bright.pfm"
+python3 -c "import struct,sys; sys.stdout.buffer.write(struct.pack('<3f', 1e19, 1e19, 1e19))" >>"$tmp/bright.pfm"
+expect_error domain-env-radiance "times --env-scale 100 has a texel of radiance 1e[+]21, above 1e[+]20" render \
+    "$data/cornell_box.obj" --env "$tmp/bright.pfm" --env-scale 100 --width 4 --height 4 --spp 1 -o "$tmp/d.pfm"
+for bad in "Kd -1 0 0" "Ke 1e38 1 1" "Ni -1" "d 2"; do
+    printf 'newmtl m\n%s\n' "$bad" >"$tmp/badval.mtl"
+    printf 'mtllib badval.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n' >"$tmp/badval.obj"
+    expect_error "mtl-${bad%% *}" "material 'm': ${bad%% *} .*is not in" render "$tmp/badval.obj" --width 4 --height 4 \
+        --spp 1 -o "$tmp/d.pfm"
+done
+# MTL numbers are scanned strictly, as OBJ ones: tinyobjloader read these as 0.
+for bad in "Kd nan" "Ns 0x10"; do
+    printf 'newmtl m\n%s\n' "$bad" >"$tmp/badval.mtl"
+    expect_error "mtl-scan-${bad%% *}" "badval.mtl' line 2: ${bad%% *} value '${bad#* }' is not a finite number" build \
+        "$tmp/badval.obj"
+done
 # Outputs never overwrite the command's inputs; invalid rays and foreign hits are refused by index.
 cp "$data/cornell_box.obj" "$tmp/cb_in.obj"
 expect_error build-out-is-input "--out .* is this command's input" build "$tmp/cb_in.obj" -o "$tmp/cb_in.obj"
@@ -314,6 +345,12 @@ PY
 }
 edit_records "$tmp/small.rays" "$tmp/nan.rays" f $((3 * 32 + 16)) nan  # ray 3: direction x
 expect_error nan-ray "ray 3 has a non-finite direction" verify "$tmp/cb_in.obj" --rays "$tmp/nan.rays"
+# Origins and directions outside the numeric domain are refused by ray index (3e18 aborted
+# inside Embree).
+edit_records "$tmp/small.rays" "$tmp/far.rays" f $((2 * 32)) 3.0e18  # ray 2: origin x
+expect_error far-ray "ray 2 has an origin [(]3e[+]18, .*[)] is outside [[]-1e[+]10, 1e[+]10[]]" verify "$tmp/cb_in.obj" \
+    --rays "$tmp/far.rays"
+expect_error far-ray-bench "ray 2 has an origin" bench "$tmp/cb_in.obj" --rays "$tmp/far.rays" --runs 1
 edit_records "$tmp/small.rays" "$tmp/damaged.rays" f $((3 * 32 + 16)) 0.5 --keep-checksum
 expect_error damaged-rays "damaged.rays' is damaged: its checksum does not match" verify "$tmp/cb_in.obj" --rays "$tmp/damaged.rays"
 "$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null

@@ -10,6 +10,7 @@
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
 #include "renderer/wavefront.h"
+#include "scene/domain.h"
 #include "scene/io/atomic_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
@@ -195,9 +196,13 @@ void register_render(CLI::App& app, Globals& g) {
         render::LensOptions lens;
         lens.aperture_radius = o->aperture;
         lens.focus_distance = o->focus;
+        for (const std::string& p : {range_problem("--aperture", o->aperture, 0.0f, scene::kMaxCoordinate),
+                                     range_problem("--focus", o->focus, 0.0f, scene::kMaxCoordinate)})
+            if (!p.empty()) throw Error(p + ", the numeric domain bvhlab supports");
         if (o->eye_end.size() == 3) {
             lens.moving = true;
             lens.eye_end = vec3_of(o->eye_end);
+            if (const std::string p = scene::vec_problem("--eye-end", lens.eye_end); !p.empty()) throw Error(p);
         }
         if (o->shutter.size() == 2) {
             if (!lens.moving) throw Error("--shutter applies to a moving camera: give --eye-end too");

@@ -16,6 +16,7 @@
 
 #include "accel/core/check.h"
 #include "renderer/render_scene.h"
+#include "scene/domain.h"
 #include "scene/io/obj_loader.h"
 #include "scene/io/procedural.h"
 #include "scene/io/scene_cache.h"
@@ -251,17 +252,9 @@ Scene load_scene(const std::string& spec, const Globals& g) {
             if (!load.cache_warning.empty()) std::fprintf(stderr, "[bvhlab] warning: %s\n", load.cache_warning.c_str());
         }
     }
-    // Surface areas (SAH, EPO, the builders' costs) are floats: a box whose area overflows
-    // would give NaN figures and arbitrary trees without a word.
-    const AABB box = s.mesh.bounds();
-    if (!std::isfinite(box.half_area())) {
-        char b[160];
-        const Vec3 e = box.extent();
-        std::snprintf(b, sizeof b,
-                      "its bounding box (extent %g x %g x %g) overflows float surface areas; scale it down", e.x, e.y,
-                      e.z);
-        throw Error("scene '" + spec + "': " + b);
-    }
+    // Outside the numeric domain Embree aborts or misses hits, and float areas overflow or
+    // underflow (scene/domain.h).
+    if (const std::string p = scene::domain_problem(s.mesh); !p.empty()) throw Error("scene '" + spec + "': " + p);
     if (entry) apply_entry(s, *entry);
     if (!s.camera_from_catalogue) s.camera = trav::framing_camera(s.mesh);
     if (s.ao_length <= 0.0f) s.ao_length = 0.05f * s.mesh.diagonal();
@@ -451,6 +444,8 @@ trav::Camera CameraOptions::apply(trav::Camera c) const {
     if (target.size() == 3) c.target = {target[0], target[1], target[2]};
     if (up.size() == 3) c.up = {up[0], up[1], up[2]};
     if (fov > 0.0f) c.fov_y_deg = fov;
+    for (const auto& [what, v] : {std::pair{"the camera's eye", c.eye}, std::pair{"the camera's target", c.target}})
+        if (const std::string p = scene::vec_problem(what, {v.x, v.y, v.z}); !p.empty()) throw Error(p);
     return c;
 }
 

@@ -12,6 +12,7 @@
 
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
+#include "scene/domain.h"
 #include "scene/io/atomic_file.h"
 
 // Records are written as the in-memory structs, which is the little-endian file layout only on
@@ -134,6 +135,8 @@ std::string invalid_ray(const Ray& r) {
     if (!finite3(r.org)) return "a non-finite origin " + str(r.org);
     if (!finite3(r.dir)) return "a non-finite direction " + str(r.dir);
     if (r.dir.x == 0.0f && r.dir.y == 0.0f && r.dir.z == 0.0f) return "a zero direction";
+    if (std::string p = scene::vec_problem("an origin", r.org); !p.empty()) return p;
+    if (std::string p = scene::vec_problem("a direction", r.dir); !p.empty()) return p;
     if (!std::isfinite(r.tmin) || r.tmin < 0.0f) return "tmin " + std::to_string(r.tmin) + " (must be finite and >= 0)";
     if (std::isnan(r.tmax) || r.tmax < r.tmin)
         return "tmax " + std::to_string(r.tmax) + " below tmin " + std::to_string(r.tmin) + " or NaN";

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accel/core/check.h"
+#include "scene/domain.h"
 
 namespace bvhlab::trav {
 namespace {
@@ -33,7 +34,8 @@ struct FieldReader {
     }
     glm::vec3 vec3(const nlohmann::json& j, const std::string& field) const {
         if (!j.is_array() || j.size() != 3) fail(field, "must be an array of 3 numbers, not " + j.dump());
-        return {number(j[0], field, -1e18, 1e18), number(j[1], field, -1e18, 1e18), number(j[2], field, -1e18, 1e18)};
+        constexpr double m = scene::kMaxCoordinate;  // the numeric domain
+        return {number(j[0], field, -m, m), number(j[1], field, -m, m), number(j[2], field, -m, m)};
     }
 };
 
