@@ -128,6 +128,35 @@ TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
     refused([](StructureSpec& s) { s.options.sbvh_budget = 0.5f; }, "budget");
     refused([](StructureSpec& s) { s.kd.traversal_cost = 0.0f; }, "kd_ct");
     refused([](StructureSpec& s) { s.kd.max_depth = 65; }, "kd_max_depth");
+    // Every range at both ends, as options_problem() and kd_config_problem() state them.
+    refused([](StructureSpec& s) { s.options.num_bins = 257; }, "bins 257 is not in [2, 256]");
+    refused([](StructureSpec& s) { s.options.config.max_leaf_size = 65; }, "max_leaf 65 is not in [1, 64]");
+    refused([](StructureSpec& s) { s.options.config.min_leaf_size = 0; }, "min_leaf 0 is not in [1, 64]");
+    refused([](StructureSpec& s) { s.options.config.max_depth = 0; }, "max_depth 0 is not in [1, 64]");
+    refused([](StructureSpec& s) { s.options.config.max_depth = 65; }, "max_depth 65");
+    refused([](StructureSpec& s) { s.options.config.traversal_cost = 0.0f; }, "ct 0 is not in [0.001, 1e+06]");
+    refused([](StructureSpec& s) { s.options.config.intersection_cost = 2e6f; }, "ci 2e+06");
+    refused([](StructureSpec& s) { s.options.sbvh_alpha = 1.5f; }, "alpha 1.5 is not in [0, 1]");
+    refused([](StructureSpec& s) { s.options.sbvh_budget = 17.0f; }, "budget 17");
+    refused([](StructureSpec& s) { s.options.sbvh_spatial_bins = 1; }, "spatial_bins 1 is not in [2, 256]");
+    refused([](StructureSpec& s) { s.options.sbvh_spatial_bins = 257; }, "spatial_bins 257");
+    refused([](StructureSpec& s) { s.options.reinsertion_passes = -2; }, "reinsertion_passes -2 is not in [-1, 16]");
+    refused([](StructureSpec& s) { s.options.reinsertion_passes = 17; }, "reinsertion_passes 17");
+    refused([](StructureSpec& s) { s.kd.intersection_cost = 1e7f; }, "kd_ci 1e+07");
+    refused([](StructureSpec& s) { s.kd.empty_bonus = 1.0f; }, "kd_bonus 1 is not in [0, 0.99]");
+    refused([](StructureSpec& s) { s.kd.max_depth = -2; }, "kd_max_depth -2 is not in [-1, 64]");
+    // ... and the ends themselves are accepted.
+    StructureSpec edge;
+    edge.builder = "sbvh";
+    edge.epo = false;
+    edge.options.num_bins = 256;
+    edge.options.config.min_leaf_size = edge.options.config.max_leaf_size = 64;
+    edge.options.config.max_depth = 64;
+    edge.options.sbvh_alpha = 1.0f;
+    edge.options.sbvh_budget = 16.0f;
+    edge.options.sbvh_spatial_bins = 2;
+    edge.options.reinsertion_passes = 16;
+    EXPECT_NO_THROW(build_structure(m, edge));
     const std::string e = error_of([] { build_structure(scene::TriangleMesh{}, StructureSpec{}); });
     EXPECT_NE(e.find("no triangles"), std::string::npos) << e;
 }

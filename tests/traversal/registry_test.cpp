@@ -37,9 +37,23 @@ TEST(KernelRegistry, NamesTheIssueKernelsOnceEachWithADescription) {
         find_kernel("warp-drive");
         FAIL() << "an unknown kernel was found";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("speculative"), std::string::npos) << "the message lists the kernels";
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("speculative"), std::string::npos) << "the message lists the kernels";
+        EXPECT_EQ(msg.rfind("no GPU kernel 'warp-drive' (registered: ", 0), 0u) << msg;
+        EXPECT_NE(msg.find("; `bvhlab kernels` describes them)"), std::string::npos) << msg;
     }
     EXPECT_THROW(register_kernel(find_kernel("plain")), Error);  // duplicate name
+}
+
+// Without CUDA there is nothing to find, and the message says why.
+TEST(KernelRegistry, WithoutCudaAnyNameSaysWhy) {
+    if (built_with_cuda()) GTEST_SKIP() << "built with CUDA: the registry has kernels";
+    try {
+        find_kernel("plain");
+        FAIL() << "a kernel was found in a build without CUDA";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "no GPU kernel 'plain': this bvhlab has no GPU kernels (built without CUDA)");
+    }
 }
 
 TEST(KernelRegistry, RefusesWhatAKernelCannotTrace) {
