@@ -351,6 +351,19 @@ edit_records "$tmp/small.rays" "$tmp/far.rays" f $((2 * 32)) 3.0e18  # ray 2: or
 expect_error far-ray "ray 2 has an origin [(]3e[+]18, .*[)] is outside [[]-1e[+]10, 1e[+]10[]]" verify "$tmp/cb_in.obj" \
     --rays "$tmp/far.rays"
 expect_error far-ray-bench "ray 2 has an origin" bench "$tmp/cb_in.obj" --rays "$tmp/far.rays" --runs 1
+# Options that do not apply are refused, not ignored: protocol options with a ray file, ray
+# counts for types not asked for, structure and kernel options for the reference renderer.
+expect_error rays-file-width "--rays excludes --width" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --width 9
+expect_error rays-file-eye "--rays excludes --eye" bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --eye 1 2 3
+expect_error rays-file-seed "--rays excludes --seed" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --seed 5
+expect_error ao-rays-without-ao "--ao-rays applies to ao rays; --types primary has none" verify "$tmp/cb_in.obj" \
+    --types primary --ao-rays 4 --width 4 --height 4
+expect_error diffuse-rays-without-diffuse "--diffuse-rays applies to diffuse rays; --types primary,ao has none" \
+    quality "$tmp/cb_in.obj" --types primary,ao --diffuse-rays 4 --width 4 --height 4
+for f in "--structure $tmp/nope.bvh" "--bins 8" "--kd-stack 4" "--fetch-threshold 4" "--layout cwbvh"; do
+    expect_error "reference-render-${f%% *}" "${f%% *} does not apply to render --device cpu without --kernel" render \
+        "$tmp/cb_in.obj" $f --width 4 --height 4 --spp 1 -o "$tmp/ref.pfm"
+done
 edit_records "$tmp/small.rays" "$tmp/damaged.rays" f $((3 * 32 + 16)) 0.5 --keep-checksum
 expect_error damaged-rays "damaged.rays' is damaged: its checksum does not match" verify "$tmp/cb_in.obj" --rays "$tmp/damaged.rays"
 "$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null

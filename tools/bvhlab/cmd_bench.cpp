@@ -55,9 +55,11 @@ void register_bench(CLI::App& app, Globals& g) {
     o->trace.add_to(*sub, true);
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
+    o->rays.excluded_by(file);  // a ray file's rays are fixed: no protocol option applies
     add_compare_options(*sub, o->cc);
     sub->callback([o, &g, file, runs] {
         o->trace.validate(o->build);
+        if (o->rays_file.empty()) o->rays.check_types(parse_ray_types(o->types), o->types);
         if (!runs->count()) o->bench.runs = o->trace.device == "cpu" ? 5 : 10;
         if (!o->hits_out.empty() && o->trace.kernel == "all")
             throw Error("--hits-out writes one tracer's hits; name one --kernel, not all");

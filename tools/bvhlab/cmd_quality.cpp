@@ -44,6 +44,7 @@ void register_quality(CLI::App& app, Globals& g) {
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
     o->rays.add_to(*sub);
     sub->callback([o, &g] {
+        o->rays.check_types(parse_ray_types(o->types), o->types);
         Scene s = load_scene(o->scene, g);
         Built b = build_scene(s, o->build, g);
         if (g.json)

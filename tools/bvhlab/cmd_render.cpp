@@ -156,6 +156,15 @@ void register_render(CLI::App& app, Globals& g) {
         const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
         if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
         if (!reference) o->trace.validate(o->build);
+        if (reference) {  // Embree traces every ray: nothing is built, no kernel runs
+            const CLI::Option* f = given_structure_flag(o->build);
+            for (const CLI::Option* g : {o->trace.block_flag, o->trace.fetch_flag})
+                if (!f && g && g->count()) f = g;
+            if (f)
+                throw Error(f->get_name() +
+                            " does not apply to render --device cpu without --kernel (the reference integrator: Embree "
+                            "traces every ray)");
+        }
         std::vector<scene::NamedFile> outputs{{"--out", o->out}};
         if (o->aov) {
             outputs.push_back({"the albedo AOV", aov_path(o->out, "albedo")});

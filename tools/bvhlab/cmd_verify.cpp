@@ -73,9 +73,11 @@ void register_verify(CLI::App& app, Globals& g) {
     o->build.accepts_all = true;
     o->build.add_to(*sub);
     o->rays.add_to(*sub);
+    o->rays.excluded_by(file);  // a ray file's rays are fixed: no protocol option applies
     add_compare_options(*sub, o->cc);
     o->trace.add_to(*sub);
     sub->callback([o, &g, file, hits] {
+        if (o->rays_file.empty()) o->rays.check_types(parse_ray_types(o->types), o->types);
         if (o->build.structure == "all") {
             // Every structure: options that choose one are refused, not silently ignored.
             std::vector<const CLI::Option*> one{o->build.builder_flag, o->build.layout_flag, o->build.collapse_flag,

@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -399,44 +400,63 @@ void BuildOptions::check_applicable() const {
 }
 
 void RayOptions::add_to(CLI::App& app) {
-    app.add_option("--width", cfg.primary.width, "image width in pixels")
-        ->check(CLI::Range(1, 65536))
-        ->capture_default_str();
-    app.add_option("--height", cfg.primary.height, "image height in pixels")
-        ->check(CLI::Range(1, 65536))
-        ->capture_default_str();
-    app.add_option("--spp", cfg.primary.samples, "samples per pixel, a perfect square (regular sub-grid)")
-        ->check(CLI::Range(1, 1024))
-        ->check(CLI::Validator(
-            [](std::string& text) -> std::string {
-                const long n = std::strtol(text.c_str(), nullptr, 10);
-                long k = 1;
-                while (k * k < n) ++k;
-                return k * k == n
-                           ? ""
-                           : "--spp " + text +
-                                 " is not a perfect square (1, 4, 9, 16, ...): the samples form a regular sub-grid";
-            },
-            "a perfect square"))
-        ->capture_default_str();
-    app.add_option("--tile", cfg.primary.tile, "order primary rays in TxT pixel tiles (0 = row-major)")
-        ->check(CLI::Range(0, 4096))
-        ->capture_default_str();
-    app.add_option("--ao-rays", cfg.ao_rays, "AO rays per primary hit")
-        ->check(CLI::Range(1, 1024))
-        ->capture_default_str();
-    app.add_option("--diffuse-rays", cfg.diffuse_rays, "diffuse rays per primary hit")
-        ->check(CLI::Range(1, 1024))
-        ->capture_default_str();
-    app.add_option("--seed", cfg.seed, "seed of every random choice")->check(UInt64())->capture_default_str();
+    flags.push_back(app.add_option("--width", cfg.primary.width, "image width in pixels")
+                        ->check(CLI::Range(1, 65536))
+                        ->capture_default_str());
+    flags.push_back(app.add_option("--height", cfg.primary.height, "image height in pixels")
+                        ->check(CLI::Range(1, 65536))
+                        ->capture_default_str());
+    flags.push_back(
+        app.add_option("--spp", cfg.primary.samples, "samples per pixel, a perfect square (regular sub-grid)")
+            ->check(CLI::Range(1, 1024))
+            ->check(CLI::Validator(
+                [](std::string& text) -> std::string {
+                    const long n = std::strtol(text.c_str(), nullptr, 10);
+                    long k = 1;
+                    while (k * k < n) ++k;
+                    return k * k == n ? ""
+                                      : "--spp " + text +
+                                            " is not a perfect square (1, 4, 9, 16, ...): the samples form a regular "
+                                            "sub-grid";
+                },
+                "a perfect square"))
+            ->capture_default_str());
+    flags.push_back(app.add_option("--tile", cfg.primary.tile, "order primary rays in TxT pixel tiles (0 = row-major)")
+                        ->check(CLI::Range(0, 4096))
+                        ->capture_default_str());
+    ao_rays_flag = app.add_option("--ao-rays", cfg.ao_rays, "AO rays per primary hit")
+                       ->check(CLI::Range(1, 1024))
+                       ->capture_default_str();
+    diffuse_rays_flag = app.add_option("--diffuse-rays", cfg.diffuse_rays, "diffuse rays per primary hit")
+                            ->check(CLI::Range(1, 1024))
+                            ->capture_default_str();
+    flags.push_back(ao_rays_flag);
+    flags.push_back(diffuse_rays_flag);
+    flags.push_back(
+        app.add_option("--seed", cfg.seed, "seed of every random choice")->check(UInt64())->capture_default_str());
     camera.add_to(app);
+    flags.insert(flags.end(), camera.flags.begin(), camera.flags.end());
+}
+
+void RayOptions::excluded_by(CLI::Option* rays_file) const {
+    for (CLI::Option* f : flags) rays_file->excludes(f);
+}
+
+void RayOptions::check_types(const std::vector<trav::RayType>& types, const std::string& list) const {
+    const auto has = [&](trav::RayType t) { return std::find(types.begin(), types.end(), t) != types.end(); };
+    if (ao_rays_flag->count() && !has(trav::RayType::kAo))
+        throw Error("--ao-rays applies to ao rays; --types " + list + " has none");
+    if (diffuse_rays_flag->count() && !has(trav::RayType::kDiffuse))
+        throw Error("--diffuse-rays applies to diffuse rays; --types " + list + " has none");
 }
 
 void CameraOptions::add_to(CLI::App& app) {
-    app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")->expected(3)->check(Finite());
-    app.add_option("--target", target, "camera target x y z")->expected(3)->check(Finite());
-    app.add_option("--up", up, "camera up vector x y z")->expected(3)->check(Finite());
-    app.add_option("--fov", fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0));
+    flags.push_back(app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")
+                        ->expected(3)
+                        ->check(Finite()));
+    flags.push_back(app.add_option("--target", target, "camera target x y z")->expected(3)->check(Finite()));
+    flags.push_back(app.add_option("--up", up, "camera up vector x y z")->expected(3)->check(Finite()));
+    flags.push_back(app.add_option("--fov", fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0)));
 }
 
 trav::Camera CameraOptions::apply(trav::Camera c) const {

@@ -144,6 +144,7 @@ struct BuildOptions {
 /// Ray-protocol flags: --width, --height, --spp, --tile, --ao-rays, --diffuse-rays, --seed.
 /// Camera overrides: --eye, --target, --up (3 floats each), --fov.
 struct CameraOptions {
+    std::vector<CLI::Option*> flags;
     std::vector<float> eye, target, up;  ///< empty = the scene's
     float fov = 0.0f;                    ///< fov_y in degrees, 0 = the scene's
     void add_to(CLI::App& app);
@@ -154,7 +155,14 @@ struct CameraOptions {
 struct RayOptions {
     trav::ProtocolConfig cfg;
     CameraOptions camera;
+    std::vector<CLI::Option*> flags;  ///< every option that shapes protocol rays (camera ones too)
+    CLI::Option* ao_rays_flag = nullptr;
+    CLI::Option* diffuse_rays_flag = nullptr;
     void add_to(CLI::App& app);
+    /// Makes `rays_file` (--rays) exclude every protocol option: a ray file's rays are fixed.
+    void excluded_by(CLI::Option* rays_file) const;
+    /// Refuses --ao-rays and --diffuse-rays when `types` has no rays of that kind.
+    void check_types(const std::vector<trav::RayType>& types, const std::string& list) const;
     /// The protocol config for a scene: its camera and AO length unless overridden.
     trav::ProtocolConfig for_scene(const Scene& s) const;
 };

@@ -130,19 +130,23 @@ void TraceOptions::validate(BuildOptions& build) const {
         if (block_flag->count()) throw Error("--block-size applies to GPU kernels; it needs --device gpu");
         if (fetch_flag->count()) throw Error("--fetch-threshold applies to GPU kernels; it needs --device gpu");
     }
-    if (device == "embree") {
-        std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag,  build.kd_stack_flag,
-                                              build.layout_flag,    build.collapse_flag, build.cw_tris_flag};
-        flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
-        flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
-        for (const CLI::Option* f : flags)
-            if (f->count())
-                throw Error(f->get_name() + " does not apply to --device embree (Embree builds its own BVH)");
-    }
+    if (device == "embree")
+        if (const CLI::Option* f = given_structure_flag(build))
+            throw Error(f->get_name() + " does not apply to --device embree (Embree builds its own BVH)");
     if (device == "gpu") {
         std::string why;
         if (!trav::gpu_available(&why)) throw Error("--device gpu: " + why);
     }
+}
+
+const CLI::Option* given_structure_flag(const BuildOptions& build) {
+    std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag,  build.kd_stack_flag,
+                                          build.layout_flag,    build.collapse_flag, build.cw_tris_flag};
+    flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
+    flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
+    for (const CLI::Option* f : flags)
+        if (f && f->count()) return f;
+    return nullptr;
 }
 
 std::vector<std::unique_ptr<trav::Tracer>> make_tracers(Built& built, const TraceOptions& t, const BuildOptions& b,

@@ -46,6 +46,10 @@ struct TraceOptions {
     void validate(BuildOptions& build) const;
 };
 
+/// The first option that sets up a structure (--structure, --builder, --layout, --bins, the kd
+/// flags, ...) given on the command line, or null: for commands that trace with Embree alone.
+const CLI::Option* given_structure_flag(const BuildOptions& build);
+
 /// The tracers of one command over `built`: one for the CPU, one per kernel on the GPU (all
 /// of the structure's layout for --kernel all), Embree's for --device embree (`oracle`
 /// required then). Throws bvhlab::Error for a kernel that does not fit.
