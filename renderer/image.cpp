@@ -27,8 +27,8 @@ std::string extension_of(const std::string& path) {
     return e;
 }
 
-void write_pfm(const Image& img, const std::string& path) {
-    scene::write_file_atomically(path, [&](std::FILE* f) {
+scene::TemporaryFile write_pfm(const Image& img, const std::string& path) {
+    return scene::write_temporary(path, [&](std::FILE* f) {
         // Negative scale: little-endian. PFM stores the bottom row first.
         std::fprintf(f, "PF\n%u %u\n-1.0\n", img.width, img.height);
         for (uint32_t y = img.height; y-- > 0;)
@@ -39,9 +39,17 @@ void write_pfm(const Image& img, const std::string& path) {
 #if defined(BVHLAB_HAVE_OIIO)
 bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
 
-void write_oiio(const Image& img, const std::string& path, const std::string& ext) {
+/// OpenImageIO's error text as one line about `path`: its first line, with the temporary's
+/// name replaced by the user's.
+std::string oiio_reason(std::string why, const std::string& tmp, const std::string& path) {
+    why = why.substr(0, why.find('\n'));
+    for (size_t at; (at = why.find(tmp)) != std::string::npos;) why.replace(at, tmp.size(), path);
+    return why.empty() ? "OpenImageIO failed" : why;
+}
+
+scene::TemporaryFile write_oiio(const Image& img, const std::string& path, const std::string& ext) {
     // OpenImageIO picks the format by the name, so the temporary keeps the extension.
-    const fs::path final_path(path);
+    const fs::path final_path(scene::output_target(path));
     const fs::path tmp =
         final_path.parent_path() / ("." + final_path.stem().string() + ".tmp" + std::to_string(getpid()) + ext);
     auto out = OIIO::ImageOutput::create(tmp.string());
@@ -57,15 +65,15 @@ void write_oiio(const Image& img, const std::string& path, const std::string& ex
                 bytes[3 * i + size_t(c)] = uint8_t(std::lround(255.0f * srgb_encode(img.pixels[i][c])));
         data = bytes.data();
     }
-    bool ok = out->open(tmp.string(), spec) &&
-              out->write_image(fl ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8, data) && out->close();
-    std::error_code ec;
-    if (ok) fs::rename(tmp, final_path, ec);
-    if (!ok || ec) {
-        const std::string why = !ok ? out->geterror() : ec.message();
+    const bool ok = out->open(tmp.string(), spec) &&
+                    out->write_image(fl ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8, data) && out->close();
+    if (!ok) {
+        const std::string why = oiio_reason(out->geterror(), tmp.string(), path);
+        std::error_code ec;
         fs::remove(tmp, ec);
         throw Error("cannot write " + path + ": " + why);
     }
+    return {tmp.string(), final_path.string(), path};
 }
 #endif
 
@@ -94,14 +102,32 @@ bool can_write_image(const std::string& path, std::string* why) {
 #endif
 }
 
-void write_image(const Image& img, const std::string& path) {
+namespace {
+
+scene::TemporaryFile write_image_temporary(const Image& img, const std::string& path) {
     std::string why;
     if (!can_write_image(path, &why)) throw Error("cannot write " + path + ": " + why);
-    const std::string ext = extension_of(path);
-    if (ext == ".pfm") return write_pfm(img, path);
 #if defined(BVHLAB_HAVE_OIIO)
-    write_oiio(img, path, ext);
+    if (const std::string ext = extension_of(path); ext != ".pfm") return write_oiio(img, path, ext);
 #endif
+    return write_pfm(img, path);
+}
+
+}  // namespace
+
+void write_images(const std::vector<std::pair<const Image*, std::string>>& images) {
+    std::vector<scene::TemporaryFile> written;
+    try {
+        for (const auto& [img, path] : images) written.push_back(write_image_temporary(*img, path));
+    } catch (...) {
+        scene::discard_temporaries(written);
+        throw;
+    }
+    scene::commit_temporaries(written);
+}
+
+void write_image(const Image& img, const std::string& path) {
+    scene::commit_temporaries({write_image_temporary(img, path)});
 }
 
 Image read_image(const std::string& path) {

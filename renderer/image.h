@@ -30,6 +30,11 @@ bool can_write_image(const std::string& path, std::string* why = nullptr);
 /// I/O failure.
 void write_image(const Image& img, const std::string& path);
 
+/// Writes every image or none: each goes to a temporary first, and only when all are written
+/// are they renamed to their names (a full disk on the third leaves none of them, and no
+/// temporary).
+void write_images(const std::vector<std::pair<const Image*, std::string>>& images);
+
 /// Reads a PFM file (colour "PF" or grey "Pf", either byte order). Throws bvhlab::Error.
 Image read_pfm(const std::string& path);
 

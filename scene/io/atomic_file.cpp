@@ -13,7 +13,7 @@
 
 namespace bvhlab::scene {
 
-void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+std::string output_target(const std::string& path) {
     namespace fs = std::filesystem;
     fs::path target(path);
     struct stat st {};
@@ -26,6 +26,12 @@ void write_file_atomically(const std::string& path, const std::function<void(std
         if (fs::is_symlink(target, ec)) target = fs::canonical(target, ec);  // the link stays
         if (ec) throw Error("cannot write '" + path + "': " + ec.message());
     }
+    return target.string();
+}
+
+TemporaryFile write_temporary(const std::string& path, const std::function<void(std::FILE*)>& write) {
+    namespace fs = std::filesystem;
+    const fs::path target(output_target(path));
     // mkstemp in the target's folder, so that the rename stays on one file system.
     std::string tmpl = (target.parent_path().empty() ? fs::path(".") : target.parent_path()) /
                        ("." + target.filename().string() + ".tmp-XXXXXX");
@@ -60,7 +66,24 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     const int closed = std::fclose(f);
     f = nullptr;
     if (closed != 0) fail(errno);
-    if (std::rename(tmpl.c_str(), target.c_str()) != 0) fail(errno);
+    return {tmpl, target.string(), path};
+}
+
+void commit_temporaries(const std::vector<TemporaryFile>& files) {
+    for (size_t i = 0; i < files.size(); ++i)
+        if (std::rename(files[i].tmp.c_str(), files[i].target.c_str()) != 0) {
+            const int e = errno;
+            discard_temporaries({files.begin() + long(i), files.end()});
+            throw Error("cannot write '" + files[i].path + "': " + std::strerror(e));
+        }
+}
+
+void discard_temporaries(const std::vector<TemporaryFile>& files) {
+    for (const TemporaryFile& f : files) ::unlink(f.tmp.c_str());
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+    commit_temporaries({write_temporary(path, write)});
 }
 
 namespace {

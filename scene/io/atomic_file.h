@@ -21,6 +21,28 @@ namespace bvhlab::scene {
 /// reports its own failures by throwing, or by a failed stdio call (checked with ferror).
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
 
+/// The file that writing `path` replaces: `path`, or what it links to. Throws bvhlab::Error
+/// when it is a folder, a pipe, a device or a socket.
+std::string output_target(const std::string& path);
+
+/// A written, synced temporary file and the file it is to replace.
+struct TemporaryFile {
+    std::string tmp;     ///< beside the target
+    std::string target;  ///< `path`, or what it links to
+    std::string path;    ///< as the caller named it, for messages
+};
+
+/// write_file_atomically() in two halves, for outputs that must all appear or none: first
+/// every temporary (the half that fails on a full disk; on failure its temporary is removed
+/// and bvhlab::Error names `path`), then commit_temporaries() renames them all. A caller that
+/// stops between the halves removes them with discard_temporaries().
+TemporaryFile write_temporary(const std::string& path, const std::function<void(std::FILE*)>& write);
+/// Renames every temporary over its target (a rename within one folder: it fails only when the
+/// folder changes meanwhile; then the rest are removed and bvhlab::Error names the file).
+void commit_temporaries(const std::vector<TemporaryFile>& files);
+/// Removes the temporaries (never the targets).
+void discard_temporaries(const std::vector<TemporaryFile>& files);
+
 /// A file of a command and the option that names it ("--env", "texture of material 'wood'").
 struct NamedFile {
     std::string what;

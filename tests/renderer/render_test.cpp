@@ -438,6 +438,32 @@ TEST(Image, PfmRoundTripAndErrors) {
     EXPECT_NEAR(srgb_encode(0.5f), 0.7354f, 1e-3f);
 }
 
+// An image set is written whole or not at all: when the last image cannot be written, the
+// earlier ones keep their old contents (or stay absent) and no temporary is left.
+TEST(Image, ASetOfImagesIsWrittenWholeOrNotAtAll) {
+    Image img(2, 2);
+    img.at(1, 1) = {1.0f, 2.0f, 3.0f};
+    test::TempFile old("set_old.pfm", "the old image");
+    const std::filesystem::path dir = std::filesystem::path(old.path()).parent_path();
+    const std::string fresh = (dir / "set_fresh.pfm").string();
+    std::filesystem::remove(fresh);
+    const auto temporaries = [&] {
+        size_t n = 0;
+        for (const auto& e : std::filesystem::directory_iterator(dir))
+            n += e.path().filename().string().rfind(".set_", 0) == 0;
+        return n;
+    };
+    const size_t before = temporaries();
+    EXPECT_THROW(write_images({{&img, old.path()}, {&img, fresh}, {&img, "/nonexistent-bvhlab-dir/c.pfm"}}), Error);
+    EXPECT_EQ(test::read_file_bytes(old.path()), "the old image");
+    EXPECT_FALSE(std::filesystem::exists(fresh));
+    EXPECT_EQ(temporaries(), before);
+    write_images({{&img, old.path()}, {&img, fresh}});
+    EXPECT_EQ(read_pfm(old.path()).at(1, 1).z, 3.0f);
+    EXPECT_EQ(read_pfm(fresh).at(1, 1).y, 2.0f);
+    std::filesystem::remove(fresh);
+}
+
 #if defined(BVHLAB_HAVE_OIIO)
 // EXR keeps the floats; PNG clamps and sRGB-encodes them; both read back through OpenImageIO.
 TEST(Image, ExrAndPngThroughOpenImageIO) {

@@ -364,6 +364,13 @@ for f in "--structure $tmp/nope.bvh" "--bins 8" "--kd-stack 4" "--fetch-threshol
     expect_error "reference-render-${f%% *}" "${f%% *} does not apply to render --device cpu without --kernel" render \
         "$tmp/cb_in.obj" $f --width 4 --height 4 --spp 1 -o "$tmp/ref.pfm"
 done
+# ... but with --cost-image the reference renderer builds a structure, and its options apply.
+if "$bin" -q render "$data/cornell_box.obj" --bins 8 --builder binned --width 4 --height 4 --spp 1 \
+    -o "$tmp/ref-ok.pfm" --cost-image "$tmp/ref-cost.pfm" >/dev/null 2>"$tmp/err" && [ -s "$tmp/ref-cost.pfm" ]; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL reference render with --cost-image and structure options:"; sed 's/^/    /' "$tmp/err"
+fi
 edit_records "$tmp/small.rays" "$tmp/damaged.rays" f $((3 * 32 + 16)) 0.5 --keep-checksum
 expect_error damaged-rays "damaged.rays' is damaged: its checksum does not match" verify "$tmp/cb_in.obj" --rays "$tmp/damaged.rays"
 "$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null

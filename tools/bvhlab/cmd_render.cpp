@@ -44,8 +44,10 @@ std::string aov_path(const std::string& out, const char* kind) {
 
 /// The primary rays' traversal work per pixel (sample 0 of each pixel), as an image and as
 /// means for the summary line.
-nlohmann::json write_cost_image(const Built& built, int kd_stack, const render::CameraData& cd, uint32_t seed,
-                                const std::string& path) {
+/// The cost image (nodes, triangle tests, leaves per pixel as R, G, B) in `img`, and its
+/// figures.
+nlohmann::json cost_image(const Built& built, int kd_stack, const render::CameraData& cd, uint32_t seed,
+                          const std::string& path, render::Image& img) {
     trav::RaySet set;
     const uint32_t npix = cd.width * cd.height;
     set.rays.resize(npix);
@@ -53,7 +55,7 @@ nlohmann::json write_cost_image(const Built& built, int kd_stack, const render::
     std::vector<trav::Hit> hits;
     std::vector<trav::TraversalCounters> counters;
     trav::trace_cpu_counted(built.structure, kd_stack, set, hits, &counters);
-    render::Image img(cd.width, cd.height);
+    img = render::Image(cd.width, cd.height);
     double nodes = 0.0, tests = 0.0, leaves = 0.0;
     for (uint32_t px = 0; px < npix; ++px) {
         const trav::TraversalCounters& c = counters[px];
@@ -62,7 +64,6 @@ nlohmann::json write_cost_image(const Built& built, int kd_stack, const render::
         tests += c.tri_tests;
         leaves += c.leaves;
     }
-    render::write_image(img, path);
     return {{"file", path},
             {"nodes_per_ray", nodes / npix},
             {"tri_tests_per_ray", tests / npix},
@@ -156,14 +157,14 @@ void register_render(CLI::App& app, Globals& g) {
         const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
         if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
         if (!reference) o->trace.validate(o->build);
-        if (reference) {  // Embree traces every ray: nothing is built, no kernel runs
-            const CLI::Option* f = given_structure_flag(o->build);
+        if (reference) {  // Embree traces every ray: no kernel runs, and a structure only for --cost-image
+            const CLI::Option* f = o->cost_image.empty() ? given_structure_flag(o->build) : nullptr;
             for (const CLI::Option* g : {o->trace.block_flag, o->trace.fetch_flag})
                 if (!f && g && g->count()) f = g;
             if (f)
                 throw Error(f->get_name() +
                             " does not apply to render --device cpu without --kernel (the reference integrator: Embree "
-                            "traces every ray)");
+                            "traces every ray; structure options apply to its --cost-image)");
         }
         std::vector<scene::NamedFile> outputs{{"--out", o->out}};
         if (o->aov) {
@@ -290,19 +291,23 @@ void register_render(CLI::App& app, Globals& g) {
                 res = render::render_host(rscene, cd, o->rs, *tracer, *tracer, progress);
             }
         }
-        render::write_image(res.mean, o->out);
+        // Every image is written, or none is (render::write_images).
+        std::vector<std::pair<const render::Image*, std::string>> images{{&res.mean, o->out}};
         if (o->aov) {
-            render::write_image(res.albedo, outputs[1].path);
-            render::write_image(res.normal, outputs[2].path);
+            images.push_back({&res.albedo, outputs[1].path});
+            images.push_back({&res.normal, outputs[2].path});
         }
+        render::Image cost_img;
         nlohmann::json cost;
         if (!o->cost_image.empty()) {
             if (reference) {
                 o->build.epo = false;
                 built = build_scene(s, o->build, g);
             }
-            cost = write_cost_image(built, o->build.kd_stack, cd, o->rs.seed, o->cost_image);
+            cost = cost_image(built, o->build.kd_stack, cd, o->rs.seed, o->cost_image, cost_img);
+            images.push_back({&cost_img, o->cost_image});
         }
+        render::write_images(images);
 
         nlohmann::json bounces = nlohmann::json::array();
         for (const render::BounceStats& b : res.bounces)
