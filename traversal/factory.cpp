@@ -149,6 +149,7 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     f["bytes"] = s.bytes;
     f["sah"] = s.sah;
     f["epo"] = s.epo >= 0 ? nlohmann::json(s.epo) : nlohmann::json(nullptr);
+    if (!s.epo_skipped.empty()) f["epo_skipped"] = s.epo_skipped;
     f["build_ms"] = b.result.build_ms;  // 0 for a loaded file: nothing was built
     if (spec.is_cwbvh()) {
         convert_cwbvh(mesh, spec, stage, b);

@@ -6,6 +6,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <vector>
 
 #include "accel/core/check.h"
@@ -33,7 +34,8 @@ std::vector<std::pair<uint32_t, uint32_t>> subtree_ranges(const BuildTree& tree)
     return range;
 }
 
-double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs) {
+/// EPO, or -1 when more than `budget` node-triangle overlap tests would be needed.
+double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs, uint64_t budget) {
     const auto range = subtree_ranges(tree);
     // CSR list of the positions at which each triangle is referenced (one per triangle for
     // object-split trees, several for spatial splits).
@@ -50,18 +52,30 @@ double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const
             if (pos[k] >= range[node].first && pos[k] < range[node].second) return true;
         return false;
     };
+    // Overlap tests are counted in batches; every thread stops once the total passes the budget.
+    constexpr uint64_t kBatch = 1 << 16;
+    std::atomic<uint64_t> tests{0};
+    std::atomic<bool> over{false};
     // A deterministic reduce with a fixed grain keeps the float sum reproducible.
     double sum = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<size_t>(0, ntri, 1024), 0.0,
         [&](const tbb::blocked_range<size_t>& r, double acc) {
             std::vector<uint32_t> stack;
-            for (size_t t = r.begin(); t < r.end(); ++t) {
+            uint64_t local = 0;
+            for (size_t t = r.begin(); t < r.end() && !over.load(std::memory_order_relaxed); ++t) {
                 const AABB tb = mesh.triangle_bounds(t);
                 const Vec3 a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
                 stack.assign(1, 0);
                 while (!stack.empty()) {
                     uint32_t ni = stack.back();
                     stack.pop_back();
+                    if (++local == kBatch) {
+                        local = 0;
+                        if (tests.fetch_add(kBatch, std::memory_order_relaxed) + kBatch > budget) {
+                            over.store(true, std::memory_order_relaxed);
+                            break;
+                        }
+                    }
                     const BuildNode& n = tree.nodes[ni];
                     if (!n.bounds.overlaps(tb)) continue;
                     if (!in_subtree(uint32_t(t), ni)) {
@@ -74,17 +88,21 @@ double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const
                     }
                 }
             }
+            // What is left of the batch counts too (a chunk of ordinary triangles fills none).
+            if (tests.fetch_add(local, std::memory_order_relaxed) + local > budget)
+                over.store(true, std::memory_order_relaxed);
             return acc;
         },
         [](double x, double y) { return x + y; });
+    if (over.load()) return -1.0;
     double total = mesh.surface_area();
     return total > 0 ? sum / total : 0.0;
 }
 
 }  // namespace
 
-TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs,
-                        bool with_epo) {
+TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs, bool with_epo,
+                        uint64_t epo_budget) {
     BVHLAB_CHECK(!tree.empty(), "statistics of an empty tree");
     TreeStats s;
     s.nodes = tree.nodes.size();
@@ -106,7 +124,14 @@ TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, 
         }
     }
     s.mean_leaf_size = s.leaves ? double(s.references) / double(s.leaves) : 0.0;
-    if (with_epo) s.epo = compute_epo(tree, mesh, costs);
+    if (with_epo) {
+        const uint64_t budget = epo_budget ? epo_budget : kEpoTestsPerTriangle * mesh.triangle_count() + (1u << 24);
+        s.epo = compute_epo(tree, mesh, costs, budget);
+        if (s.epo < 0)
+            s.epo_skipped = "EPO skipped: it needs more than " + std::to_string(budget) +
+                            " triangle-node overlap tests here (thin triangles around one vertex overlap every "
+                            "node); --no-epo skips it outright";
+    }
     return s;
 }
 

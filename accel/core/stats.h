@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "accel/core/build_tree.h"
 #include "accel/layouts/kd_node.h"
@@ -25,12 +26,22 @@ struct TreeStats {
     /// Sum over nodes n of C_n * (area of triangles outside n's subtree that lies inside n)
     /// / (total triangle area); C_n = Ct for interior nodes and Ci for leaves. -1 if skipped.
     double epo = -1;
+    /// Why EPO was skipped although asked for ("" otherwise): its work bound was reached.
+    std::string epo_skipped;
 };
 
+/// EPO's work bound, in triangle-node overlap tests per triangle. EPO visits, for each triangle,
+/// every node its bounds overlap: about the tree's depth for most meshes (furball: tens), but
+/// every node for a fan of thin triangles around one vertex (a 200,000-vertex polygon took
+/// minutes). Beyond the bound EPO is skipped with a reason instead.
+constexpr uint64_t kEpoTestsPerTriangle = 1024;
+
 /// Computes every figure. EPO clips each triangle against the nodes its bounds overlap, in
-/// parallel; pass with_epo = false to skip it on huge scenes.
+/// parallel; pass with_epo = false to skip it on huge scenes. It stops, leaving epo = -1 and
+/// epo_skipped set, after epo_budget overlap tests (0: kEpoTestsPerTriangle per triangle plus
+/// 2^24).
 TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs,
-                        bool with_epo = true);
+                        bool with_epo = true, uint64_t epo_budget = 0);
 
 /// Size and quality figures of a kd-tree, from one walk over it.
 struct KdTreeStats {

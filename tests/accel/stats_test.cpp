@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <cmath>
+
 #include "accel/builders/builder.h"
 #include "accel/core/clip.h"
 #include "accel/core/stats.h"
@@ -118,6 +120,37 @@ TEST(TreeStats, ParallelFiguresEqualOneThreadsFigures) {
         EXPECT_NEAR(s.sah, serial.sah, 1e-9 * serial.sah);
     }
     EXPECT_GT(serial.epo, 0.0);
+}
+
+// EPO's work is bounded: a fan of thin triangles around one vertex overlaps every node, so
+// the default bound (kEpoTestsPerTriangle a triangle) stops it with a reason instead of taking
+// minutes; a small explicit budget stops an ordinary mesh too, and a sufficient one does not.
+TEST(TreeStats, EpoStopsAtItsWorkBound) {
+    const int n = 20000;
+    scene::TriangleMesh fan;
+    for (int i = 0; i < n; ++i) {
+        const double a0 = 2 * M_PI * i / n, a1 = 2 * M_PI * (i + 1) / n;
+        scene::add_triangle_checked(fan, {0, 0, 0}, {float(std::cos(a0)), float(std::sin(a0)), 0},
+                                    {float(std::cos(a1)), float(std::sin(a1)), 0}, -1);
+    }
+    ASSERT_EQ(fan.triangle_count(), size_t(n));
+    const BuildTree t = run_builder(BuilderKind::kBinned, fan, {}).tree;
+    const TreeStats s = compute_stats(t, fan, BuildConfig{});
+    EXPECT_EQ(s.epo, -1.0);
+    EXPECT_NE(s.epo_skipped.find("EPO skipped: it needs more than"), std::string::npos) << s.epo_skipped;
+    EXPECT_GT(s.sah, 0.0);  // the other figures are still there
+
+    const scene::TriangleMesh soup = scene::make_procedural(scene::ProceduralKind::kSoup, 5000, 3);
+    const BuildTree u = run_builder(BuilderKind::kBinned, soup, {}).tree;
+    const TreeStats small = compute_stats(u, soup, BuildConfig{}, true, 1 << 16);
+    EXPECT_EQ(small.epo, -1.0);
+    EXPECT_FALSE(small.epo_skipped.empty());
+    const TreeStats full = compute_stats(u, soup, BuildConfig{});
+    EXPECT_GT(full.epo, 0.0);
+    EXPECT_TRUE(full.epo_skipped.empty());
+    const TreeStats off = compute_stats(u, soup, BuildConfig{}, false);
+    EXPECT_EQ(off.epo, -1.0);
+    EXPECT_TRUE(off.epo_skipped.empty());  // not asked for: nothing to explain
 }
 
 }  // namespace bvhlab::accel

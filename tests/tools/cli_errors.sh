@@ -274,6 +274,21 @@ for bad in "Kd nan" "Ns 0x10"; do
     expect_error "mtl-scan-${bad%% *}" "badval.mtl' line 2: ${bad%% *} value '${bad#* }' is not a finite number" build \
         "$tmp/badval.obj"
 done
+# EPO's work is bounded: a 20,000-vertex polygon (a fan of thin triangles around one vertex,
+# every one overlapping every node) builds with a warning and "epo": null instead of minutes.
+python3 -c "
+import math
+n = 20000
+print('v 0 0 0')
+for i in range(n): print('v %.7f %.7f 0' % (math.cos(2 * math.pi * i / n), math.sin(2 * math.pi * i / n)))
+print('f ' + ' '.join(str(i + 2) for i in range(n)))" >"$tmp/bigpoly.obj"
+if timeout 120 "$bin" build "$tmp/bigpoly.obj" --json >"$tmp/out" 2>"$tmp/err" &&
+    grep -q "warning: EPO skipped: it needs more than" "$tmp/err" &&
+    python3 -c 'import json,sys; r=json.loads(open(sys.argv[1]).readline()); assert r["epo"] is None and "work" not in r and r["epo_skipped"], r' "$tmp/out"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL bigpoly-epo:"; sed 's/^/    /' "$tmp/err" | tail -3
+fi
 # Outputs never overwrite the command's inputs; invalid rays and foreign hits are refused by index.
 cp "$data/cornell_box.obj" "$tmp/cb_in.obj"
 expect_error build-out-is-input "--out .* is this command's input" build "$tmp/cb_in.obj" -o "$tmp/cb_in.obj"

@@ -37,6 +37,7 @@ void print_build_table(const Scene& s, const Built& b) {
                 double(b.stats.references) / double(s.mesh.triangle_count()));
     std::printf("SAH          %.4f (Ct = Ci = 1, root-normalised)\n", b.stats.sah);
     if (b.stats.epo >= 0) std::printf("EPO          %.4f\n", b.stats.epo);
+    if (!b.stats.epo_skipped.empty()) std::printf("EPO          skipped (work bound reached)\n");
     if (b.structure.layout != trav::Layout::kCwbvh) {
         std::printf("bytes        %llu (BuildTree), %zu (bvh2 layout + Woop triangles)\n",
                     (unsigned long long)b.stats.bytes, b.structure.bytes());

@@ -72,6 +72,8 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
         static_cast<trav::AccelStructure&>(b) =
             trav::structure_from_file(scene.mesh, scene.hash, std::move(f), file, opts.spec(), stage);
     }
+    if (!b.stats.epo_skipped.empty() && !g.quiet)
+        std::fprintf(stderr, "[bvhlab] warning: %s\n", b.stats.epo_skipped.c_str());
     b.record = base_record("build", scene);
     b.record.update(b.figures);
     b.record["machine"] = machine_description();
