@@ -115,10 +115,6 @@ void refuse_clashing_files(const std::vector<NamedFile>& outputs, const std::vec
     }
 }
 
-void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what) {
-    refuse_clashing_files({{what, out}}, {{"the scene", in}});
-}
-
 std::string not_regular_reason(unsigned mode) {
     if (S_ISREG(mode)) return "";
     if (S_ISDIR(mode)) return "it is a directory";

@@ -55,10 +55,6 @@ struct NamedFile {
 /// file". Called before anything is written.
 void refuse_clashing_files(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs);
 
-/// refuse_clashing_files() for one output `out` (option `what`) and one input `in`, the
-/// command's scene or other main input.
-void refuse_overwriting_input(const std::string& out, const std::string& in, const std::string& what);
-
 /// Why a file of stat mode `mode` cannot be read or written as a file: "it is a directory",
 /// "it is a pipe (FIFO)", "it is a device", "it is a socket"; "" for a regular file.
 std::string not_regular_reason(unsigned mode);

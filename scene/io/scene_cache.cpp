@@ -325,11 +325,16 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
         for (const std::string& f : files)
             if (!fs::is_regular_file(f, ec)) r.missing_material_files.push_back(f);
     };
-    if (cache_dir.empty()) {
+    // The OBJ parsed (no cache, an entry that is not a regular file, a miss); its material files.
+    auto parse = [&]() {
         std::vector<std::string> mtl_files;
         r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
         r.scene_hash = scene_hash(r.mesh);
         note_materials(mtl_files);
+        return mtl_files;
+    };
+    if (cache_dir.empty()) {
+        parse();
         return r;
     }
     bool exists = false;
@@ -340,10 +345,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
     const fs::file_status entry = fs::symlink_status(r.cache_file, ec);
     if (fs::exists(entry) && !fs::is_regular_file(entry)) {
         // Never read (a FIFO would hang) and never replaced: the cache's files are its own.
-        std::vector<std::string> mtl_files;
-        r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
-        r.scene_hash = scene_hash(r.mesh);
-        note_materials(mtl_files);
+        parse();
         r.cache_warning = "scene cache entry '" + r.cache_file + "' is not a regular file: ignored, and not written";
         return r;
     }
@@ -364,10 +366,7 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
             r.cache_warning = "scene cache entry '" + r.cache_file + "' ignored and rebuilt: " + u.why;
         }
     }
-    std::vector<std::string> mtl_files;
-    r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
-    r.scene_hash = scene_hash(r.mesh);
-    note_materials(mtl_files);
+    const std::vector<std::string> mtl_files = parse();
     std::vector<Dependency> deps;
     for (const std::string& m : mtl_files) {
         Dependency d{m, false, 0};

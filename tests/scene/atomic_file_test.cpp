@@ -83,16 +83,16 @@ TEST(AtomicFile, LinksAreWrittenThroughAndSpecialFilesRefused) {
 TEST(AtomicFile, OutputThatIsAnInputIsRefused) {
     test::TempFile f("input.obj", "v 0 0 0\n");
     const fs::path p(f.path());
-    EXPECT_THROW(refuse_overwriting_input(f.path(), f.path(), "--out"), Error);
+    EXPECT_THROW(refuse_clashing_files({{"--out", f.path()}}, {{"the scene", f.path()}}), Error);
     // The same file spelled differently, and through a hard link.
     const std::string dotted = (p.parent_path() / "." / p.filename()).string();
-    EXPECT_THROW(refuse_overwriting_input(dotted, f.path(), "--out"), Error);
+    EXPECT_THROW(refuse_clashing_files({{"--out", dotted}}, {{"the scene", f.path()}}), Error);
     const std::string link = f.path() + ".link";
     fs::create_hard_link(f.path(), link);
-    EXPECT_THROW(refuse_overwriting_input(link, f.path(), "--out"), Error);
+    EXPECT_THROW(refuse_clashing_files({{"--out", link}}, {{"the scene", f.path()}}), Error);
     fs::remove(link);
-    EXPECT_NO_THROW(refuse_overwriting_input(f.path() + ".tree", f.path(), "--out"));
-    EXPECT_NO_THROW(refuse_overwriting_input(f.path(), "gen:soup:100", "--out"));
+    EXPECT_NO_THROW(refuse_clashing_files({{"--out", f.path() + ".tree"}}, {{"the scene", f.path()}}));
+    EXPECT_NO_THROW(refuse_clashing_files({{"--out", f.path()}}, {{"the scene", "gen:soup:100"}}));
 }
 
 }  // namespace
