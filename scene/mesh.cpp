@@ -80,9 +80,17 @@ std::string scene_hash(const TriangleMesh& mesh) {
     return accel::hash_hex(h);
 }
 
+namespace {
+
+bool within(Vec3 v, float limit) {
+    const auto in = [limit](float x) { return x >= -limit && x <= limit; };  // NaN is not
+    return in(v.x) && in(v.y) && in(v.z);
+}
+
+}  // namespace
+
 std::string vec_problem(const char* what, Vec3 v, float limit) {
-    const auto in = [limit](float x) { return x >= -limit && x <= limit; };
-    if (in(v.x) && in(v.y) && in(v.z)) return "";
+    if (within(v, limit)) return "";
     char b[160];
     std::snprintf(b, sizeof b, "%s (%g, %g, %g) is outside [-%g, %g], the numeric domain bvhlab supports", what, v.x,
                   v.y, v.z, limit, limit);
@@ -90,9 +98,9 @@ std::string vec_problem(const char* what, Vec3 v, float limit) {
 }
 
 std::string domain_problem(const TriangleMesh& mesh) {
-    for (size_t i = 0; i < mesh.vertices.size(); ++i)
-        if (std::string p = vec_problem(("vertex " + std::to_string(i + 1)).c_str(), mesh.vertices[i]); !p.empty())
-            return p;
+    for (size_t i = 0; i < mesh.vertices.size(); ++i)  // the name is made only for the vertex reported
+        if (!within(mesh.vertices[i], kMaxCoordinate))
+            return vec_problem(("vertex " + std::to_string(i + 1)).c_str(), mesh.vertices[i]);
     if (mesh.triangle_count() > 0 && !(mesh.diagonal() >= kMinSceneDiagonal)) {
         char b[160];
         std::snprintf(b, sizeof b,
