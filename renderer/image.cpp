@@ -132,7 +132,7 @@ void write_image(const Image& img, const std::string& path) {
 
 Image read_image(const std::string& path) {
     if (const std::string problem = scene::regular_file_problem(path); !problem.empty())
-        throw Error("cannot read " + path + ": " + (problem == "does not exist" ? "no such file" : problem));
+        throw Error("cannot read " + path + ": " + (problem == scene::kDoesNotExist ? "no such file" : problem));
     if (extension_of(path) == ".pfm") return read_pfm(path);
 #if defined(BVHLAB_HAVE_OIIO)
     auto in = OIIO::ImageInput::open(path);

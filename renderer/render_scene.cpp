@@ -109,7 +109,7 @@ void RenderScene::load_textures(const TextureOptions& opts) {
                 index = int32_t(textures_.size());
                 textures_.push_back({uint32_t(texels_.size()), img.width, img.height, 0});
                 texels_.insert(texels_.end(), img.pixels.begin(), img.pixels.end());
-            } else if (problem != "does not exist") {  // a folder or a device: an error either way
+            } else if (problem != scene::kDoesNotExist) {  // a folder or a device: an error either way
                 throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name + "'): " + problem);
             } else if (!opts.warn_missing) {
                 throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name +

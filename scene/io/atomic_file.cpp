@@ -126,7 +126,7 @@ std::string not_regular_reason(unsigned mode) {
 
 std::string regular_file_problem(const std::string& path) {
     struct stat st {};
-    if (::stat(path.c_str(), &st) != 0) return errno == ENOENT ? "does not exist" : std::string(std::strerror(errno));
+    if (::stat(path.c_str(), &st) != 0) return errno == ENOENT ? kDoesNotExist : std::string(std::strerror(errno));
     return not_regular_reason(st.st_mode);
 }
 

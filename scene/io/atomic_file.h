@@ -59,8 +59,12 @@ void refuse_clashing_files(const std::vector<NamedFile>& outputs, const std::vec
 /// "it is a pipe (FIFO)", "it is a device", "it is a socket"; "" for a regular file.
 std::string not_regular_reason(unsigned mode);
 
+/// regular_file_problem()'s answer for a path that does not exist (callers that treat a missing
+/// file apart from a folder or a device compare with it).
+inline constexpr const char* kDoesNotExist = "does not exist";
+
 /// "" when `path` is a regular file (through links); otherwise why it cannot be read, as a
-/// phrase for "'path' ...": "does not exist", "it is a directory", "it is a pipe (FIFO)", ...
+/// phrase for "'path' ...": kDoesNotExist, "it is a directory", "it is a pipe (FIFO)", ...
 std::string regular_file_problem(const std::string& path);
 
 }  // namespace bvhlab::scene

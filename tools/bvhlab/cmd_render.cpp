@@ -189,7 +189,7 @@ void register_render(CLI::App& app, Globals& g) {
         scene::refuse_clashing_files(outputs, inputs);
         for (const std::string& f : s.missing_material_files) {
             // A folder or a device is an error whatever --missing-textures says.
-            if (const std::string problem = scene::regular_file_problem(f); problem != "does not exist")
+            if (const std::string problem = scene::regular_file_problem(f); problem != scene::kDoesNotExist)
                 throw Error("cannot render " + o->scene + ": its material file " + f + ": " + problem);
             if (o->missing == "error")
                 throw Error("cannot render " + o->scene + ": its material file " + f +
@@ -232,7 +232,7 @@ void register_render(CLI::App& app, Globals& g) {
             if (problem.empty()) {
                 sky.env_file = o->env;
                 sky.env_scale = o->env_scale;
-            } else if (problem != "does not exist") {
+            } else if (problem != scene::kDoesNotExist) {
                 throw Error("cannot render with --env " + o->env + ": " + problem);
             } else if (o->missing == "error") {
                 throw Error("cannot render with --env " + o->env +
