@@ -126,6 +126,27 @@ expect_error rays-needs-out "--out" rays "$data/cornell_box.obj"
 # Structure cache: stale (other triangles, other config), damaged, and a name not built yet.
 "$bin" -q build "$data/cornell_box.obj" --builder sbvh --out "$tmp/cb.tree" >/dev/null
 expect_error cache-other-scene "stale structure file.*other triangles" verify gen:soup:50 --structure "$tmp/cb.tree"
+# Header values out of range, with a checksum made right again (byte-wise FNV-1a with the
+# README's basis): a NaN Ct (at byte 48) and a max depth of 0 (at byte 44) are refused by name.
+patch_tree() {  # patch_tree IN OUT OFFSET FORMAT VALUE
+    python3 - "$@" <<'PY'
+import struct, sys
+src, dst, off, fmt, val = sys.argv[1:6]
+d = bytearray(open(src, "rb").read())
+struct.pack_into("<" + fmt, d, int(off), float(val) if fmt == "f" else int(val))
+h = 1469598103934665603
+for c in d[:-8]:
+    h = ((h ^ c) * 1099511628211) % 2**64
+struct.pack_into("<Q", d, len(d) - 8, h)
+open(dst, "wb").write(d)
+PY
+}
+patch_tree "$tmp/cb.tree" "$tmp/nan-ct.tree" 48 f nan
+expect_error tree-header-nan-ct "nan-ct.tree' has a header value out of range: ct nan" verify \
+    "$data/cornell_box.obj" --structure "$tmp/nan-ct.tree"
+patch_tree "$tmp/cb.tree" "$tmp/depth0.tree" 44 I 0
+expect_error tree-header-depth-0 "header value out of range: max_depth 0 is not in [[]1, 64[]]" bench \
+    "$data/cornell_box.obj" --structure "$tmp/depth0.tree" --runs 1
 expect_error cache-other-config "stale structure file.*asked for" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --max-leaf 2
 expect_error cache-other-reinsertion "stale structure file.*reinsert=3.*reinsert=0" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --reinsert 0
 expect_error bad-reinsert "reinsert" build "$data/cornell_box.obj" --builder sbvh --reinsert 99
