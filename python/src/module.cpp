@@ -18,6 +18,8 @@
 #include "renderer/wavefront.h"
 #include "scene/io/obj_loader.h"
 #include "scene/io/procedural.h"
+#include "scene/io/scene_file.h"
+#include "scene/scene.h"
 #include "traversal/factory.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/oracle/embree_oracle.h"
@@ -148,9 +150,11 @@ std::shared_ptr<Scene> scene_from_arrays(py::array_t<float, py::array::c_style |
     return s;
 }
 
-std::shared_ptr<Scene> load_scene(const std::string& path) {
+std::shared_ptr<Scene> load_scene(const std::string& path, bool flatten) {
     auto s = std::make_shared<Scene>();
-    s->mesh = scene::load_obj(path, &s->warnings);
+    scene::SceneFileLoad load = scene::load_scene_file(path, "", "python");
+    s->warnings = std::move(load.warnings);
+    s->mesh = scene::single_mesh(std::move(load.scene), flatten, "'" + path + "'");
     if (s->mesh.triangle_count() == 0) throw Error("'" + path + "' has no usable triangles");
     s->hash = scene::scene_hash(s->mesh);
     s->source = path;
@@ -318,7 +322,9 @@ PYBIND11_MODULE(_bvhlab, m) {
                    s.hash + ">";
         });
 
-    m.def("load", &load_scene, py::arg("path"), "Loads an OBJ file (materials and texture coordinates too)");
+    m.def("load", &load_scene, py::arg("path"), py::arg("flatten") = false,
+          "Loads a scene file: OBJ (materials and texture coordinates too), glTF, PLY and the other formats Assimp "
+          "reads. A scene that places a mesh more than once needs flatten=True, which makes it one mesh");
     m.def("generate", &generate_scene, py::arg("kind") = "structured", py::arg("triangles") = 10000,
           py::arg("seed") = 1, "A generated scene: soup (random triangles) or structured (a height field with boxes)");
 

@@ -63,6 +63,18 @@ def test_load_and_generate(cornell):
         bvhlab.generate("blob", 10)
 
 
+def test_load_other_formats_and_instanced_scenes():
+    ply = bvhlab.load(os.path.join(DATA, "cube_binary.ply"))
+    assert ply.triangle_count == 12
+    assert ply.hash == bvhlab.load(os.path.join(DATA, "cube_ascii.ply")).hash
+    glb = os.path.join(DATA, "instances.glb")
+    with pytest.raises(bvhlab.Error, match="places 2 meshes 4 times.*flatten"):
+        bvhlab.load(glb)
+    flat = bvhlab.load(glb, flatten=True)
+    assert flat.triangle_count == 40
+    assert flat.hash == bvhlab.load(os.path.join(DATA, "instances.gltf"), flatten=True).hash
+
+
 @pytest.mark.parametrize("builder,layout,name", [
     ("binned", "bvh2", "bvh2/binned"), ("sweep", "bvh2", "bvh2/sweep"), ("sbvh", "bvh2", "bvh2/sbvh"),
     ("sbvh", "cwbvh", "cwbvh/sbvh"), ("kdtree", "bvh2", "kdtree")])

@@ -532,8 +532,31 @@ expect_error seed-negative "--seed: '-1' is not a non-negative integer" rays "$d
     --seed -1 -o "$tmp/seed.rays"
 expect_error gen-seed-negative "--seed: '-1' is not a non-negative integer" gen --kind soup -n 10 --seed -1 \
     -o "$tmp/seed.obj"
+# Scene formats through Assimp, instanced scenes and gen:instances.
+expect_error instanced-needs-flatten "scene '.*instances.glb' places 2 meshes 4 times .*--flatten makes it one mesh of 40 triangles" \
+    build "$data/instances.glb"
+expect_error gen-instances-needs-flatten "places 1 mesh 3 times" build gen:instances:cornell-box:3
+expect_error gen-instances-zero "the instance count must be 1..2\^24, not 0" build --flatten gen:instances:cornell-box:0
+expect_error gen-instances-no-count "expected gen:instances:SCENE:N\[:SEED\]" build --flatten gen:instances:cornell-box
+expect_error gen-instances-bad-seed "the seed 'x' is not a whole number" build --flatten gen:instances:cornell-box:2:x
+expect_error gen-instances-missing "no scene 'nowhere'" build --flatten gen:instances:nowhere:2
+printf 'nothing\n' >"$tmp/scene.xyz"
+expect_error unknown-format "scene.xyz': unknown scene format '.xyz'" build "$tmp/scene.xyz"
+sed 's/"extensionsUsed"/"extensionsRequired": ["KHR_draco_mesh_compression"], "extensionsUsed"/' \
+    "$data/instances.gltf" >"$tmp/draco.gltf"
+expect_error gltf-required-extension "draco.gltf': requires the glTF extension KHR_draco_mesh_compression" \
+    build --flatten "$tmp/draco.gltf"
+head -c 1000 "$data/instances.glb" >"$tmp/truncated.glb"
+expect_error glb-truncated "truncated.glb': Assimp cannot read it" build --flatten "$tmp/truncated.glb"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n' \
+    >"$tmp/points.ply"
+expect_error ply-no-faces "points.ply': has no triangles" build "$tmp/points.ply"
+cp "$data/instances.glb" "$tmp/copy.glb"
+expect_error out-over-gltf "copy.glb. is this command.s input [(]the scene[)]" build --flatten "$tmp/copy.glb" -o "$tmp/copy.glb"
 expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
+check_schema build-gltf build --flatten "$data/instances.gltf"
+check_schema build-ply build "$data/cube_binary.ply"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh
 check_schema rays rays "$data/cornell_box.obj" --type ao --width 8 --height 8 -o "$tmp/schema.rays"
 check_schema rays-info rays --info "$tmp/schema.rays"

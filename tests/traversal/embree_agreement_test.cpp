@@ -12,6 +12,7 @@
 #include "accel/layouts/kd_convert.h"
 #include "scene/io/obj_loader.h"
 #include "scene/io/procedural.h"
+#include "scene/scene.h"
 #include "tests/support/agreement.h"
 #include "tests/support/test_support.h"
 #include "traversal/cpu/cpu_trace.h"
@@ -104,6 +105,24 @@ TEST(EmbreeAgreement, GeneratedScenes) {
                                    accel::CollapseMethod::kSahOptimal, accel::CwTris::kVertices);
         }
     }
+}
+
+TEST(EmbreeAgreement, FlattenedInstances) {
+    // gen:instances: randomly turned, scaled, overlapping copies, flattened into one mesh (what
+    // --flatten gives every structure). Copies cross each other everywhere: many triangles
+    // intersect, and many rays hit near such crossings.
+    const scene::TriangleMesh base = scene::make_procedural(scene::ProceduralKind::kStructured, 1500, 4);
+    const scene::TriangleMesh mesh = scene::flatten(scene::make_instances(base, 12, 9));
+    ASSERT_EQ(mesh.triangle_count(), 12 * base.triangle_count());
+    for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
+        expect_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b);
+        expect_cwbvh_agreement(mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96, b,
+                               accel::CollapseMethod::kSahOptimal);
+    }
+    const accel::KdLayout kd = accel::convert_to_kd_layout(accel::KdTreeBuilder().build(mesh), mesh);
+    expect_agreement_with(
+        mesh, framing_camera(mesh), 0.05f * mesh.diagonal(), 128, 96,
+        [&](const RaySet& set, std::vector<Hit>& hits) { trace_kd_cpu(kd, 64, set.rays, set.query, hits); });
 }
 
 TEST(EmbreeAgreement, DetectsABrokenTracer) {

@@ -243,7 +243,7 @@ void register_render(CLI::App& app, Globals& g) {
             }
         }
         render::TextureOptions topts;
-        topts.base_dir = std::filesystem::path(s.source).parent_path().string();
+        topts.base_dir = std::filesystem::path(s.file).parent_path().string();
         topts.warn_missing = o->missing == "warn";
         std::vector<std::string> texture_warnings;
         topts.warnings = &texture_warnings;

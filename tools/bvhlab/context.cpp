@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "accel/core/check.h"
@@ -21,6 +22,8 @@
 #include "scene/io/obj_loader.h"
 #include "scene/io/procedural.h"
 #include "scene/io/scene_cache.h"
+#include "scene/io/scene_file.h"
+#include "scene/scene.h"
 #include "traversal/rays/scene_catalogue.h"
 
 namespace fs = std::filesystem;
@@ -169,10 +172,10 @@ std::vector<std::string> catalogue_scene_names() {
 }
 
 std::vector<scene::NamedFile> Scene::input_files() const {
-    if (source.rfind("gen:", 0) == 0) return {};  // generated: no files
-    std::vector<scene::NamedFile> files{{"the scene", source}};
+    if (file.empty()) return {};  // generated: no files
+    std::vector<scene::NamedFile> files{{"the scene", file}};
     for (const std::string& m : material_files) files.push_back({"material file", m});
-    const std::string dir = std::filesystem::path(source).parent_path().string();
+    const std::string dir = std::filesystem::path(file).parent_path().string();
     for (const scene::Material& m : mesh.materials)
         if (!m.diffuse_texture.empty())
             files.push_back(
@@ -180,31 +183,61 @@ std::vector<scene::NamedFile> Scene::input_files() const {
     return files;
 }
 
+namespace {
+
+std::vector<std::string> split_spec(const std::string& spec) {
+    std::vector<std::string> parts;
+    std::stringstream ss(spec);
+    for (std::string p; std::getline(ss, p, ':');) parts.push_back(p);
+    return parts;
+}
+
+/// A whole number of a gen: spec, or a one-line error naming it.
+uint64_t spec_number(const std::string& spec, const std::string& text, const char* what) {
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19)
+        throw Error("generated-scene spec '" + spec + "': " + what + " '" + text + "' is not a whole number");
+    return std::stoull(text);
+}
+
+}  // namespace
+
 Scene load_scene(const std::string& spec, const Globals& g) {
     Scene s;
     s.source = spec;
     const trav::CatalogueEntry* entry = nullptr;
     fs::path file;
     std::vector<Catalogue> cats = catalogues();
-    if (spec.rfind("gen:", 0) == 0) {
+    scene::InstancedScene placed;
+    if (spec.rfind("gen:instances:", 0) == 0) {
+        // gen:instances:SCENE:N[:SEED]
+        const std::vector<std::string> parts = split_spec(spec);
+        if (parts.size() < 4 || parts.size() > 5 || parts[2].empty())
+            throw Error("bad generated-scene spec '" + spec +
+                        "' (expected gen:instances:SCENE:N[:SEED], SCENE a scene name or file without ':')");
+        const uint64_t n = spec_number(spec, parts[3], "the instance count");
+        const uint64_t seed = parts.size() == 5 ? spec_number(spec, parts[4], "the seed") : 1;
+        if (n < 1 || n > (1u << 24))
+            throw Error("generated-scene spec '" + spec + "': the instance count must be 1..2^24, not " + parts[3]);
+        Scene base = load_scene(parts[2], g);
+        s.file = base.file;
+        s.material_files = base.material_files;
+        s.missing_material_files = base.missing_material_files;
+        s.name = spec;
+        Stage st(g, "placing " + std::to_string(n) + " instances of " + base.name);
+        placed = scene::make_instances(std::move(base.mesh), uint32_t(n), seed);
+        s.load_ms = base.load_ms + 1000.0 * st.seconds();
+    } else if (spec.rfind("gen:", 0) == 0) {
         // gen:KIND:TRIANGLES[:SEED]
-        std::vector<std::string> parts;
-        std::stringstream ss(spec);
-        for (std::string p; std::getline(ss, p, ':');) parts.push_back(p);
+        const std::vector<std::string> parts = split_spec(spec);
         if (parts.size() < 3 || parts.size() > 4)
-            throw Error("bad generated-scene spec '" + spec + "' (expected gen:soup|structured:TRIANGLES[:SEED])");
-        uint64_t n = 0, seed = 1;
-        auto number = [&](const std::string& text, const char* what) {
-            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19)
-                throw Error("generated-scene spec '" + spec + "': " + what + " '" + text + "' is not a whole number");
-            return std::stoull(text);
-        };
-        n = number(parts[2], "the triangle count");
-        if (parts.size() == 4) seed = number(parts[3], "the seed");
+            throw Error("bad generated-scene spec '" + spec +
+                        "' (expected gen:soup|structured:TRIANGLES[:SEED] or gen:instances:SCENE:N[:SEED])");
+        const uint64_t n = spec_number(spec, parts[2], "the triangle count");
+        const uint64_t seed = parts.size() == 4 ? spec_number(spec, parts[3], "the seed") : 1;
         if (n < 1 || n > (1ull << 30))
             throw Error("generated-scene spec '" + spec + "': the triangle count must be 1..2^30, not " + parts[2]);
         Stage st(g, "generating " + spec);
-        s.mesh = scene::make_procedural(scene::parse_procedural_kind(parts[1]), n, seed);
+        placed = scene::single_instance(scene::make_procedural(scene::parse_procedural_kind(parts[1]), n, seed));
         s.name = spec;
         s.load_ms = 1000.0 * st.seconds();
     } else {
@@ -234,16 +267,18 @@ Scene load_scene(const std::string& spec, const Globals& g) {
                         s.name = e.name;
                     }
         }
-        s.source = file.string();  // what a catalogue name resolved to
+        s.source = s.file = file.string();  // what a catalogue name resolved to
         const std::string cache_dir = g.no_scene_cache ? "" : scene::default_scene_cache_dir();
         Stage st(g, "loading " + file.string());
-        scene::SceneLoad load =
-            scene::load_obj_cached(file.string(), cache_dir, git_commit(),
+        scene::SceneFileLoad load =
+            scene::load_scene_file(file.string(), cache_dir, git_commit(),
                                    [&st](size_t done, size_t total) { st.progress_bytes(done, total); });
-        s.mesh = std::move(load.mesh);
+        placed = std::move(load.scene);
         s.hash = load.scene_hash;
         s.load_ms = 1000.0 * st.seconds();
-        s.scene_cache = cache_dir.empty() ? "off" : load.from_cache ? "hit" : "miss";
+        s.scene_cache = cache_dir.empty() || !scene::is_obj_path(file.string()) ? "off"
+                        : load.from_cache                                       ? "hit"
+                                                                                : "miss";
         s.material_files = load.material_files;
         s.missing_material_files = load.missing_material_files;
         if (!g.quiet) {
@@ -252,6 +287,23 @@ Scene load_scene(const std::string& spec, const Globals& g) {
             for (const auto& w : load.warnings) std::fprintf(stderr, "[bvhlab] warning: %s\n", w.c_str());
             if (!load.cache_warning.empty()) std::fprintf(stderr, "[bvhlab] warning: %s\n", load.cache_warning.c_str());
         }
+    }
+    s.instances = placed.instances.size();
+    s.meshes = scene::placed_mesh_count(placed);
+    const bool one_mesh = placed.instances.size() == 1 && placed.instances[0].transform.is_identity();
+    std::optional<scene::SceneCamera> file_camera = placed.camera;
+    {
+        std::optional<Stage> st;
+        if (!one_mesh && (g.flatten || !placed.is_instanced()))
+            st.emplace(g, "flattening " + std::to_string(s.instances) + " instances");
+        s.mesh = scene::single_mesh(std::move(placed), g.flatten, "scene '" + spec + "'");
+    }
+    if (!one_mesh) s.hash.clear();  // the file's hash is not the flattened mesh's
+    if (file_camera) {
+        const scene::SceneCamera& c = *file_camera;
+        s.camera = {
+            {c.eye.x, c.eye.y, c.eye.z}, {c.target.x, c.target.y, c.target.z}, {c.up.x, c.up.y, c.up.z}, c.fov_y_deg};
+        s.camera_from_catalogue = true;  // the file's own camera (a catalogue entry's wins)
     }
     // Outside the numeric domain Embree aborts or misses hits, and float areas overflow or
     // underflow (scene/domain.h).
@@ -517,9 +569,10 @@ std::string machine_description() {
 }
 
 nlohmann::json base_record(const char* kind, const Scene& scene) {
-    return {{"record", kind},           {"commit", git_commit()},          {"build_type", build_type()},
-            {"scene", scene.name},      {"scene_hash", scene.hash},        {"triangles", scene.mesh.triangle_count()},
-            {"load_ms", scene.load_ms}, {"scene_cache", scene.scene_cache}};
+    return {{"record", kind},           {"commit", git_commit()},           {"build_type", build_type()},
+            {"scene", scene.name},      {"scene_hash", scene.hash},         {"triangles", scene.mesh.triangle_count()},
+            {"load_ms", scene.load_ms}, {"scene_cache", scene.scene_cache}, {"instances", scene.instances},
+            {"meshes", scene.meshes}};
 }
 
 void emit(const nlohmann::json& record) {

@@ -31,6 +31,7 @@ struct Globals {
     bool json = false;
     bool quiet = false;
     bool no_scene_cache = false;  ///< --no-scene-cache: parse the OBJ, neither read nor write the cache
+    bool flatten = false;         ///< --flatten: an instanced scene becomes one mesh
 };
 
 /// Stage lines on stderr: "[bvhlab] loading X ..." then "... done (1.23 s)".
@@ -73,8 +74,13 @@ std::string failed_stage_clause();
 /// automatic framing when it has none).
 struct Scene {
     std::string name;
-    std::string source;  ///< the OBJ file read (a catalogue name resolved to its file), or the gen: spec
-    scene::TriangleMesh mesh;
+    std::string source;  ///< the scene file read (a catalogue name resolved to its file), or the gen: spec
+    /// The scene file its triangles come from: `source`, or for gen:instances the base scene's
+    /// file; "" for generated soups (textures are found beside it).
+    std::string file;
+    scene::TriangleMesh mesh;  ///< the triangles (an instanced scene's, flattened)
+    uint64_t instances = 1;    ///< instances in the scene file (1 for a single mesh)
+    uint64_t meshes = 1;       ///< distinct meshes they place
     trav::Camera camera;
     bool camera_from_catalogue = false;
     float ao_length = 0.0f;
@@ -89,8 +95,10 @@ struct Scene {
     std::vector<scene::NamedFile> input_files() const;
 };
 
-/// Resolves SPEC: an OBJ path, a scene name from $BVHLAB_SCENES/scenes.json or data/scenes.json,
-/// or gen:KIND:TRIANGLES[:SEED]. Prints load progress and dropped-triangle counts on stderr.
+/// Resolves SPEC: a scene file (OBJ, or glTF, PLY and the other formats Assimp reads), a scene name
+/// from $BVHLAB_SCENES/scenes.json or data/scenes.json, gen:KIND:TRIANGLES[:SEED], or
+/// gen:instances:SCENE:N[:SEED]. An instanced scene (a mesh placed more than once) needs
+/// g.flatten, which makes it one mesh. Prints load progress and dropped-triangle counts on stderr.
 Scene load_scene(const std::string& spec, const Globals& g);
 
 /// The project's data/ folder: $BVHLAB_DATA, else the source tree's, else share/bvhlab/data

@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", g.quiet, "no progress on stderr");
     app.add_flag("--no-scene-cache", g.no_scene_cache,
                  "parse OBJ files, neither reading nor writing the scene cache ($BVHLAB_CACHE_DIR)");
+    app.add_flag("--flatten", g.flatten,
+                 "make an instanced scene (a mesh placed more than once: glTF nodes, gen:instances) one mesh");
     app.set_version_flag("--version", std::string(bvhlab::git_commit()));
     register_build(app, g);
     register_rays(app, g);
@@ -38,13 +40,15 @@ int main(int argc, char** argv) {
     for (CLI::App* sub : app.get_subcommands({})) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
         sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
-        if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen")
+        if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen") {
             sub->add_flag("--no-scene-cache", g.no_scene_cache, "parse OBJ files, bypassing the scene cache");
+            sub->add_flag("--flatten", g.flatten, "make an instanced scene one mesh");
+        }
     }
     // An unknown first word is named (CLI11 would only say that a subcommand is required).
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--json" || a == "-q" || a == "--quiet" || a == "--no-scene-cache") continue;
+        if (a == "--json" || a == "-q" || a == "--quiet" || a == "--no-scene-cache" || a == "--flatten") continue;
         if (a.empty() || a[0] == '-') break;
         std::string known;
         bool found = false;

@@ -1,0 +1,360 @@
+// SPDX-License-Identifier: MIT
+// Assimp input: nodes to instances, aiMaterials to the renderer's parameters, the first camera.
+#include "scene/io/scene_file.h"
+
+#include <assimp/config.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <assimp/Importer.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+
+#include "accel/core/check.h"
+#include "scene/domain.h"
+#include "scene/io/atomic_file.h"
+
+namespace bvhlab::scene {
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    const size_t dot = path.find_last_of('.');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    std::string ext = path.substr(dot);
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& why) { throw Error("'" + path + "': " + why); }
+
+/// The first line of an Assimp error, without trailing blanks.
+std::string first_line(std::string s) {
+    s = s.substr(0, s.find('\n'));
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
+    return s.empty() ? "Assimp could not read it" : s;
+}
+
+/// The JSON of a .gltf, or the JSON chunk of a .glb (null when the container is damaged: Assimp
+/// then says why).
+nlohmann::json gltf_json(const std::string& path, bool binary) {
+    std::ifstream in(path, std::ios::binary);
+    if (!binary) return nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    uint32_t header[5] = {};
+    if (!in.read(reinterpret_cast<char*>(header), sizeof header)) return nullptr;
+    if (header[0] != 0x46546C67u || header[4] != 0x4E4F534Au) return nullptr;  // "glTF", "JSON"
+    if (header[3] > header[2]) return nullptr;  // a chunk longer than the file says it is
+    std::string text(header[3], '\0');
+    if (!in.read(text.data(), std::streamsize(text.size()))) return nullptr;
+    return nlohmann::json::parse(text, nullptr, false);
+}
+
+/// Refuses a glTF that requires an extension bvhlab does not implement; warns about used ones.
+void check_gltf_extensions(const std::string& path, bool binary, std::vector<std::string>* warnings) {
+    const nlohmann::json doc = gltf_json(path, binary);
+    if (!doc.is_object()) return;  // Assimp reports the damage
+    const auto& ok = supported_gltf_extensions();
+    const auto names = [&](const char* key) {
+        std::vector<std::string> out;
+        auto it = doc.find(key);
+        if (it != doc.end() && it->is_array())
+            for (const auto& e : *it)
+                if (e.is_string()) out.push_back(e.get<std::string>());
+        return out;
+    };
+    const std::vector<std::string> required = names("extensionsRequired");
+    for (const std::string& e : required)
+        if (std::find(ok.begin(), ok.end(), e) == ok.end()) {
+            std::string list;
+            for (const std::string& s : ok) list += (list.empty() ? "" : ", ") + s;
+            fail(path,
+                 "requires the glTF extension " + e + ", which bvhlab does not implement (it implements " + list + ")");
+        }
+    if (warnings)
+        for (const std::string& e : names("extensionsUsed"))
+            if (std::find(ok.begin(), ok.end(), e) == ok.end())
+                warnings->push_back("'" + path + "' uses the glTF extension " + e + ", which bvhlab ignores");
+}
+
+Transform to_transform(const aiMatrix4x4& a) {
+    Transform t;
+    const float rows[12] = {a.a1, a.a2, a.a3, a.a4, a.b1, a.b2, a.b3, a.b4, a.c1, a.c2, a.c3, a.c4};
+    std::memcpy(t.m, rows, sizeof rows);
+    return t;
+}
+
+Vec3 color(const aiMaterial& m, const char* key, unsigned type, unsigned index, Vec3 fallback) {
+    aiColor4D c;
+    if (m.Get(key, type, index, c) != aiReturn_SUCCESS) return fallback;
+    return {c.r, c.g, c.b};
+}
+
+float number(const aiMaterial& m, const char* key, unsigned type, unsigned index, float fallback) {
+    float v = 0.0f;
+    return m.Get(key, type, index, v) == aiReturn_SUCCESS ? v : fallback;
+}
+
+/// A texture's path as the file writes it; "" for none. Embedded textures ("*N") are not read.
+std::string texture(const aiMaterial& m, aiTextureType type, const std::string& path, const std::string& name,
+                    std::vector<std::string>* warnings) {
+    aiString s;
+    if (m.GetTexture(type, 0, &s) != aiReturn_SUCCESS || s.length == 0) return "";
+    if (s.C_Str()[0] == '*') {
+        if (warnings)
+            warnings->push_back("'" + path + "': material '" + name +
+                                "' has an embedded base-colour texture, which bvhlab does not read (it renders "
+                                "with the base colour)");
+        return "";
+    }
+    return s.C_Str();
+}
+
+/// glTF's metallic-roughness material as MTL parameters (README, "Scene formats"):
+/// transmission > 0 -> glass (d = 1 - transmission, Ni = ior); metallic >= 0.5 -> conductor
+/// (illum 3, Ks = base colour); otherwise plastic (illum 2, Kd = base colour, Ks 0.04, Ni = ior).
+/// Roughness r gives the GGX alpha r^2, i.e. Ns = 2 / r^4 - 2 (capped at 1e6).
+Material gltf_material(const aiMaterial& am, const std::string& path, std::vector<std::string>* warnings) {
+    Material m;
+    m.name = am.GetName().C_Str();
+    const Vec3 base = color(am, AI_MATKEY_BASE_COLOR, {1, 1, 1});
+    const float metallic = number(am, AI_MATKEY_METALLIC_FACTOR, 1.0f);
+    const float roughness = number(am, AI_MATKEY_ROUGHNESS_FACTOR, 1.0f);
+    const float transmission = number(am, AI_MATKEY_TRANSMISSION_FACTOR, 0.0f);
+    const float ior = number(am, AI_MATKEY_REFRACTI, 1.5f);
+    const float strength = number(am, AI_MATKEY_EMISSIVE_INTENSITY, 1.0f);
+    const float r4 = roughness * roughness * roughness * roughness;
+    m.shininess = r4 > 2.0f / 1e6f ? std::max(0.0f, 2.0f / r4 - 2.0f) : 1e6f;
+    m.emission = color(am, AI_MATKEY_COLOR_EMISSIVE, {0, 0, 0}) * strength;
+    m.ior = ior;
+    m.diffuse = base;
+    m.specular = {0.04f, 0.04f, 0.04f};
+    if (transmission > 0.0f) {
+        m.dissolve = std::max(0.0f, 1.0f - transmission);
+        m.illum = 4;
+    } else if (metallic >= 0.5f) {
+        m.specular = base;
+        m.illum = 3;
+    } else {
+        m.illum = 2;
+    }
+    m.diffuse_texture = texture(am, aiTextureType_BASE_COLOR, path, m.name, warnings);
+    if (m.diffuse_texture.empty()) m.diffuse_texture = texture(am, aiTextureType_DIFFUSE, path, m.name, warnings);
+    return m;
+}
+
+/// Any other format's material: the classic diffuse, specular, emissive, shininess, opacity.
+Material classic_material(const aiMaterial& am, const std::string& path, std::vector<std::string>* warnings) {
+    Material m;
+    m.name = am.GetName().C_Str();
+    m.diffuse = color(am, AI_MATKEY_COLOR_DIFFUSE, m.diffuse);
+    m.specular = color(am, AI_MATKEY_COLOR_SPECULAR, {0, 0, 0});
+    m.emission = color(am, AI_MATKEY_COLOR_EMISSIVE, {0, 0, 0});
+    m.shininess = number(am, AI_MATKEY_SHININESS, 1.0f);
+    m.dissolve = number(am, AI_MATKEY_OPACITY, 1.0f);
+    m.ior = number(am, AI_MATKEY_REFRACTI, 1.0f);
+    m.illum = (m.specular.x > 0 || m.specular.y > 0 || m.specular.z > 0) ? 2 : 0;
+    m.diffuse_texture = texture(am, aiTextureType_DIFFUSE, path, m.name, warnings);
+    return m;
+}
+
+/// The world transform of a node: its parents' transforms, outermost first.
+aiMatrix4x4 world_matrix(const aiNode* node) {
+    aiMatrix4x4 t;
+    for (; node; node = node->mParent) t = node->mTransformation * t;
+    return t;
+}
+
+struct Placement {
+    std::vector<unsigned> meshes;  // the node's aiMesh list
+    Transform transform;
+};
+
+void collect(const aiNode* node, const aiMatrix4x4& parent, std::vector<Placement>& out) {
+    const aiMatrix4x4 world = parent * node->mTransformation;
+    if (node->mNumMeshes > 0)
+        out.push_back({std::vector<unsigned>(node->mMeshes, node->mMeshes + node->mNumMeshes), to_transform(world)});
+    for (unsigned i = 0; i < node->mNumChildren; ++i) collect(node->mChildren[i], world, out);
+}
+
+/// Appends the triangles of `meshes` to `out`, through `t`, dropping bad ones.
+void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Transform& t, bool texcoords,
+            bool materials, TriangleMesh& out) {
+    for (unsigned id : meshes) {
+        const aiMesh& am = *scene.mMeshes[id];
+        if (!(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+        const auto base = uint32_t(out.vertices.size());
+        for (unsigned v = 0; v < am.mNumVertices; ++v) {
+            const aiVector3D& p = am.mVertices[v];
+            out.vertices.push_back(flush_denormals(t.point({p.x, p.y, p.z})));
+        }
+        const aiVector3D* uv = am.mTextureCoords[0];
+        for (unsigned f = 0; f < am.mNumFaces; ++f) {
+            const aiFace& face = am.mFaces[f];
+            if (face.mNumIndices != 3) continue;
+            const unsigned* i = face.mIndices;
+            if (!count_drop(
+                    check_triangle(out.vertices[base + i[0]], out.vertices[base + i[1]], out.vertices[base + i[2]]),
+                    out.dropped))
+                continue;
+            out.indices.insert(out.indices.end(), {base + i[0], base + i[1], base + i[2]});
+            out.material_ids.push_back(materials ? int32_t(am.mMaterialIndex) : -1);
+            if (texcoords)
+                for (int k = 0; k < 3; ++k) {
+                    out.texcoords.push_back(uv ? uv[i[k]].x : 0.0f);
+                    out.texcoords.push_back(uv ? uv[i[k]].y : 0.0f);
+                }
+        }
+    }
+}
+
+}  // namespace
+
+bool is_obj_path(const std::string& path) { return lower_extension(path) == ".obj"; }
+
+const std::vector<std::string>& supported_gltf_extensions() {
+    static const std::vector<std::string> names{"KHR_materials_emissive_strength", "KHR_materials_ior",
+                                                "KHR_materials_transmission"};
+    return names;
+}
+
+SceneFileLoad load_scene_file(const std::string& path, const std::string& cache_dir, const std::string& writer,
+                              const LoadProgress& progress) {
+    SceneFileLoad out;
+    if (!is_obj_path(path)) {
+        out.scene = load_assimp(path, &out.warnings);
+        return out;
+    }
+    SceneLoad load = load_obj_cached(path, cache_dir, writer, progress);
+    out.scene = single_instance(std::move(load.mesh));
+    out.warnings = std::move(load.warnings);
+    out.material_files = std::move(load.material_files);
+    out.missing_material_files = std::move(load.missing_material_files);
+    out.scene_hash = std::move(load.scene_hash);
+    out.from_cache = load.from_cache;
+    out.cache_file = std::move(load.cache_file);
+    out.cache_warning = std::move(load.cache_warning);
+    return out;
+}
+
+InstancedScene load_assimp(const std::string& path, std::vector<std::string>* warnings) {
+    if (const std::string p = regular_file_problem(path); !p.empty()) fail(path, p);
+    const std::string ext = lower_extension(path);
+    Assimp::Importer importer;
+    if (ext.empty() || !importer.IsExtensionSupported(ext))
+        fail(path, (ext.empty() ? std::string("no file extension") : "unknown scene format '" + ext + "'") +
+                       " (bvhlab reads .obj, and through Assimp .gltf, .glb, .ply, .fbx, .dae, .3ds, .stl and the "
+                       "other formats `assimp listext` lists)");
+    const bool gltf = ext == ".gltf" || ext == ".glb";
+    if (gltf) check_gltf_extensions(path, ext == ".glb", warnings);
+
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    const aiScene* as =
+        importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+    if (!as) {
+        const std::string why = first_line(importer.GetErrorString());
+        // Assimp says this when a file's only primitives are points or lines.
+        if (why.find("No meshes") != std::string::npos || why.find("no meshes") != std::string::npos ||
+            why.find("contains no faces") != std::string::npos)
+            fail(path, "has no triangles (Assimp: " + why + ")");
+        fail(path, "Assimp cannot read it: " + why);
+    }
+    if (as->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail(path, "has no triangles (Assimp read no meshes from it)");
+
+    InstancedScene s;
+    // PLY and STL carry no materials: Assimp's made-up one would turn them into white plastic.
+    const bool materials = ext != ".ply" && ext != ".stl";
+    for (unsigned i = 0; materials && i < as->mNumMaterials; ++i) {
+        Material m = gltf ? gltf_material(*as->mMaterials[i], path, warnings)
+                          : classic_material(*as->mMaterials[i], path, warnings);
+        if (const std::string p = material_problem(m); !p.empty()) fail(path, "material '" + m.name + "': " + p);
+        s.materials.push_back(std::move(m));
+    }
+
+    std::vector<Placement> placements;
+    if (as->mRootNode) collect(as->mRootNode, aiMatrix4x4(), placements);
+    bool texcoords = false;
+    for (unsigned i = 0; i < as->mNumMeshes; ++i) texcoords = texcoords || as->mMeshes[i]->mTextureCoords[0];
+
+    std::map<std::vector<unsigned>, uint32_t> uses;
+    for (auto it = placements.begin(); it != placements.end();) {
+        if (it->transform.determinant() == 0.0 || !std::isfinite(it->transform.determinant())) {
+            if (warnings)
+                warnings->push_back("'" + path + "': a node with a singular or non-finite transform is left out");
+            it = placements.erase(it);
+        } else {
+            ++uses[it->meshes];
+            ++it;
+        }
+    }
+    // Meshes placed once go into world space, merged into one mesh placed once (first).
+    TriangleMesh world;
+    std::map<std::vector<unsigned>, uint32_t> shared;  // node mesh list -> index into s.meshes
+    for (const Placement& p : placements) {
+        if (uses[p.meshes] == 1) {
+            append(*as, p.meshes, p.transform, texcoords, materials, world);
+            continue;
+        }
+        auto [it, added] = shared.emplace(p.meshes, uint32_t(s.meshes.size() + 1));  // +1: world is first
+        if (added) {
+            s.meshes.emplace_back();
+            append(*as, p.meshes, Transform{}, texcoords, materials, s.meshes.back());
+        }
+        s.instances.push_back({p.transform, it->second, 0});
+    }
+    const auto add_drops = [&s](const TriangleMesh& m) {
+        s.dropped.non_finite += m.dropped.non_finite;
+        s.dropped.zero_area += m.dropped.zero_area;
+    };
+    add_drops(world);
+    for (const TriangleMesh& m : s.meshes) add_drops(m);
+    if (world.triangle_count() > 0) {
+        s.meshes.insert(s.meshes.begin(), std::move(world));
+        s.instances.insert(s.instances.begin(), Instance{});
+    } else {  // nothing placed once: no world mesh
+        for (Instance& inst : s.instances) --inst.mesh;
+    }
+    if (s.triangle_count() == 0)
+        fail(path, s.dropped.total() > 0 ? "has no usable triangles (all " + std::to_string(s.dropped.total()) +
+                                               " are degenerate or non-finite)"
+                                         : "has no triangles");
+    // Shared meshes whose every triangle was dropped place nothing.
+    s.instances.erase(std::remove_if(s.instances.begin(), s.instances.end(),
+                                     [&s](const Instance& i) { return s.meshes[i.mesh].triangle_count() == 0; }),
+                      s.instances.end());
+
+    if (as->mNumCameras > 0) {
+        const aiCamera& cam = *as->mCameras[0];
+        const aiNode* node = as->mRootNode ? as->mRootNode->FindNode(cam.mName) : nullptr;
+        const Transform t = to_transform(node ? world_matrix(node) : aiMatrix4x4());
+        // glTF cameras sit at their node's origin looking down -z with +y up (Assimp's glTF
+        // reader also copies the node's translation into mPosition, which would count it twice);
+        // other readers give the camera in its node's space, as aiCamera documents.
+        const Vec3 eye = gltf ? Vec3{0, 0, 0} : Vec3{cam.mPosition.x, cam.mPosition.y, cam.mPosition.z};
+        const Vec3 look = gltf ? Vec3{0, 0, -1} : Vec3{cam.mLookAt.x, cam.mLookAt.y, cam.mLookAt.z};
+        const Vec3 up = gltf ? Vec3{0, 1, 0} : Vec3{cam.mUp.x, cam.mUp.y, cam.mUp.z};
+        SceneCamera c;
+        c.eye = t.point(eye);
+        c.target = t.point(eye + look);
+        c.up = t.vector(up);
+        // Assimp's glTF reader stores yfov * aspect as mHorizontalFOV; other readers give half
+        // the horizontal angle, as aiCamera documents.
+        const float aspect = cam.mAspect > 0.0f ? cam.mAspect : 1.0f;
+        const double fov_y =
+            gltf ? cam.mHorizontalFOV / aspect : 2.0 * std::atan(std::tan(cam.mHorizontalFOV) / aspect);
+        c.fov_y_deg = float(fov_y * 180.0 / M_PI);
+        if (c.fov_y_deg > 0.0f && c.fov_y_deg < 180.0f && length(c.target - c.eye) > 0.0f)
+            s.camera = c;
+        else if (warnings)
+            warnings->push_back("'" + path +
+                                "': its camera is unusable (field of view or direction), so it is ignored");
+    }
+    return s;
+}
+
+}  // namespace bvhlab::scene
