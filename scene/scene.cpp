@@ -84,7 +84,7 @@ InstancedScene single_instance(TriangleMesh mesh) {
     return s;
 }
 
-TriangleMesh flatten(const InstancedScene& scene) {
+TriangleMesh flatten(const InstancedScene& scene, bool keep_all) {
     TriangleMesh out;
     out.materials = scene.materials;
     out.dropped = scene.dropped;
@@ -108,7 +108,8 @@ TriangleMesh flatten(const InstancedScene& scene) {
             const uint32_t* idx = &mesh.indices[3 * t];
             const Vec3 a = out.vertices[base + idx[0]], b = out.vertices[base + idx[1]],
                        c = out.vertices[base + idx[2]];
-            if (!count_drop(check_triangle(a, b, c), out.dropped)) continue;
+            const TriangleCheck check = check_triangle(a, b, c);
+            if (!keep_all && !count_drop(check, out.dropped)) continue;
             out.indices.insert(out.indices.end(), {base + idx[0], base + idx[1], base + idx[2]});
             const int32_t id = mesh.material_ids.empty() ? -1 : mesh.material_ids[t];
             out.material_ids.push_back(id < 0 ? -1 : id + inst.material_offset);
@@ -135,8 +136,7 @@ TriangleMesh single_mesh(InstancedScene scene, bool allow_flatten, const std::st
         const uint64_t meshes = placed_mesh_count(scene);
         throw Error(what + " places " + std::to_string(meshes) + (meshes == 1 ? " mesh " : " meshes ") +
                     std::to_string(scene.instances.size()) +
-                    " times (a mesh more than once); bvhlab's structures are single-level: --flatten makes it "
-                    "one mesh of " +
+                    " times (a mesh more than once), and one mesh is needed here: flattening makes it one mesh of " +
                     std::to_string(scene.triangle_count()) + " triangles");
     }
     if (scene.instances.size() == 1 && scene.instances[0].transform.is_identity()) {

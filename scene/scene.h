@@ -82,16 +82,18 @@ InstancedScene single_instance(TriangleMesh mesh);
 
 /// One mesh with every instance's triangles in world space, in instance order, with the scene's
 /// materials (ids offset per instance) and texture coordinates. Throws bvhlab::Error when the
-/// result would exceed 2^32 - 1 vertices, and drops (and counts) triangles that a transform
-/// makes degenerate.
-TriangleMesh flatten(const InstancedScene& scene);
+/// result would exceed 2^32 - 1 vertices. Triangles that a transform makes degenerate are
+/// dropped (and counted), unless `keep_all`: then triangle ids are the scene-wide ids of
+/// two-level hits (instance i's triangle k is the triangles of instances 0..i-1 plus k), which
+/// is how hits of a two-level BVH are checked in world space.
+TriangleMesh flatten(const InstancedScene& scene, bool keep_all = false);
 
 /// Meshes that some instance places.
 uint64_t placed_mesh_count(const InstancedScene& scene);
 
 /// The scene as one mesh, for the single-level structures: its mesh as it is when it is one
 /// instance with the identity transform, else flatten(scene). A scene that places some mesh
-/// more than once is flattened only when `allow_flatten` (`--flatten`); otherwise a one-line
+/// more than once is flattened only when `allow_flatten` (Python's flatten=True); otherwise a one-line
 /// bvhlab::Error names `what`, its meshes and instances, and the flattened size.
 TriangleMesh single_mesh(InstancedScene scene, bool allow_flatten, const std::string& what);
 

@@ -216,6 +216,73 @@ AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureS
     return finish_bvh(mesh, spec, stage, std::move(b), "");
 }
 
+AccelStructure build_structure(const scene::InstancedScene& placed, const StructureSpec& spec_in,
+                               const StageHook& stage) {
+    spec_in.check();
+    if (spec_in.is_kdtree())
+        throw Error(
+            "the kd-tree is single-level and the scene places a mesh more than once: --flatten makes it one "
+            "mesh");
+    if (spec_in.is_cwbvh())
+        throw Error(
+            "two-level structures have BVH2 bottom levels (layout bvh2); --flatten makes the scene one mesh "
+            "for the cwbvh layout");
+    if (placed.instances.empty()) throw Error("the scene places no mesh: nothing to build a structure over");
+    for (const scene::TriangleMesh& m : placed.meshes)
+        if (const std::string p = scene::domain_problem(m); !p.empty() && m.triangle_count() > 0) throw Error(p);
+    StructureSpec spec = spec_in;
+    spec.builder = accel::builder_name(spec.kind());
+    AccelStructure b;
+    b.spec = spec;
+    accel::ValidateOptions vo;
+    vo.allow_duplicates = spec.kind() == accel::BuilderKind::kSbvh;
+    const auto t0 = std::chrono::steady_clock::now();
+    {
+        auto st =
+            begin(stage, "building " + std::to_string(scene::placed_mesh_count(placed)) + " " + spec.builder +
+                             " SAH BLAS and the TLAS over " + std::to_string(placed.instances.size()) + " instances");
+        b.structure.two_level = accel::build_two_level(placed, [&](const scene::TriangleMesh& m) {
+            accel::BuildTree tree = accel::run_builder(spec.kind(), m, spec.options).tree;
+            const std::string err = accel::validate(tree, m, spec.options.config, vo);
+            if (!err.empty()) throw Error("builder '" + spec.builder + "' produced an invalid BLAS: " + err);
+            return tree;
+        });
+    }
+    b.result.build_ms = ms_since(t0);
+    const accel::TwoLevelBvh& t = b.structure.two_level;
+    b.structure.layout = Layout::kTwoLevel;
+    b.structure.name = "two-level/" + spec.builder;
+    size_t blas_nodes = 0, blas_refs = 0, blas_bytes = 0;
+    for (const accel::Bvh2& x : t.blas) {
+        blas_nodes += x.nodes.size();
+        blas_refs += x.tri_ids.size();
+        blas_bytes += x.bytes();
+    }
+    nlohmann::json& f = b.figures;
+    f["builder"] = spec.builder;
+    f["structure"] = b.structure.name;
+    f["layout"] = layout_name(b.structure.layout);
+    f["triangles"] = t.world_triangles;
+    f["stored_triangles"] = placed.stored_triangle_count();
+    f["instances"] = placed.instances.size();
+    f["meshes"] = scene::placed_mesh_count(placed);
+    f["tlas_nodes"] = t.tlas.nodes.size();
+    f["tlas_depth"] = t.tlas_depth();
+    f["blas_nodes"] = blas_nodes;
+    f["blas_depth"] = t.blas_depth();
+    f["references"] = blas_refs;
+    f["sah"] = nullptr;  // no single-level SAH: the TLAS's cost depends on the BLAS behind each leaf
+    f["epo"] = nullptr;
+    f["layout_bytes"] = b.structure.bytes();
+    f["blas_bytes"] = blas_bytes;
+    f["bytes_per_world_triangle"] = t.world_triangles ? double(b.structure.bytes()) / double(t.world_triangles) : 0.0;
+    f["build_ms"] = b.result.build_ms;
+    if (spec.builder != "sweep") f["bins"] = spec.options.num_bins;
+    f["max_leaf"] = spec.options.config.max_leaf_size;
+    f["config"] = accel::describe_config(spec.kind(), spec.options);
+    return b;
+}
+
 AccelStructure structure_from_file(const scene::TriangleMesh& mesh, const std::string& scene_hash, accel::TreeFile file,
                                    const std::string& path, const StructureSpec& spec_in, const StageHook& stage) {
     const std::string stale = accel::stale_reason(file.meta, mesh.triangle_count(), scene_hash);
@@ -276,6 +343,8 @@ std::unique_ptr<Tracer> AccelStructure::gpu_tracer(const std::string& kernel, st
 }
 
 void AccelStructure::save(const std::string& path, const std::string& scene_hash) const {
+    if (structure.layout == Layout::kTwoLevel)
+        throw Error("structure files hold single-level structures; a two-level BVH is rebuilt from its scene");
     accel::TreeFileMeta meta;
     if (loaded_meta) {  // re-saving a loaded file keeps its provenance
         meta = *loaded_meta;

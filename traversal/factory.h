@@ -19,6 +19,7 @@
 #include "accel/core/stats.h"
 #include "accel/io/tree_file.h"
 #include "scene/mesh.h"
+#include "scene/scene.h"
 #include "traversal/gpu/device_structure.h"
 #include "traversal/gpu/gpu_tracer.h"
 #include "traversal/gpu/registry.h"
@@ -88,6 +89,13 @@ private:
 /// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
 /// figures (SAH, EPO, sizes), and the traversal layout.
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
+
+/// Builds the two-level BVH of an instanced scene: a BLAS per placed mesh by spec's BVH builder
+/// and options, each validated, under a binned TLAS (layout "two-level", name
+/// "two-level/<builder>"; hits name triangles by scene-wide ids, accel::TwoLevelBvh). Throws
+/// bvhlab::Error for the kd-tree and the cwbvh layout (single-level: flatten the scene first).
+AccelStructure build_structure(const scene::InstancedScene& scene, const StructureSpec& spec,
+                               const StageHook& stage = {});
 
 /// The structure of a structure file already read (`path` names it in errors and figures):
 /// its tree, validated, in the layout of `spec` (layout, collapse, cw_tris, kd_stack, epo);

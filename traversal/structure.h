@@ -4,36 +4,51 @@
 // uploaded (gpu/device_structure.h). One object per structure, whatever the layout.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 
 #include "accel/layouts/bvh2_node.h"
 #include "accel/layouts/cwbvh_node.h"
 #include "accel/layouts/kd_convert.h"
+#include "accel/layouts/two_level.h"
 
 namespace bvhlab::trav {
 
 /// The traversal layouts. A kernel traces exactly one of them.
-enum class Layout : uint32_t { kBvh2 = 0, kKd = 1, kCwbvh = 2 };
+enum class Layout : uint32_t { kBvh2 = 0, kKd = 1, kCwbvh = 2, kTwoLevel = 3 };
 
-/// "bvh2", "kdtree" or "cwbvh".
+/// "bvh2", "kdtree", "cwbvh" or "two-level".
 inline const char* layout_name(Layout layout) {
-    return layout == Layout::kBvh2 ? "bvh2" : layout == Layout::kKd ? "kdtree" : "cwbvh";
+    return layout == Layout::kBvh2    ? "bvh2"
+           : layout == Layout::kKd    ? "kdtree"
+           : layout == Layout::kCwbvh ? "cwbvh"
+                                      : "two-level";
 }
 
 struct Structure {
-    std::string name;  ///< "bvh2/binned", "bvh2/sweep", "bvh2/sbvh", "cwbvh/<builder>" or "kdtree"
+    /// "bvh2/binned", "bvh2/sweep", "bvh2/sbvh", "cwbvh/<builder>", "kdtree", or
+    /// "two-level/<builder>" (BVH2 BLAS by that builder under a binned TLAS)
+    std::string name;
     Layout layout = Layout::kBvh2;
-    accel::Bvh2 bvh2;    ///< the structure when layout == kBvh2
-    accel::KdLayout kd;  ///< the structure when layout == kKd
-    accel::Cwbvh cwbvh;  ///< the structure when layout == kCwbvh
+    accel::Bvh2 bvh2;              ///< the structure when layout == kBvh2
+    accel::KdLayout kd;            ///< the structure when layout == kKd
+    accel::Cwbvh cwbvh;            ///< the structure when layout == kCwbvh
+    accel::TwoLevelBvh two_level;  ///< the structure when layout == kTwoLevel (hits: scene-wide ids)
 
     /// Stack entries a full-stack traversal needs (interior nodes on the longest path).
+    /// For a two-level BVH: the deeper of its TLAS and BLAS stacks (each level has its own).
     uint32_t depth() const {
-        return layout == Layout::kBvh2 ? bvh2.depth : layout == Layout::kKd ? kd.depth : cwbvh.depth;
+        return layout == Layout::kBvh2    ? bvh2.depth
+               : layout == Layout::kKd    ? kd.depth
+               : layout == Layout::kCwbvh ? cwbvh.depth
+                                          : std::max(two_level.tlas_depth(), two_level.blas_depth());
     }
     size_t bytes() const {
-        return layout == Layout::kBvh2 ? bvh2.bytes() : layout == Layout::kKd ? kd.bytes() : cwbvh.bytes();
+        return layout == Layout::kBvh2    ? bvh2.bytes()
+               : layout == Layout::kKd    ? kd.bytes()
+               : layout == Layout::kCwbvh ? cwbvh.bytes()
+                                          : two_level.bytes();
     }
 };
 

@@ -66,6 +66,18 @@ void set_child_box(Bvh2Node& n, int slot, const AABB& b) {
 }  // namespace
 
 Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh) {
+    Bvh2 out = convert_bvh2_nodes(tree);
+    out.tris.resize(tree.prim_indices.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tris.size(), 4096), [&](const auto& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+            uint32_t t = tree.prim_indices[k];
+            out.tris[k] = make_woop_triangle(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2));
+        }
+    });
+    return out;
+}
+
+Bvh2 convert_bvh2_nodes(const BuildTree& tree) {
     BVHLAB_CHECK(!tree.empty(), "cannot convert an empty BuildTree");
     Bvh2 out;
     // Interior BuildTree nodes keep their relative order; map each to its Bvh2 index.
@@ -76,13 +88,6 @@ Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh) {
     const bool root_leaf = tree.nodes[0].is_leaf();
     out.nodes.resize(root_leaf ? 1 : size_t(next));
     out.tri_ids = tree.prim_indices;
-    out.tris.resize(tree.prim_indices.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.tris.size(), 4096), [&](const auto& r) {
-        for (size_t k = r.begin(); k < r.end(); ++k) {
-            uint32_t t = tree.prim_indices[k];
-            out.tris[k] = make_woop_triangle(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2));
-        }
-    });
     auto fill_child = [&](Bvh2Node& n, int slot, const BuildNode& c, size_t ci) {
         set_child_box(n, slot, c.bounds);
         if (c.is_leaf()) {

@@ -12,4 +12,8 @@ namespace bvhlab::accel {
 /// leaf as child 0 and an empty child 1. Node 0 of the result is the root.
 Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh);
 
+/// The nodes, leaf references (tri_ids = the tree's prim_indices) and depth of the same
+/// conversion, without triangles: for trees over other primitives (the two-level top level).
+Bvh2 convert_bvh2_nodes(const BuildTree& tree);
+
 }  // namespace bvhlab::accel

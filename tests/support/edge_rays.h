@@ -69,11 +69,18 @@ inline scene::TriangleMesh make_lattice_scene(uint32_t seed) {
 /// kd-tree cells (interior and leaf).
 inline std::vector<AABB> structure_boxes(const trav::Structure& s) {
     std::vector<AABB> boxes;
-    if (s.layout == trav::Layout::kBvh2) {
-        for (const accel::Bvh2Node& n : s.bvh2.nodes) {
+    const auto bvh2_boxes = [&boxes](const accel::Bvh2& bvh) {
+        for (const accel::Bvh2Node& n : bvh.nodes) {
             boxes.push_back({{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}});
             boxes.push_back({{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}});
         }
+    };
+    if (s.layout == trav::Layout::kBvh2) {
+        bvh2_boxes(s.bvh2);
+    } else if (s.layout == trav::Layout::kTwoLevel) {
+        // The TLAS's world boxes and each BLAS's (object space: the world's under identity).
+        bvh2_boxes(s.two_level.tlas);
+        for (const accel::Bvh2& b : s.two_level.blas) bvh2_boxes(b);
     } else if (s.layout == trav::Layout::kCwbvh) {
         for (const accel::CwbvhNode& n : s.cwbvh.nodes)
             for (uint32_t slot = 0; slot < 8; ++slot)

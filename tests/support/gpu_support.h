@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "scene/scene.h"
 #include "traversal/factory.h"
 #include "traversal/gpu/device_buffer.h"
 
@@ -27,10 +28,16 @@ inline bool built_with_cuda() {
 #define BVHLAB_SKIP_WITHOUT_GPU() \
     if (const std::string why = ::bvhlab::trav::no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 
-/// A structure of `layout` from the library's factory (no EPO: the tests do not read it).
+/// A structure of `layout` from the library's factory (no EPO: the tests do not read it). For
+/// the two-level layout, the mesh placed once (identity): triangle ids are the mesh's.
 inline Structure make_structure(const scene::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder,
                                 accel::CwTris tris = accel::CwTris::kWoop) {
     StructureSpec spec;
+    if (layout == Layout::kTwoLevel) {
+        spec.builder = accel::builder_name(builder);
+        spec.epo = false;
+        return build_structure(scene::single_instance(mesh), spec).structure;
+    }
     spec.builder = layout == Layout::kKd ? "kdtree" : accel::builder_name(builder);
     spec.layout = layout == Layout::kCwbvh ? "cwbvh" : "bvh2";
     spec.cw_tris = tris == accel::CwTris::kVertices ? "vertices" : "woop";

@@ -533,9 +533,15 @@ expect_error seed-negative "--seed: '-1' is not a non-negative integer" rays "$d
 expect_error gen-seed-negative "--seed: '-1' is not a non-negative integer" gen --kind soup -n 10 --seed -1 \
     -o "$tmp/seed.obj"
 # Scene formats through Assimp, instanced scenes and gen:instances.
-expect_error instanced-needs-flatten "scene '.*instances.glb' places 2 meshes 4 times .*--flatten makes it one mesh of 40 triangles" \
-    build "$data/instances.glb"
-expect_error gen-instances-needs-flatten "places 1 mesh 3 times" build gen:instances:cornell-box:3
+expect_error instanced-kdtree "the kd-tree is single-level and the scene places a mesh more than once: --flatten" \
+    build --structure kdtree "$data/instances.glb"
+expect_error instanced-cwbvh "two-level structures have BVH2 bottom levels .*--flatten" build --layout cwbvh \
+    gen:instances:cornell-box:3
+expect_error instanced-out "--out writes a structure file, .* is built two-level .*--flatten" build "$data/instances.glb" \
+    -o "$tmp/two-level.tree"
+[ ! -e "$tmp/two-level.tree" ] && pass=$((pass + 1)) || { fail=$((fail + 1)); echo "FAIL instanced-out wrote a file"; }
+expect_error instanced-structure-file "structure files hold single-level structures" verify "$data/instances.glb" \
+    --structure "$tmp/cb.tree"
 expect_error gen-instances-zero "the instance count must be 1..2\^24, not 0" build --flatten gen:instances:cornell-box:0
 expect_error gen-instances-no-count "expected gen:instances:SCENE:N\[:SEED\]" build --flatten gen:instances:cornell-box
 expect_error gen-instances-bad-seed "the seed 'x' is not a whole number" build --flatten gen:instances:cornell-box:2:x
@@ -556,6 +562,8 @@ expect_error out-over-gltf "copy.glb. is this command.s input [(]the scene[)]" b
 expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/no/such/dir/x.pfm"
 check_schema build build "$data/cornell_box.obj"
 check_schema build-gltf build --flatten "$data/instances.gltf"
+check_schema build-two-level build "$data/instances.gltf"
+check_schema verify-two-level verify gen:instances:cornell-box:4 --width 8 --height 8
 check_schema build-ply build "$data/cube_binary.ply"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh
 check_schema rays rays "$data/cornell_box.obj" --type ao --width 8 --height 8 -o "$tmp/schema.rays"

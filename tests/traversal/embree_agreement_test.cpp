@@ -24,36 +24,13 @@
 namespace bvhlab::trav {
 namespace {
 
-using Tracer = std::function<void(const RaySet&, std::vector<Hit>&)>;
+using test::Tracer;
 
 /// Traces all four ray types with `trace` and expects zero real mismatches.
 void expect_agreement_with(const scene::TriangleMesh& mesh, const Camera& cam, float ao_length, uint32_t w, uint32_t h,
                            const Tracer& trace) {
     EmbreeOracle oracle(mesh);
-    ProtocolConfig cfg;
-    cfg.camera = cam;
-    cfg.primary = {w, h, 1, 0};
-    cfg.ao_length = ao_length;
-    RayProtocol proto(mesh, oracle, cfg);
-    for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
-        SCOPED_TRACE(ray_type_name(t));
-        RaySet set = proto.make(t);
-        std::vector<Hit> ours, ref;
-        trace(set, ours);
-        oracle.trace(set.rays, set.query, ref);
-        const CompareReport rep = test::expect_no_real_mismatch(mesh, oracle, set.rays, set.query, ours, ref);
-        EXPECT_GT(set.rays.size(), 0u);
-        // Ties that excuse float error are rare: a large share means the tie rules are hiding a
-        // bug. Each kind has its own cap, 5-10x the largest share seen over every kernel and
-        // structure on the benchmark scenes (3e-5 of rays for shared edges and near edges, none
-        // at interval ends). Coincident ties are proven (both triangles hit inside at the same
-        // t in double precision: duplicate and overlapping faces, 0.64% of sibenik's primary
-        // rays) and not capped.
-        const double n = double(set.rays.size());
-        EXPECT_LE(double(rep.ties_by_kind[size_t(TieKind::kSharedEdgeOrVertex)]), n / 5000 + 3) << "shared-edge ties";
-        EXPECT_LE(double(rep.ties_by_kind[size_t(TieKind::kNearEdge)]), n / 5000 + 3) << "near-edge ties";
-        EXPECT_LE(double(rep.ties_by_kind[size_t(TieKind::kIntervalEnd)]), n / 100000 + 3) << "interval-end ties";
-    }
+    test::expect_protocol_agreement(mesh, oracle, cam, ao_length, w, h, trace);
 }
 
 /// The same with a BVH from `builder`.

@@ -123,7 +123,12 @@ TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
     refused([](StructureSpec& s) { s.kd_stack = 9; }, "kd_stack");
     refused([](StructureSpec& s) { s.options.num_bins = 1; }, "bins");
     refused([](StructureSpec& s) { s.options.config.max_leaf_size = 0; }, "max_leaf");
-    refused([](StructureSpec& s) { s.options.config.min_leaf_size = 9; }, "min_leaf");
+    // The spec's own check names both sizes (a builder's internal check would also say min_leaf).
+    refused([](StructureSpec& s) { s.options.config.min_leaf_size = 9; }, "min_leaf 9 is larger than max_leaf 8");
+    accel::BuilderOptions crossed;
+    crossed.config.min_leaf_size = 5;
+    crossed.config.max_leaf_size = 4;
+    EXPECT_EQ(accel::options_problem(crossed), "min_leaf 5 is larger than max_leaf 4");
     refused([](StructureSpec& s) { s.options.sbvh_alpha = std::nanf(""); }, "alpha");
     refused([](StructureSpec& s) { s.options.sbvh_budget = 0.5f; }, "budget");
     refused([](StructureSpec& s) { s.kd.traversal_cost = 0.0f; }, "kd_ct");
@@ -209,9 +214,10 @@ TEST(StructureFactory, DefaultKernelsComeFromTheRegistry) {
     std::set<std::pair<int, bool>> seen;
     for (const KernelInfo& k : registered_kernels())
         if (k.is_default) EXPECT_TRUE(seen.insert({int(k.layout), k.short_stack}).second) << k.name;
-    EXPECT_EQ(seen.size(), 4u);
+    EXPECT_EQ(seen.size(), 5u);  // bvh2, cwbvh, two-level, and the kd-tree's two
     EXPECT_EQ(default_kernel(Layout::kBvh2).layout, Layout::kBvh2);
     EXPECT_EQ(default_kernel(Layout::kCwbvh).layout, Layout::kCwbvh);
+    EXPECT_EQ(default_kernel(Layout::kTwoLevel).layout, Layout::kTwoLevel);
     EXPECT_FALSE(full.default_kernel().short_stack);
     EXPECT_TRUE(shorty.default_kernel().short_stack);
     EXPECT_EQ(shorty.gpu_options(shorty.default_kernel()).kd_stack, 3);

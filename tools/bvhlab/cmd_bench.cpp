@@ -39,7 +39,7 @@ void register_bench(CLI::App& app, Globals& g) {
     auto o = std::make_shared<Opts>();
     CLI::App* sub = app.add_subcommand(
         "bench", "benchmark traversal in Mrays/s on protocol rays or a ray file (hits checked against Embree first)");
-    sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
+    sub->add_option("scene", o->scene, kSceneHelp)->required();
     auto* types = sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
     auto* file = sub->add_option("--rays", o->rays_file, "trace this ray file instead of protocol rays")
                      ->check(CLI::ExistingFile);
@@ -71,7 +71,8 @@ void register_bench(CLI::App& app, Globals& g) {
         for (auto& f : s.input_files()) inputs.push_back(std::move(f));
         scene::refuse_clashing_files(outputs, inputs);
         o->build.epo = false;  // EPO is a build figure; bench does not need it
-        trav::EmbreeOracle oracle(s.mesh);
+        const std::unique_ptr<trav::EmbreeOracle> oracle_owner = make_oracle(s);
+        const trav::EmbreeOracle& oracle = *oracle_owner;
         Built b;
         if (o->trace.device != "embree") b = build_scene(s, o->build, g);
         auto tracers = make_tracers(b, o->trace, o->build, &oracle);

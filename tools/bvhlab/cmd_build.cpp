@@ -29,6 +29,19 @@ void print_build_table(const Scene& s, const Built& b) {
         return;
     }
     std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
+    if (b.structure.layout == trav::Layout::kTwoLevel) {
+        std::printf("two-level    %s BLAS over %llu meshes (%llu triangles stored), binned TLAS over %llu instances\n",
+                    r["builder"].get<std::string>().c_str(), (unsigned long long)r["meshes"].get<uint64_t>(),
+                    (unsigned long long)r["stored_triangles"].get<uint64_t>(),
+                    (unsigned long long)r["instances"].get<uint64_t>());
+        std::printf("build        %.1f ms\n", b.result.build_ms);
+        std::printf("nodes        %llu BLAS (depth %u), %llu TLAS (depth %u)\n",
+                    (unsigned long long)r["blas_nodes"].get<uint64_t>(), r["blas_depth"].get<uint32_t>(),
+                    (unsigned long long)r["tlas_nodes"].get<uint64_t>(), r["tlas_depth"].get<uint32_t>());
+        std::printf("bytes        %zu (two-level layout: %.1f per world triangle)\n", b.structure.bytes(),
+                    r["bytes_per_world_triangle"].get<double>());
+        return;
+    }
     std::printf("builder      %s  build %.1f ms\n", r["builder"].get<std::string>().c_str(), b.result.build_ms);
     std::printf("nodes        %llu (%llu leaves), depth %u\n", (unsigned long long)b.stats.nodes,
                 (unsigned long long)b.stats.leaves, b.stats.depth);
@@ -62,7 +75,7 @@ void register_build(CLI::App& app, Globals& g) {
     auto o = std::make_shared<Opts>();
     CLI::App* sub = app.add_subcommand(
         "build", "build a BVH (binary, or collapsed to a CWBVH) or kd-tree from a scene and print its quality figures");
-    sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
+    sub->add_option("scene", o->scene, kSceneHelp)->required();
     o->build.add_to(*sub);
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
     sub->add_option("-o,--out", o->out, "write the tree to this structure file (load it with --structure FILE)");
@@ -73,6 +86,9 @@ void register_build(CLI::App& app, Globals& g) {
         Scene s = load_scene(o->scene, g);
         for (auto& f : s.input_files()) inputs.push_back(std::move(f));
         scene::refuse_clashing_files(outputs, inputs);
+        if (s.placed && !o->out.empty())
+            throw Error("--out writes a structure file, which holds a single-level structure, and scene '" + s.name +
+                        "' is built two-level (it places a mesh more than once): --flatten makes it one mesh");
         Built b = build_scene(s, o->build, g);
         if (!o->out.empty()) {
             b.save(o->out, s.hash);

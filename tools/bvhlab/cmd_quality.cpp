@@ -38,7 +38,7 @@ void register_quality(CLI::App& app, Globals& g) {
     auto o = std::make_shared<Opts>();
     CLI::App* sub = app.add_subcommand(
         "quality", "tree quality (SAH, EPO, sizes) and measured per-ray cost (nodes, leaves, triangle tests)");
-    sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
+    sub->add_option("scene", o->scene, kSceneHelp)->required();
     sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
     o->build.add_to(*sub);
     sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
@@ -51,7 +51,8 @@ void register_quality(CLI::App& app, Globals& g) {
             emit(b.record);
         else
             print_build_table(s, b);
-        trav::EmbreeOracle oracle(s.mesh);
+        const std::unique_ptr<trav::EmbreeOracle> oracle_owner = make_oracle(s);
+        const trav::EmbreeOracle& oracle = *oracle_owner;
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
         if (!g.json)
             std::printf("\n%-10s %10s   %-22s %-22s %-22s\n", "rays", "count", "nodes mean/p50/p99",

@@ -19,7 +19,7 @@ void register_rays(CLI::App& app, Globals& g) {
     auto o = std::make_shared<Opts>();
     CLI::App* sub =
         app.add_subcommand("rays", "generate a seeded ray set and export it as a ray file, or describe a ray file");
-    auto* scene = sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]");
+    auto* scene = sub->add_option("scene", o->scene, kSceneHelp);
     auto* type = sub->add_option("--type", o->type, "primary, ao, diffuse or shadow")
                      ->check(CLI::IsMember({"primary", "ao", "diffuse", "shadow"}))
                      ->capture_default_str();
@@ -53,7 +53,8 @@ void register_rays(CLI::App& app, Globals& g) {
         scene::refuse_clashing_files(outputs, {{"the scene", o->scene}});
         Scene s = load_scene(o->scene, g);
         scene::refuse_clashing_files(outputs, s.input_files());
-        trav::EmbreeOracle oracle(s.mesh);
+        const std::unique_ptr<trav::EmbreeOracle> oracle_owner = make_oracle(s);
+        const trav::EmbreeOracle& oracle = *oracle_owner;
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
         trav::RaySet set;
         {

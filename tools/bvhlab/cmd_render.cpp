@@ -76,7 +76,7 @@ nlohmann::json cost_image(const Built& built, int kd_stack, const render::Camera
 void register_render(CLI::App& app, Globals& g) {
     auto o = std::make_shared<RenderOpts>();
     CLI::App* sub = app.add_subcommand("render", "render an image with the wavefront path tracer");
-    sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
+    sub->add_option("scene", o->scene, kSceneHelp)->required();
     sub->add_option("-o,--out", o->out, "image to write: .exr or .hdr (float), .png (sRGB, 8 bits), .pfm")->required();
     sub->add_option("--width", o->width, "image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
     sub->add_option("--height", o->height, "image height in pixels")
@@ -184,7 +184,10 @@ void register_render(CLI::App& app, Globals& g) {
             {"the scene", o->scene}, {"--env", o->env}, {"--structure", o->build.structure_file()}};
         scene::refuse_clashing_files(outputs, inputs);  // before the load, and again with its files
         o->rs.aovs = o->aov;
-        Scene s = load_scene(o->scene, g);
+        // The renderer traces single-level structures: an instanced scene is rendered flattened.
+        Globals flat = g;
+        flat.flatten = true;
+        Scene s = load_scene(o->scene, flat);
         for (auto& f : s.input_files()) inputs.push_back(std::move(f));
         scene::refuse_clashing_files(outputs, inputs);
         for (const std::string& f : s.missing_material_files) {

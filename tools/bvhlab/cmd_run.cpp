@@ -55,7 +55,8 @@ void register_run(CLI::App& app, Globals& g) {
             Built b = build_scene(s, o->build, g);
             Row row{s.name, b.record, {}, {}};
             if (g.json) emit(b.record);
-            trav::EmbreeOracle oracle(s.mesh);
+            const std::unique_ptr<trav::EmbreeOracle> oracle_owner = make_oracle(s);
+            const trav::EmbreeOracle& oracle = *oracle_owner;
             auto tracers = make_tracers(b, o->trace, o->build, &oracle);
             trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));
             for (trav::RayType t : types) {

@@ -35,15 +35,18 @@ void print_verify_row(const nlohmann::json& j) {
 namespace {
 
 /// What --structure all checks: each BVH builder in both layouts, then the kd-tree with its
-/// full stack and with the short stack of --kd-stack (2 unless given).
+/// full stack and with the short stack of --kd-stack (2 unless given). An instanced scene's
+/// structures are two-level: each BVH builder's BLAS in the bvh2 layout.
 struct StructureSpec {
     std::string structure, layout;
     int kd_stack;
 };
-std::vector<StructureSpec> every_structure(int short_stack) {
+std::vector<StructureSpec> every_structure(int short_stack, bool instanced) {
     std::vector<StructureSpec> out;
     for (const char* b : {"binned", "sweep", "sbvh"})
-        for (const char* layout : {"bvh2", "cwbvh"}) out.push_back({b, layout, 64});
+        for (const char* layout : {"bvh2", "cwbvh"})
+            if (!instanced || std::string(layout) == "bvh2") out.push_back({b, layout, 64});
+    if (instanced) return out;
     out.push_back({"kdtree", "bvh2", 64});
     out.push_back({"kdtree", "bvh2", short_stack});
     return out;
@@ -61,7 +64,7 @@ void register_verify(CLI::App& app, Globals& g) {
     };
     auto o = std::make_shared<Opts>();
     CLI::App* sub = app.add_subcommand("verify", "compare every hit with Embree; exit 1 on any real mismatch");
-    sub->add_option("scene", o->scene, "OBJ file, scene name from scenes.json, or gen:KIND:N[:SEED]")->required();
+    sub->add_option("scene", o->scene, kSceneHelp)->required();
     auto* types = sub->add_option("--types", o->types, "comma-separated ray types, or all")->capture_default_str();
     auto* file = sub->add_option("--rays", o->rays_file, "verify on this ray file instead of protocol rays")
                      ->check(CLI::ExistingFile);
@@ -97,7 +100,8 @@ void register_verify(CLI::App& app, Globals& g) {
         if (hits->count() && (o->trace.kernel_flag->count() || o->trace.device != "cpu"))
             throw Error("--hits checks a hit file; --device and --kernel choose a tracer, which it does not use");
         Scene s = load_scene(o->scene, g);
-        trav::EmbreeOracle oracle(s.mesh);
+        const std::unique_ptr<trav::EmbreeOracle> oracle_owner = make_oracle(s);
+        const trav::EmbreeOracle& oracle = *oracle_owner;
         std::vector<nlohmann::json> rows;
         auto check_one = [&](const CheckedSet& cs, const std::vector<trav::Hit>& ours, nlohmann::json fields) {
             Stage st(g, "verifying " + std::to_string(cs.set.rays.size()) + " " + cs.ray_type + " rays (" +
@@ -123,7 +127,7 @@ void register_verify(CLI::App& app, Globals& g) {
             if (o->build.structure == "all") {
                 const int short_stack =
                     o->build.kd_stack_flag->count() && o->build.kd_stack != trav::kKdFullStack ? o->build.kd_stack : 2;
-                for (const StructureSpec& spec : every_structure(short_stack)) {
+                for (const StructureSpec& spec : every_structure(short_stack, s.placed != nullptr)) {
                     BuildOptions b = o->build;
                     b.structure = spec.structure;
                     b.builder = spec.structure == "kdtree" ? b.builder : spec.structure;

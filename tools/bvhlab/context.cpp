@@ -126,6 +126,10 @@ struct Catalogue {
 
 }  // namespace
 
+std::unique_ptr<trav::EmbreeOracle> make_oracle(const Scene& s) {
+    return s.placed ? std::make_unique<trav::EmbreeOracle>(*s.placed) : std::make_unique<trav::EmbreeOracle>(s.mesh);
+}
+
 std::string data_dir() {
     if (const char* env = std::getenv("BVHLAB_DATA"); env && *env) return env;
     std::error_code ec;
@@ -292,11 +296,16 @@ Scene load_scene(const std::string& spec, const Globals& g) {
     s.meshes = scene::placed_mesh_count(placed);
     const bool one_mesh = placed.instances.size() == 1 && placed.instances[0].transform.is_identity();
     std::optional<scene::SceneCamera> file_camera = placed.camera;
-    {
+    if (placed.is_instanced() && !g.flatten) {
+        // Two-level: the world-space triangles are still made, for rays and for checking hits.
+        Stage st(g, "placing " + std::to_string(placed.triangle_count()) + " triangles of " +
+                        std::to_string(s.instances) + " instances in world space");
+        s.mesh = scene::flatten(placed, /*keep_all=*/true);
+        s.placed = std::make_shared<const scene::InstancedScene>(std::move(placed));
+    } else {
         std::optional<Stage> st;
-        if (!one_mesh && (g.flatten || !placed.is_instanced()))
-            st.emplace(g, "flattening " + std::to_string(s.instances) + " instances");
-        s.mesh = scene::single_mesh(std::move(placed), g.flatten, "scene '" + spec + "'");
+        if (!one_mesh) st.emplace(g, "flattening " + std::to_string(s.instances) + " instances");
+        s.mesh = scene::single_mesh(std::move(placed), true, "scene '" + spec + "'");
     }
     if (!one_mesh) s.hash.clear();  // the file's hash is not the flattened mesh's
     if (file_camera) {

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,7 +16,9 @@
 #include "accel/core/stats.h"
 #include "scene/io/atomic_file.h"
 #include "scene/mesh.h"
+#include "scene/scene.h"
 #include "traversal/factory.h"
+#include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/protocol.h"
 #include "traversal/rays/ray_file.h"
 
@@ -78,9 +81,14 @@ struct Scene {
     /// The scene file its triangles come from: `source`, or for gen:instances the base scene's
     /// file; "" for generated soups (textures are found beside it).
     std::string file;
-    scene::TriangleMesh mesh;  ///< the triangles (an instanced scene's, flattened)
-    uint64_t instances = 1;    ///< instances in the scene file (1 for a single mesh)
-    uint64_t meshes = 1;       ///< distinct meshes they place
+    /// The triangles in world space. For an instanced scene (`placed` set) every instance's, with
+    /// the scene-wide ids of two-level hits: what rays are made on and hits are checked against.
+    scene::TriangleMesh mesh;
+    /// A scene that places some mesh more than once, without --flatten: structures are built
+    /// two-level over it, and Embree checks them with its own instances. Null otherwise.
+    std::shared_ptr<const scene::InstancedScene> placed;
+    uint64_t instances = 1;  ///< instances in the scene file (1 for a single mesh)
+    uint64_t meshes = 1;     ///< distinct meshes they place
     trav::Camera camera;
     bool camera_from_catalogue = false;
     float ao_length = 0.0f;
@@ -95,11 +103,20 @@ struct Scene {
     std::vector<scene::NamedFile> input_files() const;
 };
 
+/// The help text of every command's SCENE argument.
+inline constexpr const char* kSceneHelp =
+    "scene file (OBJ, glTF, PLY, ...), scene name from scenes.json, gen:KIND:N[:SEED] or gen:instances:SCENE:N[:SEED]";
+
 /// Resolves SPEC: a scene file (OBJ, or glTF, PLY and the other formats Assimp reads), a scene name
 /// from $BVHLAB_SCENES/scenes.json or data/scenes.json, gen:KIND:TRIANGLES[:SEED], or
-/// gen:instances:SCENE:N[:SEED]. An instanced scene (a mesh placed more than once) needs
-/// g.flatten, which makes it one mesh. Prints load progress and dropped-triangle counts on stderr.
+/// gen:instances:SCENE:N[:SEED]. An instanced scene (a mesh placed more than once) keeps its
+/// instances (Scene::placed) unless g.flatten makes it one mesh. Prints load progress and
+/// dropped-triangle counts on stderr.
 Scene load_scene(const std::string& spec, const Globals& g);
+
+/// The Embree oracle of a scene: over its mesh, or with Embree's own instances when it is
+/// instanced (the same triangle ids either way).
+std::unique_ptr<trav::EmbreeOracle> make_oracle(const Scene& s);
 
 /// The project's data/ folder: $BVHLAB_DATA, else the source tree's, else share/bvhlab/data
 /// of an installed tree.

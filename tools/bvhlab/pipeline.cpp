@@ -60,8 +60,13 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
     const trav::StageHook stage = [&g](const std::string& what) { return std::make_shared<Stage>(g, what); };
     const std::string file = opts.structure_file();
     Built b;
-    if (file.empty()) {
+    if (file.empty() && scene.placed) {
+        static_cast<trav::AccelStructure&>(b) = trav::build_structure(*scene.placed, opts.spec(), stage);
+    } else if (file.empty()) {
         static_cast<trav::AccelStructure&>(b) = trav::build_structure(scene.mesh, opts.spec(), stage);
+    } else if (scene.placed) {
+        throw Error("structure files hold single-level structures and scene '" + scene.name +
+                    "' places a mesh more than once: --flatten makes it one mesh");
     } else {
         accel::TreeFile f;
         {

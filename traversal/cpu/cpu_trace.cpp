@@ -74,4 +74,18 @@ void trace_cpu(const accel::Cwbvh& cw, const std::vector<Ray>& rays, Query query
     }
 }
 
+void trace_cpu(const accel::TwoLevelBvh& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
+               std::vector<TraversalCounters>* counters) {
+    check_bvh2_stack(bvh.tlas);
+    std::vector<Bvh2View> blas(bvh.blas.size());
+    for (size_t m = 0; m < bvh.blas.size(); ++m) {
+        check_bvh2_stack(bvh.blas[m]);
+        blas[m] = {bvh.blas[m].nodes.data(), bvh.blas[m].tris.data(), bvh.blas[m].tri_ids.data()};
+    }
+    const TwoLevelView view{bvh.tlas.nodes.data(), bvh.tlas.tri_ids.data(), bvh.instances.data(), blas.data()};
+    trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
+        return traverse_two_level<decltype(any)::value>(view, ray, c);
+    });
+}
+
 }  // namespace bvhlab::trav

@@ -8,6 +8,10 @@ namespace bvhlab::trav {
 DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_(s.depth()) {
     std::string why;
     if (!gpu_available(&why)) throw Error(why);
+    if (s.layout == Layout::kTwoLevel)
+        throw Error(
+            "no GPU kernel traces the two-level layout: trace it with --device cpu, or make the scene one "
+            "mesh with --flatten");
     if (s.layout == Layout::kBvh2) {
         bvh_nodes_.upload(s.bvh2.nodes);
         bvh_tris_.upload(s.bvh2.tris);
@@ -17,6 +21,31 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         bvh_tris_.upload(s.cwbvh.tris);
         cw_vtris_.upload(s.cwbvh.vtris);
         bvh_ids_.upload(s.cwbvh.tri_ids);
+    } else if (s.layout == Layout::kTwoLevel) {
+        const accel::TwoLevelBvh& t = s.two_level;
+        bvh_nodes_.upload(t.tlas.nodes);
+        bvh_ids_.upload(t.tlas.tri_ids);
+        instances_.upload(t.instances);
+        // Every BLAS in one set of buffers; each view points at its own part.
+        std::vector<accel::Bvh2Node> nodes;
+        std::vector<accel::WoopTriangle> tris;
+        std::vector<uint32_t> ids;
+        std::vector<size_t> node_at, tri_at;
+        for (const accel::Bvh2& b : t.blas) {
+            node_at.push_back(nodes.size());
+            tri_at.push_back(tris.size());
+            nodes.insert(nodes.end(), b.nodes.begin(), b.nodes.end());
+            tris.insert(tris.end(), b.tris.begin(), b.tris.end());
+            ids.insert(ids.end(), b.tri_ids.begin(), b.tri_ids.end());
+        }
+        blas_nodes_.upload(nodes);
+        blas_tris_.upload(tris);
+        blas_ids_.upload(ids);
+        std::vector<Bvh2View> views;
+        for (size_t m = 0; m < t.blas.size(); ++m)
+            views.push_back(
+                {blas_nodes_.data() + node_at[m], blas_tris_.data() + tri_at[m], blas_ids_.data() + tri_at[m]});
+        blas_views_.upload(views);
     } else {
         kd_nodes_.upload(s.kd.tree.nodes);
         kd_prims_.upload(s.kd.tree.prim_indices);

@@ -7,6 +7,7 @@
 #include "traversal/device/bvh2_traverse.h"
 #include "traversal/device/cwbvh_traverse.h"
 #include "traversal/device/kd_traverse.h"
+#include "traversal/device/two_level_traverse.h"
 #include "traversal/gpu/device_buffer.h"
 #include "traversal/structure.h"
 
@@ -26,6 +27,11 @@ public:
     KdView kd() const { return {kd_nodes_.data(), kd_prims_.data(), kd_tris_.data(), kd_bounds_}; }
     /// The device view of a CWBVH layout (null pointers for the other layouts).
     CwbvhView cwbvh() const { return {cw_nodes_.data(), bvh_tris_.data(), bvh_ids_.data(), cw_vtris_.data()}; }
+    /// The device view of a two-level layout (null pointers for the other layouts): the TLAS in
+    /// the BVH2 buffers (its ids are instance indices), every BLAS concatenated behind it.
+    TwoLevelView two_level() const {
+        return {bvh_nodes_.data(), bvh_ids_.data(), instances_.data(), blas_views_.data()};
+    }
 
 private:
     Layout layout_;
@@ -39,6 +45,11 @@ private:
     DeviceBuffer<uint32_t> kd_prims_;
     DeviceBuffer<accel::WoopTriangle> kd_tris_;
     AABB kd_bounds_ = AABB::empty();
+    DeviceBuffer<accel::InstanceRecord> instances_;
+    DeviceBuffer<accel::Bvh2Node> blas_nodes_;
+    DeviceBuffer<accel::WoopTriangle> blas_tris_;
+    DeviceBuffer<uint32_t> blas_ids_;
+    DeviceBuffer<Bvh2View> blas_views_;  // one per BLAS, pointing into the three buffers above
 };
 
 }  // namespace bvhlab::trav

@@ -34,6 +34,8 @@ LaunchArgs make_args(const DeviceStructure& s, RayQueue& queue, Query query, uin
         a.bvh2 = s.bvh2();
     else if (s.layout() == Layout::kCwbvh)
         a.cwbvh = s.cwbvh();
+    else if (s.layout() == Layout::kTwoLevel)
+        a.two_level = s.two_level();
     else
         a.kd = s.kd();
     a.queue = queue.view();

@@ -12,6 +12,7 @@
 #include "traversal/device/bvh2_traverse.h"
 #include "traversal/device/cwbvh_traverse.h"
 #include "traversal/device/kd_traverse.h"
+#include "traversal/device/two_level_traverse.h"
 #include "traversal/gpu/ray_queue.h"
 #include "traversal/structure.h"
 
@@ -22,6 +23,7 @@ struct LaunchArgs {
     Bvh2View bvh2{};
     KdView kd{};
     CwbvhView cwbvh{};
+    TwoLevelView two_level{};
     RayQueueView queue{};
     uint32_t capacity = 0;  ///< the queue's capacity: the grid covers it, threads read the count
     Query query = Query::kClosest;

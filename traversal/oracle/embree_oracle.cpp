@@ -16,7 +16,39 @@ namespace bvhlab::trav {
 struct EmbreeOracle::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
-    std::string error;  // first error Embree reported through the callback
+    std::vector<RTCScene> mesh_scenes;  // an instanced scene's meshes, each its own Embree scene
+    std::vector<uint32_t> first_ids;    // an instanced scene: scene-wide id of each instance's triangle 0
+    std::string error;                  // first error Embree reported through the callback
+
+    /// Our hit of Embree's (instance, primitive): the scene-wide id (TwoLevelBvh's numbering).
+    Hit hit(unsigned inst, unsigned prim, float t, float u, float v) const {
+        const uint32_t base = first_ids.empty() ? 0u : first_ids[inst];
+        return {int32_t(base + prim), t, u, v};
+    }
+    /// A new scene in robust mode: watertight triangle tests, no precision-for-speed shortcuts.
+    RTCScene new_scene() const {
+        RTCScene s = rtcNewScene(device);
+        rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
+        return s;
+    }
+    /// Attaches `mesh` to `scene` as one triangle geometry (triangle ids = primIDs).
+    void attach(RTCScene scene, const scene::TriangleMesh& mesh) const {
+        RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        const size_t nv = mesh.vertices.size(), nt = mesh.triangle_count();
+        // Embree reads vertex buffers with 16-byte loads, so pad the last vertex.
+        auto* v = static_cast<float*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv + 1));
+        auto* idx = static_cast<unsigned*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
+        if (v && idx) {
+            std::memcpy(v, mesh.vertices.data(), nv * sizeof(Vec3));
+            std::memcpy(idx, mesh.indices.data(), nt * 3 * sizeof(unsigned));
+            rtcCommitGeometry(geom);
+            rtcAttachGeometry(scene, geom);
+        }
+        rtcReleaseGeometry(geom);
+    }
 };
 
 namespace {
@@ -49,30 +81,49 @@ EmbreeOracle::EmbreeOracle(const scene::TriangleMesh& mesh) : impl_(std::make_un
     impl_->device = rtcNewDevice(nullptr);
     BVHLAB_CHECK(impl_->device != nullptr, "rtcNewDevice failed");
     rtcSetDeviceErrorFunction(impl_->device, on_error, impl_.get());
-    impl_->scene = rtcNewScene(impl_->device);
-    // Robust mode: watertight triangle tests, no precision-for-speed shortcuts.
-    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-    RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    const size_t nv = mesh.vertices.size(), nt = mesh.triangle_count();
-    // Embree reads vertex buffers with 16-byte loads, so pad the last vertex.
-    auto* v = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv + 1));
-    auto* idx = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
-    if (v && idx) {
-        std::memcpy(v, mesh.vertices.data(), nv * sizeof(Vec3));
-        std::memcpy(idx, mesh.indices.data(), nt * 3 * sizeof(unsigned));
-        rtcCommitGeometry(geom);
-        rtcAttachGeometry(impl_->scene, geom);
+    impl_->scene = impl_->new_scene();
+    impl_->attach(impl_->scene, mesh);
+    rtcCommitScene(impl_->scene);
+    if (!impl_->error.empty()) throw Error(impl_->error);
+}
+
+EmbreeOracle::EmbreeOracle(const scene::InstancedScene& placed) : impl_(std::make_unique<Impl>()) {
+    impl_->device = rtcNewDevice(nullptr);
+    BVHLAB_CHECK(impl_->device != nullptr, "rtcNewDevice failed");
+    rtcSetDeviceErrorFunction(impl_->device, on_error, impl_.get());
+    impl_->mesh_scenes.assign(placed.meshes.size(), nullptr);
+    for (const scene::Instance& inst : placed.instances) {
+        BVHLAB_CHECK(inst.mesh < placed.meshes.size(), "an instance of a mesh the scene does not have");
+        RTCScene& ms = impl_->mesh_scenes[inst.mesh];
+        if (ms) continue;
+        ms = impl_->new_scene();
+        impl_->attach(ms, placed.meshes[inst.mesh]);
+        rtcCommitScene(ms);
     }
-    rtcReleaseGeometry(geom);
+    // Embree's own instances: geometry i of the top scene is instance i, so Embree's instID is
+    // the instance index.
+    impl_->scene = impl_->new_scene();
+    uint64_t first = 0;
+    for (size_t i = 0; i < placed.instances.size(); ++i) {
+        const scene::Instance& inst = placed.instances[i];
+        BVHLAB_CHECK(first <= 0x7fffffffull, "more than 2^31 - 1 triangles in an instanced scene");
+        impl_->first_ids.push_back(uint32_t(first));
+        first += placed.meshes[inst.mesh].triangle_count();
+        RTCGeometry g = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(g, impl_->mesh_scenes[inst.mesh]);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, inst.transform.m);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(impl_->scene, g, unsigned(i));
+        rtcReleaseGeometry(g);
+    }
     rtcCommitScene(impl_->scene);
     if (!impl_->error.empty()) throw Error(impl_->error);
 }
 
 EmbreeOracle::~EmbreeOracle() {
     if (impl_->scene) rtcReleaseScene(impl_->scene);
+    for (RTCScene ms : impl_->mesh_scenes)
+        if (ms) rtcReleaseScene(ms);
     if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 
@@ -83,9 +134,10 @@ Hit EmbreeOracle::intersect(const Ray& ray) const {
     rh.ray = to_rtc(ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit::miss();
-    return {int32_t(rh.hit.primID), rh.ray.tfar, rh.hit.u, rh.hit.v};
+    return impl_->hit(rh.hit.instID[0], rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
 }
 
 bool EmbreeOracle::occluded(const Ray& ray) const {
@@ -138,6 +190,7 @@ void EmbreeOracle::trace16(const std::vector<Ray>& rays, Query query, std::vecto
                 rh.ray.flags[k] = 0;
                 rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
                 rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+                rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
             }
             if (query == Query::kClosest) {
                 rtcIntersect16(valid, impl_->scene, &ctx, &rh);
@@ -149,7 +202,8 @@ void EmbreeOracle::trace16(const std::vector<Ray>& rays, Query query, std::vecto
                 if (query == Query::kClosest) {
                     h = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
                             ? Hit::miss()
-                            : Hit{int32_t(rh.hit.primID[k]), rh.ray.tfar[k], rh.hit.u[k], rh.hit.v[k]};
+                            : impl_->hit(rh.hit.instID[0][k], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k],
+                                         rh.hit.v[k]);
                 } else {
                     h = rh.ray.tfar[k] == -INFINITY ? Hit{0, 0.0f, 0.0f, 0.0f} : Hit::miss();
                 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "scene/mesh.h"
+#include "scene/scene.h"
 #include "traversal/device/ray.h"
 #include "traversal/tracer.h"
 
@@ -17,6 +18,10 @@ public:
     /// Builds an Embree scene over `mesh` (triangle ids = Embree primIDs). Throws bvhlab::Error
     /// if Embree reports an error.
     explicit EmbreeOracle(const scene::TriangleMesh& mesh);
+    /// Builds Embree's own two-level scene: one Embree scene per placed mesh and one Embree
+    /// instance per instance. Hits name triangles by scene-wide ids (accel::TwoLevelBvh's
+    /// numbering: instance i's triangle k is the triangles of instances 0..i-1 plus k).
+    explicit EmbreeOracle(const scene::InstancedScene& scene);
     ~EmbreeOracle();
     EmbreeOracle(const EmbreeOracle&) = delete;
     EmbreeOracle& operator=(const EmbreeOracle&) = delete;

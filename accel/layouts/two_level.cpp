@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: MIT
+// Two-level BVH construction: a BLAS per placed mesh, then a TLAS over the instances.
+#include "accel/layouts/two_level.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "accel/builders/binned_sah.h"
+#include "accel/core/check.h"
+#include "accel/layouts/bvh2_convert.h"
+
+namespace bvhlab::accel {
+
+namespace {
+
+/// The child boxes of a BVH2's root (one when the root's second slot is empty).
+std::vector<AABB> root_boxes(const Bvh2& bvh) {
+    const Bvh2Node& n = bvh.nodes[0];
+    std::vector<AABB> out;
+    const AABB c0{{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}};
+    const AABB c1{{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}};
+    for (const AABB& b : {c0, c1})
+        if (!b.is_empty()) out.push_back(b);
+    return out;
+}
+
+/// The world box of `boxes` (object space) under `t`: their transformed corners' box.
+AABB world_box(const std::vector<AABB>& boxes, const scene::Transform& t) {
+    AABB w = AABB::empty();
+    for (const AABB& b : boxes)
+        for (int k = 0; k < 8; ++k)
+            w.extend(t.point({(k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z}));
+    return w;
+}
+
+}  // namespace
+
+uint32_t TwoLevelBvh::blas_depth() const {
+    uint32_t d = 0;
+    for (const Bvh2& b : blas) d = std::max(d, b.depth);
+    return d;
+}
+
+size_t TwoLevelBvh::bytes() const {
+    size_t n = tlas.bytes() + instances.size() * sizeof(InstanceRecord);
+    for (const Bvh2& b : blas) n += b.bytes();
+    return n;
+}
+
+uint32_t TwoLevelBvh::instance_of_id(uint32_t id) const {
+    BVHLAB_CHECK(id < world_triangles, "a triangle id beyond the scene's");
+    const auto it = std::upper_bound(instances.begin(), instances.end(), id,
+                                     [](uint32_t v, const InstanceRecord& r) { return v < r.first_id; });
+    return uint32_t(it - instances.begin()) - 1;
+}
+
+TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build) {
+    if (scene.instances.empty()) throw Error("a two-level BVH needs at least one instance");
+    const uint64_t world = scene.triangle_count();
+    if (world > 0x7fffffffull)
+        throw Error("the scene places " + std::to_string(world) +
+                    " triangles; two-level hits number them with 31 bits (at most 2^31 - 1)");
+    TwoLevelBvh out;
+    out.world_triangles = world;
+    std::vector<bool> placed(scene.meshes.size(), false);
+    for (const scene::Instance& inst : scene.instances) {
+        BVHLAB_CHECK(inst.mesh < scene.meshes.size(), "an instance of a mesh the scene does not have");
+        placed[inst.mesh] = true;
+    }
+    out.blas.resize(scene.meshes.size());
+    tbb::parallel_for(size_t(0), scene.meshes.size(), [&](size_t m) {
+        if (placed[m]) out.blas[m] = convert_to_bvh2(build(scene.meshes[m]), scene.meshes[m]);
+    });
+    std::vector<std::vector<AABB>> boxes(scene.meshes.size());
+    for (size_t m = 0; m < scene.meshes.size(); ++m)
+        if (placed[m]) boxes[m] = root_boxes(out.blas[m]);
+
+    std::vector<PrimRef> refs(scene.instances.size());
+    out.instances.resize(scene.instances.size());
+    uint64_t first = 0;
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+        const scene::Instance& inst = scene.instances[i];
+        const double det = inst.transform.determinant();
+        if (!(std::isfinite(det) && det != 0.0))
+            throw Error("instance " + std::to_string(i) + " has a singular or non-finite transform");
+        InstanceRecord& r = out.instances[i];
+        std::memcpy(r.world_to_object, inst.transform.inverse().m, sizeof r.world_to_object);
+        r.blas = inst.mesh;
+        r.first_id = uint32_t(first);
+        r.reserved[0] = r.reserved[1] = 0;
+        first += scene.meshes[inst.mesh].triangle_count();
+        refs[i] = {world_box(boxes[inst.mesh], inst.transform), uint32_t(i)};
+    }
+    // One instance per leaf: testing an instance costs a whole BLAS traversal, far more than the
+    // triangle a leaf entry usually stands for.
+    BinnedSahBuilder::Config cfg;
+    cfg.min_leaf_size = 1;
+    cfg.max_leaf_size = 1;
+    out.tlas = convert_bvh2_nodes(BinnedSahBuilder(cfg).build(std::move(refs)));
+    return out;
+}
+
+}  // namespace bvhlab::accel

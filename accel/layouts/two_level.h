@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: MIT
+// A two-level BVH: one bottom-level BVH2 (BLAS) per mesh, in the mesh's own space, and a
+// top-level BVH2 (TLAS) over the instances' world boxes, one instance per leaf entry. A ray
+// reaching an instance is moved into the instance's space and traced through its mesh's BLAS
+// (traversal/device/two_level_traverse.h), as in Embree, OptiX and tinybvh.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "accel/core/build_tree.h"
+#include "accel/layouts/bvh2_node.h"
+#include "scene/scene.h"
+
+namespace bvhlab::accel {
+
+/// An instance as the traversal reads it, 64 bytes.
+struct alignas(16) InstanceRecord {
+    float world_to_object[12];  ///< rows of the inverse of the instance's [M | t]
+    uint32_t blas;              ///< the BLAS of its mesh
+    uint32_t first_id;          ///< the scene-wide id of its triangle 0 (see TwoLevelBvh)
+    uint32_t reserved[2];       ///< zero
+
+    BVHLAB_HD Vec3 point(Vec3 p) const {
+        const float* m = world_to_object;
+        return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+    }
+    BVHLAB_HD Vec3 vector(Vec3 v) const {
+        const float* m = world_to_object;
+        return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+                m[8] * v.x + m[9] * v.y + m[10] * v.z};
+    }
+};
+static_assert(sizeof(InstanceRecord) == 64 && alignof(InstanceRecord) == 16, "InstanceRecord layout");
+
+/// Hits of a two-level BVH name triangles by scene-wide ids: instance i's triangle k is
+/// first_id(i) + k, where first_id counts the triangles of the instances before i. These are the
+/// ids of flatten()'s mesh (when no transform degenerates a triangle), so one id says both the
+/// instance and its triangle (instance_of_id), and every single-level tool (the comparison,
+/// hit files) reads two-level hits unchanged. At most 2^31 - 1 triangles in the world.
+struct TwoLevelBvh {
+    std::vector<Bvh2> blas;  ///< one per mesh of the scene (an empty Bvh2 for a mesh no instance places)
+    Bvh2 tlas;               ///< over instance boxes: tlas.tri_ids are instance indices, no triangles
+    std::vector<InstanceRecord> instances;
+    uint64_t world_triangles = 0;  ///< triangles of every instance
+
+    /// Interior nodes on the longest TLAS path plus the deepest BLAS: the two stacks' entries.
+    uint32_t tlas_depth() const { return tlas.depth; }
+    uint32_t blas_depth() const;
+    size_t bytes() const;
+    /// The instance whose id range holds scene-wide triangle id `id` (binary search).
+    uint32_t instance_of_id(uint32_t id) const;
+};
+
+/// A BVH builder over one mesh, as the caller chooses it (any BVH builder and options).
+using MeshBuilder = std::function<BuildTree(const scene::TriangleMesh&)>;
+
+/// Builds the BLAS of every placed mesh with `build` and a binned-SAH TLAS over the instances'
+/// world boxes (the transformed corners of each BLAS root's two child boxes). Throws
+/// bvhlab::Error for a scene without instances or with more than 2^31 - 1 world triangles, and
+/// for a singular instance transform.
+TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build);
+
+}  // namespace bvhlab::accel
