@@ -226,7 +226,8 @@ def test_kernels_name_one_default_per_layout():
         pytest.skip("built without CUDA: no GPU kernels")
     assert len({k["name"] for k in ks}) == len(ks)
     defaults = [(k["layout"], k["short_stack"]) for k in ks if k["default"]]
-    assert sorted(defaults) == sorted({("bvh2", False), ("cwbvh", False), ("kdtree", False), ("kdtree", True)})
+    assert sorted(defaults) == sorted({("bvh2", False), ("cwbvh", False), ("kdtree", False), ("kdtree", True),
+                                       ("two-level", False)})
 
 
 @needs_gpu

@@ -70,10 +70,10 @@ inline scene::TriangleMesh make_lattice_scene(uint32_t seed) {
 inline std::vector<AABB> structure_boxes(const trav::Structure& s) {
     std::vector<AABB> boxes;
     const auto bvh2_boxes = [&boxes](const accel::Bvh2& bvh) {
-        for (const accel::Bvh2Node& n : bvh.nodes) {
-            boxes.push_back({{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}});
-            boxes.push_back({{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}});
-        }
+        for (const accel::Bvh2Node& n : bvh.nodes)
+            for (const AABB& b : {AABB{{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}},
+                                  AABB{{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}}})
+                if (!b.is_empty()) boxes.push_back(b);  // a root leaf's second slot is empty (+-FLT_MAX)
     };
     if (s.layout == trav::Layout::kBvh2) {
         bvh2_boxes(s.bvh2);

@@ -8,10 +8,6 @@ namespace bvhlab::trav {
 DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_(s.depth()) {
     std::string why;
     if (!gpu_available(&why)) throw Error(why);
-    if (s.layout == Layout::kTwoLevel)
-        throw Error(
-            "no GPU kernel traces the two-level layout: trace it with --device cpu, or make the scene one "
-            "mesh with --flatten");
     if (s.layout == Layout::kBvh2) {
         bvh_nodes_.upload(s.bvh2.nodes);
         bvh_tris_.upload(s.bvh2.tris);
