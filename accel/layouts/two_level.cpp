@@ -17,14 +17,28 @@ namespace bvhlab::accel {
 
 namespace {
 
-/// The child boxes of a BVH2's root (one when the root's second slot is empty).
-std::vector<AABB> root_boxes(const Bvh2& bvh) {
-    const Bvh2Node& n = bvh.nodes[0];
+/// BLAS levels whose boxes bound an instance in the world (up to 2^levels boxes, 8 corners each).
+constexpr int kFrontierLevels = 4;
+
+/// The boxes of a BVH2's nodes `levels` below the root (fewer where leaves end sooner): their
+/// transformed corners bound an instance far tighter than the root box's when it is turned.
+std::vector<AABB> frontier_boxes(const Bvh2& bvh, int levels) {
     std::vector<AABB> out;
-    const AABB c0{{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}};
-    const AABB c1{{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}};
-    for (const AABB& b : {c0, c1})
-        if (!b.is_empty()) out.push_back(b);
+    std::vector<std::pair<int32_t, int>> todo{{0, 0}};
+    while (!todo.empty()) {
+        const auto [node, level] = todo.back();
+        todo.pop_back();
+        const Bvh2Node& n = bvh.nodes[size_t(node)];
+        const AABB c[2] = {{{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}},
+                           {{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}}};
+        for (int k = 0; k < 2; ++k) {
+            if (c[k].is_empty()) continue;  // a root leaf's second slot
+            if (n.child[k] >= 0 && level + 1 < levels)
+                todo.push_back({n.child[k], level + 1});
+            else
+                out.push_back(c[k]);
+        }
+    }
     return out;
 }
 
@@ -77,7 +91,7 @@ TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilde
     });
     std::vector<std::vector<AABB>> boxes(scene.meshes.size());
     for (size_t m = 0; m < scene.meshes.size(); ++m)
-        if (placed[m]) boxes[m] = root_boxes(out.blas[m]);
+        if (placed[m]) boxes[m] = frontier_boxes(out.blas[m], kFrontierLevels);
 
     std::vector<PrimRef> refs(scene.instances.size());
     out.instances.resize(scene.instances.size());

@@ -58,7 +58,8 @@ struct TwoLevelBvh {
 using MeshBuilder = std::function<BuildTree(const scene::TriangleMesh&)>;
 
 /// Builds the BLAS of every placed mesh with `build` and a binned-SAH TLAS over the instances'
-/// world boxes (the transformed corners of each BLAS root's two child boxes). Throws
+/// world boxes: the transformed corners of the BLAS's boxes four levels below its root (up to 16
+/// boxes), far tighter than the root box's corners for a turned instance. Throws
 /// bvhlab::Error for a scene without instances or with more than 2^31 - 1 world triangles, and
 /// for a singular instance transform.
 TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build);

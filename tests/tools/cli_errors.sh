@@ -563,6 +563,17 @@ expect_error render-unwritable "cannot" render "$data/cornell_box.obj" --width 4
 check_schema build build "$data/cornell_box.obj"
 check_schema build-gltf build --flatten "$data/instances.gltf"
 check_schema build-two-level build "$data/instances.gltf"
+# Memory figures of every build record: layout bytes per triangle, the process's peak.
+for args in "$data/cornell_box.obj" "$data/instances.gltf" "--flatten $data/instances.gltf"; do
+    # shellcheck disable=SC2086
+    if "$bin" -q build $args --json | python3 -c '
+import json, sys
+r = json.loads(sys.stdin.readline())
+assert r["peak_host_bytes"] > 1e6, r
+assert abs(r["bytes_per_triangle"] * r["triangles"] - r["layout_bytes"]) < 1e-6 * r["layout_bytes"], r
+'; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL build memory figures: $args"; fi
+done
+
 check_schema verify-two-level verify gen:instances:cornell-box:4 --width 8 --height 8
 check_schema build-ply build "$data/cube_binary.ply"
 check_schema build-cwbvh build "$data/cornell_box.obj" --layout cwbvh

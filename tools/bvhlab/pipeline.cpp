@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "tools/bvhlab/pipeline.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <optional>
@@ -81,6 +83,12 @@ Built build_scene(const Scene& scene, const BuildOptions& opts, const Globals& g
         std::fprintf(stderr, "[bvhlab] warning: %s\n", b.stats.epo_skipped.c_str());
     b.record = base_record("build", scene);
     b.record.update(b.figures);
+    // Memory: the layout's bytes per (world) triangle, and the process's peak resident set so
+    // far (scene, structure and every temporary; Linux reports kilobytes).
+    const uint64_t triangles = b.record.value("triangles", uint64_t(0));
+    b.record["bytes_per_triangle"] = triangles ? double(b.structure.bytes()) / double(triangles) : 0.0;
+    struct rusage ru {};
+    if (getrusage(RUSAGE_SELF, &ru) == 0) b.record["peak_host_bytes"] = uint64_t(ru.ru_maxrss) * 1024u;
     b.record["machine"] = machine_description();
     return b;
 }
