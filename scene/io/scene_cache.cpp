@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
-// Scene cache entries: a fixed header, the dependencies (the OBJ's and each material file's
-// content hash), the mesh, and a checksum of everything before it. Little-endian.
+// Scene cache entries: a fixed header, the dependencies (each material file's or, for other
+// formats, each file the importer opened beside the scene, by content hash), the scene (its
+// materials, meshes, instances and camera), and a checksum of everything before it.
+// Little-endian.
 #include "scene/io/scene_cache.h"
 
 #include <fcntl.h>
@@ -19,6 +21,7 @@
 #include "accel/core/checksum.h"
 #include "scene/io/atomic_file.h"
 #include "scene/io/obj_loader.h"
+#include "scene/scene.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "scene cache files need a little-endian host");
 
@@ -33,16 +36,17 @@ constexpr const char* kExtension = ".bvhscene";
 struct Header {
     char magic[8];
     uint32_t version;         // kSceneCacheVersion
-    uint32_t loader_version;  // kObjLoaderVersion
-    uint64_t obj_hash;        // hash_file of the OBJ
-    uint64_t scene_hash;      // scene_hash(mesh) as a number
-    uint64_t vertices, triangles, materials;
+    uint32_t loader_version;  // the loader's version (kObjLoaderVersion, kAssimpLoaderVersion)
+    uint64_t obj_hash;        // hash_file of the scene file
+    uint64_t scene_hash;      // scene_hash of the mesh of a single-mesh scene, as a number (0 otherwise)
+    uint64_t vertices, triangles, materials;  // vertices and triangles stored, over every mesh
     uint64_t dropped_non_finite, dropped_zero_area;
     uint32_t dependencies;  // material files
     uint32_t warnings;
     char writer[24];
 };
 static_assert(sizeof(Header) == 104, "scene cache header is 104 bytes");
+static_assert(sizeof(Instance) == 56 && sizeof(SceneCamera) == 40, "instances and cameras are stored as they are");
 
 /// Why an entry cannot be used: turned into a warning, never an error.
 struct Unusable {
@@ -110,12 +114,12 @@ struct Dependency {
     uint64_t hash;
 };
 
-/// The entry of `obj` in `dir`: its stem, and a hash of its absolute path and the loader version.
-std::string entry_path(const std::string& dir, const std::string& obj) {
+/// The entry of `file` in `dir`: its stem, and a hash of its absolute path and the loader version.
+std::string entry_path(const std::string& dir, const std::string& file, uint32_t loader_version) {
     std::error_code ec;
-    fs::path abs = fs::weakly_canonical(fs::absolute(obj), ec);
-    if (ec) abs = fs::absolute(obj);
-    const std::string key = abs.string() + '\0' + std::to_string(kObjLoaderVersion);
+    fs::path abs = fs::weakly_canonical(fs::absolute(file), ec);
+    if (ec) abs = fs::absolute(file);
+    const std::string key = abs.string() + '\0' + std::to_string(loader_version);
     return (fs::path(dir) /
             (abs.stem().string() + "-" + accel::hash_hex(accel::fnv1a(key.data(), key.size())) + kExtension))
         .string();
@@ -137,7 +141,7 @@ struct Entry {
     std::string source;
     std::vector<Dependency> deps;
     std::vector<std::string> warnings;
-    TriangleMesh mesh;
+    InstancedScene scene;
 };
 
 Entry parse_entry(const std::string& data) {
@@ -174,21 +178,37 @@ Entry parse_entry(const std::string& data) {
         m.dissolve = in.pod<float>();
         m.illum = in.pod<int32_t>();
         m.diffuse_texture = in.str();
-        e.mesh.materials.push_back(std::move(m));
+        e.scene.materials.push_back(std::move(m));
     }
-    in.array(e.mesh.vertices, e.h.vertices, "vertex");
-    if (e.h.triangles > (uint64_t(1) << 40)) throw Unusable{"its triangle count is implausible"};
-    in.array(e.mesh.indices, 3 * e.h.triangles, "index");
-    in.array(e.mesh.material_ids, e.h.triangles, "material id");
-    const auto has_texcoords = in.pod<uint8_t>();
-    if (has_texcoords > 1) throw Unusable{"its texture-coordinate flag is neither 0 nor 1"};
-    if (has_texcoords) in.array(e.mesh.texcoords, 6 * e.h.triangles, "texture coordinate");
+    const auto meshes = in.pod<uint32_t>();
+    uint64_t vertices = 0, triangles = 0;
+    for (uint32_t k = 0; k < meshes; ++k) {
+        TriangleMesh& mesh = e.scene.meshes.emplace_back();
+        const auto nv = in.pod<uint64_t>(), nt = in.pod<uint64_t>();
+        if (nt > (uint64_t(1) << 40)) throw Unusable{"its triangle count is implausible"};
+        in.array(mesh.vertices, nv, "vertex");
+        in.array(mesh.indices, 3 * nt, "index");
+        in.array(mesh.material_ids, nt, "material id");
+        const auto has_texcoords = in.pod<uint8_t>();
+        if (has_texcoords > 1) throw Unusable{"its texture-coordinate flag is neither 0 nor 1"};
+        if (has_texcoords) in.array(mesh.texcoords, 6 * nt, "texture coordinate");
+        for (uint32_t i : mesh.indices)
+            if (i >= mesh.vertices.size()) throw Unusable{"an index is out of range"};
+        for (int32_t m : mesh.material_ids)
+            if (m < -1 || (m >= 0 && uint64_t(m) >= e.h.materials)) throw Unusable{"a material id is out of range"};
+        vertices += nv;
+        triangles += nt;
+    }
+    if (vertices != e.h.vertices || triangles != e.h.triangles)
+        throw Unusable{"its meshes do not hold the vertices and triangles its header counts"};
+    in.array(e.scene.instances, in.pod<uint64_t>(), "instance");
+    for (const Instance& inst : e.scene.instances)
+        if (inst.mesh >= meshes || inst.material_offset != 0) throw Unusable{"an instance is out of range"};
+    const auto has_camera = in.pod<uint8_t>();
+    if (has_camera > 1) throw Unusable{"its camera flag is neither 0 nor 1"};
+    if (has_camera) e.scene.camera = in.pod<SceneCamera>();
     if (!in.at_end()) throw Unusable{"it has trailing bytes"};
-    for (uint32_t i : e.mesh.indices)
-        if (i >= e.mesh.vertices.size()) throw Unusable{"an index is out of range"};
-    for (int32_t m : e.mesh.material_ids)
-        if (m < -1 || (m >= 0 && uint64_t(m) >= e.h.materials)) throw Unusable{"a material id is out of range"};
-    e.mesh.dropped = {e.h.dropped_non_finite, e.h.dropped_zero_area};
+    e.scene.dropped = {e.h.dropped_non_finite, e.h.dropped_zero_area};
     return e;
 }
 
@@ -213,32 +233,35 @@ bool dependencies_unchanged(const std::vector<Dependency>& deps) {
     return true;
 }
 
-void write_entry(const std::string& path, const std::string& obj, uint64_t obj_hash,
-                 const std::vector<Dependency>& deps, const SceneLoad& load, const std::string& writer) {
+void write_entry(const std::string& path, const std::string& file, uint64_t file_hash, uint32_t loader_version,
+                 const std::vector<Dependency>& deps, const CachedScene& load, const std::string& writer) {
+    const InstancedScene& scene = load.scene;
     Out out;
     Header h{};
     std::memcpy(h.magic, kMagic, 8);
     h.version = kSceneCacheVersion;
-    h.loader_version = kObjLoaderVersion;
-    h.obj_hash = obj_hash;
-    h.scene_hash = accel::hash_from_hex(load.scene_hash);
-    h.vertices = load.mesh.vertices.size();
-    h.triangles = load.mesh.triangle_count();
-    h.materials = load.mesh.materials.size();
-    h.dropped_non_finite = load.mesh.dropped.non_finite;
-    h.dropped_zero_area = load.mesh.dropped.zero_area;
+    h.loader_version = loader_version;
+    h.obj_hash = file_hash;
+    h.scene_hash = load.scene_hash.empty() ? 0 : accel::hash_from_hex(load.scene_hash);
+    for (const TriangleMesh& m : scene.meshes) {
+        h.vertices += m.vertices.size();
+        h.triangles += m.triangle_count();
+    }
+    h.materials = scene.materials.size();
+    h.dropped_non_finite = scene.dropped.non_finite;
+    h.dropped_zero_area = scene.dropped.zero_area;
     h.dependencies = uint32_t(deps.size());
     h.warnings = uint32_t(load.warnings.size());
     std::memcpy(h.writer, writer.data(), std::min(writer.size(), sizeof h.writer));
     out.pod(h);
-    out.str(fs::absolute(obj).string());
+    out.str(fs::absolute(file).string());
     for (const Dependency& d : deps) {
         out.str(d.path);
         out.pod(uint8_t(d.exists));
         out.pod(d.hash);
     }
     for (const std::string& w : load.warnings) out.str(w);
-    for (const Material& m : load.mesh.materials) {
+    for (const Material& m : scene.materials) {
         out.str(m.name);
         out.pod(m.diffuse);
         out.pod(m.emission);
@@ -250,11 +273,20 @@ void write_entry(const std::string& path, const std::string& obj, uint64_t obj_h
         out.pod(m.illum);
         out.str(m.diffuse_texture);
     }
-    out.array(load.mesh.vertices);
-    out.array(load.mesh.indices);
-    out.array(load.mesh.material_ids);
-    out.pod(uint8_t(!load.mesh.texcoords.empty()));
-    out.array(load.mesh.texcoords);
+    out.pod(uint32_t(scene.meshes.size()));
+    for (const TriangleMesh& m : scene.meshes) {
+        out.pod(uint64_t(m.vertices.size()));
+        out.pod(uint64_t(m.triangle_count()));
+        out.array(m.vertices);
+        out.array(m.indices);
+        out.array(m.material_ids);
+        out.pod(uint8_t(!m.texcoords.empty()));
+        out.array(m.texcoords);
+    }
+    out.pod(uint64_t(scene.instances.size()));
+    out.array(scene.instances);
+    out.pod(uint8_t(scene.camera.has_value()));
+    if (scene.camera) out.pod(*scene.camera);
     const uint64_t sum = accel::fnv1a_words(out.bytes().data(), out.bytes().size());
     out.pod(sum);
     std::error_code ec;
@@ -316,31 +348,32 @@ uint64_t hash_file(const std::string& path, bool* exists) {
     return accel::fnv1a_words(part.data(), part.size() * sizeof(uint64_t), h);
 }
 
-SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
-                          const LoadProgress& progress) {
-    SceneLoad r;
-    auto note_materials = [&r](const std::vector<std::string>& files) {
-        r.material_files = files;
+CachedScene load_cached(const std::string& path, uint32_t loader_version, const std::string& cache_dir,
+                        const std::string& writer, const SceneParser& parser) {
+    CachedScene r;
+    auto note_dependencies = [&r](const std::vector<std::string>& files) {
+        r.dependencies = files;
         std::error_code ec;
         for (const std::string& f : files)
-            if (!fs::is_regular_file(f, ec)) r.missing_material_files.push_back(f);
+            if (!fs::is_regular_file(f, ec)) r.missing_dependencies.push_back(f);
     };
-    // The OBJ parsed (no cache, an entry that is not a regular file, a miss); its material files.
+    // The file parsed (no cache, an entry that is not a regular file, a miss); its dependencies.
     auto parse = [&]() {
-        std::vector<std::string> mtl_files;
-        r.mesh = load_obj(obj_path, &r.warnings, &mtl_files, progress);
-        r.scene_hash = scene_hash(r.mesh);
-        note_materials(mtl_files);
-        return mtl_files;
+        std::vector<std::string> files;
+        r.scene = parser(&r.warnings, &files);
+        const bool one_mesh = r.scene.instances.size() == 1 && r.scene.instances[0].transform.is_identity();
+        r.scene_hash = one_mesh ? scene_hash(r.scene.meshes[r.scene.instances[0].mesh]) : "";
+        note_dependencies(files);
+        return files;
     };
     if (cache_dir.empty()) {
         parse();
         return r;
     }
     bool exists = false;
-    const uint64_t obj_hash = hash_file(obj_path, &exists);
-    if (!exists) throw Error("cannot open '" + obj_path + "': " + std::strerror(ENOENT));
-    r.cache_file = entry_path(cache_dir, obj_path);
+    const uint64_t file_hash = hash_file(path, &exists);
+    if (!exists) throw Error("cannot open '" + path + "': " + std::strerror(ENOENT));
+    r.cache_file = entry_path(cache_dir, path, loader_version);
     std::error_code ec;
     const fs::file_status entry = fs::symlink_status(r.cache_file, ec);
     if (fs::exists(entry) && !fs::is_regular_file(entry)) {
@@ -352,32 +385,50 @@ SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_
     if (fs::exists(entry)) {
         try {
             Entry e = parse_entry(read_whole(r.cache_file));
-            if (e.h.loader_version == kObjLoaderVersion && e.h.obj_hash == obj_hash && dependencies_unchanged(e.deps)) {
-                r.mesh = std::move(e.mesh);
+            if (e.h.loader_version == loader_version && e.h.obj_hash == file_hash && dependencies_unchanged(e.deps)) {
+                r.scene = std::move(e.scene);
                 r.warnings = std::move(e.warnings);
-                r.scene_hash = accel::hash_hex(e.h.scene_hash);
+                r.scene_hash = e.h.scene_hash ? accel::hash_hex(e.h.scene_hash) : "";
                 r.from_cache = true;
                 std::vector<std::string> files;
                 for (const Dependency& d : e.deps) files.push_back(d.path);
-                note_materials(files);
+                note_dependencies(files);
                 return r;
             }
         } catch (const Unusable& u) {
             r.cache_warning = "scene cache entry '" + r.cache_file + "' ignored and rebuilt: " + u.why;
         }
     }
-    const std::vector<std::string> mtl_files = parse();
+    const std::vector<std::string> files = parse();
     std::vector<Dependency> deps;
-    for (const std::string& m : mtl_files) {
+    for (const std::string& m : files) {
         Dependency d{m, false, 0};
         d.hash = dependency_hash(m, &d.exists);
         deps.push_back(std::move(d));
     }
     try {
-        write_entry(r.cache_file, obj_path, obj_hash, deps, r, writer);
+        write_entry(r.cache_file, path, file_hash, loader_version, deps, r, writer);
     } catch (const Error& e) {
         r.cache_warning = std::string("scene cache not written: ") + e.what();
     }
+    return r;
+}
+
+SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
+                          const LoadProgress& progress) {
+    CachedScene c = load_cached(obj_path, kObjLoaderVersion, cache_dir, writer,
+                                [&](std::vector<std::string>* warnings, std::vector<std::string>* files) {
+                                    return single_instance(load_obj(obj_path, warnings, files, progress));
+                                });
+    SceneLoad r;
+    r.mesh = single_mesh(std::move(c.scene), /*allow_flatten=*/true, "'" + obj_path + "'");
+    r.warnings = std::move(c.warnings);
+    r.material_files = std::move(c.dependencies);
+    r.missing_material_files = std::move(c.missing_dependencies);
+    r.scene_hash = std::move(c.scene_hash);
+    r.from_cache = c.from_cache;
+    r.cache_file = std::move(c.cache_file);
+    r.cache_warning = std::move(c.cache_warning);
     return r;
 }
 

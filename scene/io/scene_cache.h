@@ -8,15 +8,17 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "scene/io/obj_loader.h"
 #include "scene/mesh.h"
+#include "scene/scene.h"
 
 namespace bvhlab::scene {
 
-constexpr uint32_t kSceneCacheVersion = 3;  // 2: the renderer's material parameters; 3: texcoords
+constexpr uint32_t kSceneCacheVersion = 4;  // 2: material parameters; 3: texcoords; 4: meshes, instances, camera
 
 /// $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab, else $HOME/.cache/bvhlab ("" when none is set).
 std::string default_scene_cache_dir();
@@ -48,6 +50,30 @@ struct SceneLoad {
 /// `progress` reports a parse as load_obj's does (a hit is not reported).
 SceneLoad load_obj_cached(const std::string& obj_path, const std::string& cache_dir, const std::string& writer,
                           const LoadProgress& progress = {});
+
+/// What load_cached did, for any format.
+struct CachedScene {
+    InstancedScene scene;
+    std::vector<std::string> warnings;  ///< the parser's, cached ones included
+    /// The files the scene file depends on (an OBJ's material files; the files an importer opened
+    /// beside the scene), and which of them do not exist.
+    std::vector<std::string> dependencies, missing_dependencies;
+    std::string scene_hash;  ///< scene_hash of the mesh of a one-mesh scene (one identity instance), else ""
+    bool from_cache = false;
+    std::string cache_file;
+    std::string cache_warning;
+};
+
+/// Parses a scene file: the scene, with warnings and the files it depends on appended.
+using SceneParser =
+    std::function<InstancedScene(std::vector<std::string>* warnings, std::vector<std::string>* dependencies)>;
+
+/// Loads `path` through the cache in `cache_dir` ("" = no cache: `parse` alone), as
+/// load_obj_cached does for OBJ files: an entry is used only when the file's bytes, each
+/// dependency's bytes (or its absence) and `loader_version` are those it was made from; a
+/// damaged, foreign or unreadable entry is never trusted and never fatal.
+CachedScene load_cached(const std::string& path, uint32_t loader_version, const std::string& cache_dir,
+                        const std::string& writer, const SceneParser& parse);
 
 /// One entry of a cache folder, as `bvhlab cache info` shows it.
 struct SceneCacheEntry {

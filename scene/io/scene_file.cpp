@@ -2,6 +2,7 @@
 // Assimp input: nodes to instances, aiMaterials to the renderer's parameters, the first camera.
 #include "scene/io/scene_file.h"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 
@@ -20,6 +22,8 @@
 #include "scene/io/atomic_file.h"
 
 namespace bvhlab::scene {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -31,6 +35,18 @@ std::string lower_extension(const std::string& path) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
 }
+
+/// Assimp's file system, recording every file the importer opens (a glTF's buffers, an
+/// OBJ-like format's material files): the scene cache's dependencies.
+class RecordingIO : public Assimp::DefaultIOSystem {
+public:
+    std::vector<std::string> opened;
+    Assimp::IOStream* Open(const char* file, const char* mode) override {
+        Assimp::IOStream* s = DefaultIOSystem::Open(file, mode);
+        if (s) opened.emplace_back(file);
+        return s;
+    }
+};
 
 [[noreturn]] void fail(const std::string& path, const std::string& why) { throw Error("'" + path + "': " + why); }
 
@@ -225,24 +241,19 @@ const std::vector<std::string>& supported_gltf_extensions() {
 
 SceneFileLoad load_scene_file(const std::string& path, const std::string& cache_dir, const std::string& writer,
                               const LoadProgress& progress) {
-    SceneFileLoad out;
-    if (!is_obj_path(path)) {
-        out.scene = load_assimp(path, &out.warnings);
-        return out;
-    }
-    SceneLoad load = load_obj_cached(path, cache_dir, writer, progress);
-    out.scene = single_instance(std::move(load.mesh));
-    out.warnings = std::move(load.warnings);
-    out.material_files = std::move(load.material_files);
-    out.missing_material_files = std::move(load.missing_material_files);
-    out.scene_hash = std::move(load.scene_hash);
-    out.from_cache = load.from_cache;
-    out.cache_file = std::move(load.cache_file);
-    out.cache_warning = std::move(load.cache_warning);
-    return out;
+    if (is_obj_path(path))
+        return load_cached(path, kObjLoaderVersion, cache_dir, writer,
+                           [&](std::vector<std::string>* warnings, std::vector<std::string>* files) {
+                               return single_instance(load_obj(path, warnings, files, progress));
+                           });
+    return load_cached(path, kAssimpLoaderVersion, cache_dir, writer,
+                       [&](std::vector<std::string>* warnings, std::vector<std::string>* files) {
+                           return load_assimp(path, warnings, files);
+                       });
 }
 
-InstancedScene load_assimp(const std::string& path, std::vector<std::string>* warnings) {
+InstancedScene load_assimp(const std::string& path, std::vector<std::string>* warnings,
+                           std::vector<std::string>* dependencies) {
     if (const std::string p = regular_file_problem(path); !p.empty()) fail(path, p);
     const std::string ext = lower_extension(path);
     Assimp::Importer importer;
@@ -254,8 +265,19 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
     if (gltf) check_gltf_extensions(path, ext == ".glb", warnings);
 
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    auto* io = new RecordingIO;  // the importer owns it
+    importer.SetIOHandler(io);
     const aiScene* as =
         importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+    if (dependencies) {
+        std::error_code ec;
+        const fs::path self = fs::weakly_canonical(fs::absolute(path), ec);
+        for (const std::string& f : io->opened) {
+            const fs::path p = fs::weakly_canonical(fs::absolute(f), ec);
+            if (p != self && std::find(dependencies->begin(), dependencies->end(), p.string()) == dependencies->end())
+                dependencies->push_back(p.string());
+        }
+    }
     if (!as) {
         const std::string why = first_line(importer.GetErrorString());
         // Assimp says this when a file's only primitives are points or lines.

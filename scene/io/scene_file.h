@@ -33,22 +33,19 @@ bool is_obj_path(const std::string& path);
 /// implement, a file with no triangles, a material outside the renderer's domain.
 /// Non-fatal notes (embedded textures, glTF extensions used but ignored, instances dropped for a
 /// singular transform) are appended to `warnings`.
-InstancedScene load_assimp(const std::string& path, std::vector<std::string>* warnings = nullptr);
+/// The files Assimp opened besides `path` (a glTF's buffers, say) are appended to
+/// `dependencies`: the scene cache checks them as it checks an OBJ's material files.
+InstancedScene load_assimp(const std::string& path, std::vector<std::string>* warnings = nullptr,
+                           std::vector<std::string>* dependencies = nullptr);
 
-/// What load_scene_file did: the scene, and for OBJ files what load_obj_cached says.
-struct SceneFileLoad {
-    InstancedScene scene;
-    std::vector<std::string> warnings;
-    std::vector<std::string> material_files, missing_material_files;  ///< OBJ: its `mtllib` files
-    std::string scene_hash;   ///< OBJ: scene_hash of its mesh; "" for other formats
-    bool from_cache = false;  ///< the scene cache served it
-    std::string cache_file;   ///< the cache entry read or written ("" when none)
-    std::string cache_warning;
-};
+/// What load_scene_file did: the scene, its warnings, the files it depends on (an OBJ's
+/// `mtllib` files; the files Assimp opened beside the scene) and what the cache did.
+using SceneFileLoad = CachedScene;
 
-/// Any scene file: an OBJ through load_obj_cached (the cache in `cache_dir`, "" for none, with
-/// `writer` stamped in entries written), as a single instance; any other format through
-/// load_assimp (not cached). Errors as those functions throw them.
+/// Any scene file through the scene cache in `cache_dir` ("" for none, with `writer` stamped in
+/// entries written): an OBJ through load_obj as a single instance (kObjLoaderVersion), any other
+/// format through load_assimp (kAssimpLoaderVersion), each cached by load_cached.
+/// Errors as those functions throw them.
 SceneFileLoad load_scene_file(const std::string& path, const std::string& cache_dir, const std::string& writer,
                               const LoadProgress& progress = {});
 

@@ -13,6 +13,8 @@
 #include "accel/core/check.h"
 #include "accel/core/checksum.h"
 #include "scene/io/obj_loader.h"
+#include "scene/io/scene_file.h"
+#include "scene/scene.h"
 #include "tests/support/test_support.h"
 
 namespace bvhlab::scene {
@@ -222,6 +224,116 @@ TEST(SceneCache, FileHashSeesEveryByte) {
     bool exists = true;
     EXPECT_EQ(hash_file((fx.dir / "none").string(), &exists), 0u);
     EXPECT_FALSE(exists);
+}
+
+}  // namespace bvhlab::scene
+
+namespace bvhlab::scene {
+
+namespace {
+
+/// data/instances.gltf with its buffer moved into buffer.bin beside it, in a fresh folder.
+struct GltfFixture {
+    fs::path dir, gltf, bin, cache;
+    GltfFixture() {
+        dir = fs::temp_directory_path() / ("bvhlab_scene_cache_gltf_" + std::to_string(getpid()) + "_" +
+                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+        gltf = dir / "scene.gltf";
+        bin = dir / "buffer.bin";
+        cache = dir / "cache";
+        std::string text = test::read_file_bytes(test::data_dir() + "/instances.gltf");
+        const std::string prefix = "data:application/octet-stream;base64,";
+        const size_t at = text.find(prefix), end = text.find('"', at);
+        std::ofstream(bin, std::ios::binary)
+            << base64_decode(text.substr(at + prefix.size(), end - at - prefix.size()));
+        text.replace(at, end - at, "buffer.bin");
+        std::ofstream(gltf, std::ios::binary) << text;
+    }
+    ~GltfFixture() { fs::remove_all(dir); }
+    SceneFileLoad load() const { return load_scene_file(gltf.string(), cache.string(), "test-writer"); }
+    static std::string base64_decode(const std::string& in) {
+        std::string out;
+        int val = 0, bits = -8;
+        for (unsigned char c : in) {
+            const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+            const char* p = std::strchr(table, c);
+            if (!p || c == 0) break;
+            val = (val << 6) + int(p - table);
+            bits += 6;
+            if (bits >= 0) {
+                out.push_back(char((val >> bits) & 0xff));
+                bits -= 8;
+            }
+        }
+        return out;
+    }
+};
+
+void expect_same_scene(const InstancedScene& a, const InstancedScene& b) {
+    ASSERT_EQ(a.meshes.size(), b.meshes.size());
+    for (size_t m = 0; m < a.meshes.size(); ++m) {
+        EXPECT_EQ(a.meshes[m].indices, b.meshes[m].indices);
+        EXPECT_EQ(a.meshes[m].material_ids, b.meshes[m].material_ids);
+        EXPECT_EQ(a.meshes[m].texcoords, b.meshes[m].texcoords);
+        EXPECT_EQ(scene_hash(a.meshes[m]), scene_hash(b.meshes[m]));
+    }
+    ASSERT_EQ(a.instances.size(), b.instances.size());
+    for (size_t i = 0; i < a.instances.size(); ++i) {
+        EXPECT_TRUE(a.instances[i].transform == b.instances[i].transform);
+        EXPECT_EQ(a.instances[i].mesh, b.instances[i].mesh);
+    }
+    ASSERT_EQ(a.materials.size(), b.materials.size());
+    for (size_t i = 0; i < a.materials.size(); ++i) {
+        EXPECT_EQ(a.materials[i].name, b.materials[i].name);
+        EXPECT_EQ(a.materials[i].illum, b.materials[i].illum);
+        EXPECT_EQ(a.materials[i].dissolve, b.materials[i].dissolve);
+        EXPECT_EQ(a.materials[i].emission.y, b.materials[i].emission.y);
+    }
+    ASSERT_EQ(a.camera.has_value(), b.camera.has_value());
+    if (a.camera) {
+        EXPECT_EQ(a.camera->eye.z, b.camera->eye.z);
+        EXPECT_EQ(a.camera->fov_y_deg, b.camera->fov_y_deg);
+    }
+}
+
+}  // namespace
+
+// A glTF's converted scene (meshes, instances, materials, camera) is cached; its external buffer
+// is a dependency: changing it is a miss, and the entry is written again.
+TEST(SceneCache, CachesConvertedGltfScenesAndWatchesTheirBuffers) {
+    GltfFixture f;
+    const SceneFileLoad first = f.load();
+    EXPECT_FALSE(first.from_cache);
+    EXPECT_EQ(first.cache_warning, "");
+    ASSERT_EQ(first.dependencies.size(), 1u) << "the buffer Assimp opened";
+    EXPECT_EQ(fs::path(first.dependencies[0]).filename(), "buffer.bin");
+    EXPECT_TRUE(first.scene.is_instanced());
+    const SceneFileLoad second = f.load();
+    EXPECT_TRUE(second.from_cache);
+    expect_same_scene(first.scene, second.scene);
+    expect_same_scene(first.scene, load_assimp(f.gltf.string()));
+    EXPECT_EQ(second.dependencies, first.dependencies);
+    // A changed buffer (the first cube vertex moved) is a miss, with the new geometry.
+    std::string bytes = test::read_file_bytes(f.bin.string());
+    const float moved = 0.25f;
+    std::memcpy(bytes.data(), &moved, sizeof moved);
+    std::ofstream(f.bin, std::ios::binary) << bytes;
+    const SceneFileLoad third = f.load();
+    EXPECT_FALSE(third.from_cache);
+    EXPECT_NE(scene_hash(flatten(third.scene)), scene_hash(flatten(first.scene)));
+    EXPECT_TRUE(f.load().from_cache);
+    // A PLY: one mesh, no dependencies, its hash kept with the entry.
+    const std::string ply = (f.dir / "cube.ply").string();
+    fs::copy_file(test::data_dir() + "/cube_binary.ply", ply);
+    const SceneFileLoad p1 = load_scene_file(ply, f.cache.string(), "w"),
+                        p2 = load_scene_file(ply, f.cache.string(), "w");
+    EXPECT_FALSE(p1.from_cache);
+    EXPECT_TRUE(p2.from_cache);
+    EXPECT_EQ(p1.scene_hash, scene_hash(flatten(p1.scene)));
+    EXPECT_EQ(p2.scene_hash, p1.scene_hash);
+    EXPECT_TRUE(p2.dependencies.empty());
 }
 
 }  // namespace bvhlab::scene

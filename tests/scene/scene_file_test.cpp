@@ -322,7 +322,7 @@ TEST(SceneFile, LoadSceneFileDispatchesOnTheExtension) {
     EXPECT_FALSE(is_obj_path("obj"));
     const SceneFileLoad obj = load_scene_file(test::data_dir() + "/cornell_box.obj", "", "test");
     EXPECT_EQ(obj.scene.triangle_count(), 32u);
-    EXPECT_FALSE(obj.material_files.empty());
+    EXPECT_FALSE(obj.dependencies.empty());
     EXPECT_EQ(obj.scene_hash, scene_hash(flatten(obj.scene)));
     EXPECT_EQ(obj.scene.materials.size(), load_obj(test::data_dir() + "/cornell_box.obj").materials.size());
     EXPECT_FALSE(obj.scene.materials.empty()) << "the OBJ's materials become the scene's";

@@ -70,6 +70,15 @@ timeout 60 "$bin" cache clear >/dev/null
 check "cache clear leaves the FIFO" [ -p "$entry" ]
 rm -f "$entry"
 
+# A glTF's converted scene is cached too: the second run is served, with the same instances.
+data=$(dirname "$0")/../../data
+g1=$("$bin" -q build "$data/instances.glb" --json | tail -1)
+g2=$("$bin" -q build "$data/instances.glb" --json | tail -1)
+check "a glTF's first load is a miss" [ "$(echo "$g1" | field scene_cache)" = miss ]
+check "a glTF's second load is a hit" [ "$(echo "$g2" | field scene_cache)" = hit ]
+check "with the same instances" [ "$(echo "$g2" | field instances)" = "$(echo "$g1" | field instances)" ]
+check "and the same scene hash" [ "$(echo "$g2" | field scene_hash)" = "$(echo "$g1" | field scene_hash)" ]
+
 "$bin" cache clear >/dev/null
 left=$("$bin" cache info --json | tail -1 | field entries)
 check "cache clear empties it ($left entries)" [ "$left" -eq 0 ]

@@ -178,7 +178,8 @@ std::vector<std::string> catalogue_scene_names() {
 std::vector<scene::NamedFile> Scene::input_files() const {
     if (file.empty()) return {};  // generated: no files
     std::vector<scene::NamedFile> files{{"the scene", file}};
-    for (const std::string& m : material_files) files.push_back({"material file", m});
+    const char* kind = scene::is_obj_path(file) ? "material file" : "a file the scene reads";
+    for (const std::string& m : material_files) files.push_back({kind, m});
     const std::string dir = std::filesystem::path(file).parent_path().string();
     for (const scene::Material& m : mesh.materials)
         if (!m.diffuse_texture.empty())
@@ -203,6 +204,16 @@ uint64_t spec_number(const std::string& spec, const std::string& text, const cha
     return std::stoull(text);
 }
 
+/// The count (parts[at], in 1..max) and the optional seed after it (default 1) of a gen: spec.
+std::pair<uint64_t, uint64_t> count_and_seed(const std::string& spec, const std::vector<std::string>& parts, size_t at,
+                                             const char* what, uint64_t max, const char* max_text) {
+    const uint64_t n = spec_number(spec, parts[at], what);
+    const uint64_t seed = parts.size() == at + 2 ? spec_number(spec, parts[at + 1], "the seed") : 1;
+    if (n < 1 || n > max)
+        throw Error("generated-scene spec '" + spec + "': " + what + " must be 1.." + max_text + ", not " + parts[at]);
+    return {n, seed};
+}
+
 }  // namespace
 
 Scene load_scene(const std::string& spec, const Globals& g) {
@@ -218,10 +229,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         if (parts.size() < 4 || parts.size() > 5 || parts[2].empty())
             throw Error("bad generated-scene spec '" + spec +
                         "' (expected gen:instances:SCENE:N[:SEED], SCENE a scene name or file without ':')");
-        const uint64_t n = spec_number(spec, parts[3], "the instance count");
-        const uint64_t seed = parts.size() == 5 ? spec_number(spec, parts[4], "the seed") : 1;
-        if (n < 1 || n > (1u << 24))
-            throw Error("generated-scene spec '" + spec + "': the instance count must be 1..2^24, not " + parts[3]);
+        const auto [n, seed] = count_and_seed(spec, parts, 3, "the instance count", 1u << 24, "2^24");
         Scene base = load_scene(parts[2], g);
         s.file = base.file;
         s.material_files = base.material_files;
@@ -236,10 +244,7 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         if (parts.size() < 3 || parts.size() > 4)
             throw Error("bad generated-scene spec '" + spec +
                         "' (expected gen:soup|structured:TRIANGLES[:SEED] or gen:instances:SCENE:N[:SEED])");
-        const uint64_t n = spec_number(spec, parts[2], "the triangle count");
-        const uint64_t seed = parts.size() == 4 ? spec_number(spec, parts[3], "the seed") : 1;
-        if (n < 1 || n > (1ull << 30))
-            throw Error("generated-scene spec '" + spec + "': the triangle count must be 1..2^30, not " + parts[2]);
+        const auto [n, seed] = count_and_seed(spec, parts, 2, "the triangle count", 1ull << 30, "2^30");
         Stage st(g, "generating " + spec);
         placed = scene::single_instance(scene::make_procedural(scene::parse_procedural_kind(parts[1]), n, seed));
         s.name = spec;
@@ -280,11 +285,9 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         placed = std::move(load.scene);
         s.hash = load.scene_hash;
         s.load_ms = 1000.0 * st.seconds();
-        s.scene_cache = cache_dir.empty() || !scene::is_obj_path(file.string()) ? "off"
-                        : load.from_cache                                       ? "hit"
-                                                                                : "miss";
-        s.material_files = load.material_files;
-        s.missing_material_files = load.missing_material_files;
+        s.scene_cache = cache_dir.empty() ? "off" : load.from_cache ? "hit" : "miss";
+        s.material_files = load.dependencies;
+        s.missing_material_files = load.missing_dependencies;
         if (!g.quiet) {
             if (load.from_cache)
                 std::fprintf(stderr, "[bvhlab] served by the scene cache (%s)\n", load.cache_file.c_str());

@@ -33,7 +33,7 @@ namespace cli {
 struct Globals {
     bool json = false;
     bool quiet = false;
-    bool no_scene_cache = false;  ///< --no-scene-cache: parse the OBJ, neither read nor write the cache
+    bool no_scene_cache = false;  ///< --no-scene-cache: parse the scene file, neither read nor write the cache
     bool flatten = false;         ///< --flatten: an instanced scene becomes one mesh
 };
 
@@ -95,7 +95,7 @@ struct Scene {
     std::string hash;
     double load_ms = 0.0;                     ///< loading (or generating) the mesh
     std::string scene_cache = "off";          ///< hit (the cache served the load), miss (parsed, then cached) or off
-    std::vector<std::string> material_files;  ///< the `mtllib` files it names
+    std::vector<std::string> material_files;  ///< the `mtllib` files it names (other formats: the files Assimp opened)
     std::vector<std::string> missing_material_files;  ///< those that do not exist
 
     /// The files it was read from (the scene file, its material files and map_Kd textures),

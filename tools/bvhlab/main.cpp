@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
     app.add_flag("--json", g.json, "print one JSON object per line on stdout");
     app.add_flag("-q,--quiet", g.quiet, "no progress on stderr");
     app.add_flag("--no-scene-cache", g.no_scene_cache,
-                 "parse OBJ files, neither reading nor writing the scene cache ($BVHLAB_CACHE_DIR)");
+                 "parse scene files, neither reading nor writing the scene cache ($BVHLAB_CACHE_DIR)");
     app.add_flag("--flatten", g.flatten,
                  "make an instanced scene (a mesh placed more than once: glTF nodes, gen:instances) one mesh");
     app.set_version_flag("--version", std::string(bvhlab::git_commit()));
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
         sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
         if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen") {
-            sub->add_flag("--no-scene-cache", g.no_scene_cache, "parse OBJ files, bypassing the scene cache");
+            sub->add_flag("--no-scene-cache", g.no_scene_cache, "parse scene files, bypassing the scene cache");
             sub->add_flag("--flatten", g.flatten, "make an instanced scene one mesh");
         }
     }
