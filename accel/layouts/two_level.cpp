@@ -115,6 +115,10 @@ TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilde
     cfg.min_leaf_size = 1;
     cfg.max_leaf_size = 1;
     out.tlas = convert_bvh2_nodes(BinnedSahBuilder(cfg).build(std::move(refs)));
+    // The traversal enters a TLAS leaf's first instance only.
+    for (const Bvh2Node& n : out.tlas.nodes)
+        for (int32_t ref : n.child)
+            BVHLAB_CHECK(ref >= 0 || Bvh2Node::leaf_count(ref) == 1, "a TLAS leaf of more than one instance");
     return out;
 }
 

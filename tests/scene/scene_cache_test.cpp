@@ -255,12 +255,13 @@ struct GltfFixture {
     SceneFileLoad load() const { return load_scene_file(gltf.string(), cache.string(), "test-writer"); }
     static std::string base64_decode(const std::string& in) {
         std::string out;
-        int val = 0, bits = -8;
+        uint32_t val = 0;  // the last 24 bits read
+        int bits = -8;
         for (unsigned char c : in) {
             const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
             const char* p = std::strchr(table, c);
             if (!p || c == 0) break;
-            val = (val << 6) + int(p - table);
+            val = ((val << 6) | uint32_t(p - table)) & 0xffffffu;
             bits += 6;
             if (bits >= 0) {
                 out.push_back(char((val >> bits) & 0xff));
