@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Kernel 'two-level': instanced scenes. One thread per ray running the traversal the CPU tracer
-// runs (traverse_two_level: the TLAS walk; at each instance the ray moves into the instance's
-// space and the mesh's BLAS is walked with the shared BVH2 traversal, generic loads).
+// runs (traverse_two_level: one loop and one stack for both levels; at an instance the ray moves
+// into the instance's space and the mesh's BLAS is walked above a stack mark, generic loads).
 #include "traversal/kernels/launch_helpers.cuh"
 
 namespace bvhlab::trav {
@@ -22,8 +22,8 @@ void launch(const LaunchArgs& a) {
 }  // namespace
 
 BVHLAB_REGISTER_KERNEL({"two-level", Layout::kTwoLevel,
-                        "instanced scenes: one thread per ray, the CPU tracer's two-level traversal (TLAS walk, ray "
-                        "moved into each instance's space, the BLAS walked as 'plain' does)",
+                        "instanced scenes: one thread per ray, the CPU tracer's two-level traversal (one loop and one "
+                        "stack for both levels, the ray moved into each instance's space)",
                         kBvh2StackSize, false, 128, launch, 1024, false, true, true});
 
 }  // namespace bvhlab::trav
