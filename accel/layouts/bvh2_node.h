@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "accel/core/aabb.h"
 #include "accel/core/hd.h"
 #include "accel/layouts/woop_tri.h"
 
@@ -33,6 +34,11 @@ struct alignas(16) Bvh2Node {
     }
     BVHLAB_HD static uint32_t leaf_first(int32_t ref) { return uint32_t(~ref) >> kLeafCountBits; }
     BVHLAB_HD static uint32_t leaf_count(int32_t ref) { return (uint32_t(~ref) & (kMaxLeafCount - 1)) + 1; }
+    /// The box of child `slot` (0 or 1); empty (inverted) in a root leaf's second slot.
+    AABB child_box(int slot) const {
+        return slot == 0 ? AABB{{c0_lo_x, c0_lo_y, c0_lo_z}, {c0_hi_x, c0_hi_y, c0_hi_z}}
+                         : AABB{{c1_lo_x, c1_lo_y, c1_lo_z}, {c1_hi_x, c1_hi_y, c1_hi_z}};
+    }
 };
 static_assert(sizeof(Bvh2Node) == 64 && alignof(Bvh2Node) == 16, "Bvh2Node layout");
 

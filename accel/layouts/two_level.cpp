@@ -29,14 +29,13 @@ std::vector<AABB> frontier_boxes(const Bvh2& bvh, int levels) {
         const auto [node, level] = todo.back();
         todo.pop_back();
         const Bvh2Node& n = bvh.nodes[size_t(node)];
-        const AABB c[2] = {{{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}},
-                           {{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}}};
         for (int k = 0; k < 2; ++k) {
-            if (c[k].is_empty()) continue;  // a root leaf's second slot
+            const AABB box = n.child_box(k);
+            if (box.is_empty()) continue;  // a root leaf's second slot
             if (n.child[k] >= 0 && level + 1 < levels)
                 todo.push_back({n.child[k], level + 1});
             else
-                out.push_back(c[k]);
+                out.push_back(box);
         }
     }
     return out;

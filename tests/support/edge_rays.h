@@ -71,9 +71,8 @@ inline std::vector<AABB> structure_boxes(const trav::Structure& s) {
     std::vector<AABB> boxes;
     const auto bvh2_boxes = [&boxes](const accel::Bvh2& bvh) {
         for (const accel::Bvh2Node& n : bvh.nodes)
-            for (const AABB& b : {AABB{{n.c0_lo_x, n.c0_lo_y, n.c0_lo_z}, {n.c0_hi_x, n.c0_hi_y, n.c0_hi_z}},
-                                  AABB{{n.c1_lo_x, n.c1_lo_y, n.c1_lo_z}, {n.c1_hi_x, n.c1_hi_y, n.c1_hi_z}}})
-                if (!b.is_empty()) boxes.push_back(b);  // a root leaf's second slot is empty (+-FLT_MAX)
+            for (int slot = 0; slot < 2; ++slot)
+                if (!n.child_box(slot).is_empty()) boxes.push_back(n.child_box(slot));  // a root leaf's 2nd is empty
     };
     if (s.layout == trav::Layout::kBvh2) {
         bvh2_boxes(s.bvh2);

@@ -552,6 +552,8 @@ sed 's/"extensionsUsed"/"extensionsRequired": ["KHR_draco_mesh_compression"], "e
     "$data/instances.gltf" >"$tmp/draco.gltf"
 expect_error gltf-required-extension "draco.gltf': requires the glTF extension KHR_draco_mesh_compression" \
     build --flatten "$tmp/draco.gltf"
+sed 's|"uri": "data:[^"]*"|"uri": "missing.bin"|' "$data/instances.gltf" >"$tmp/nobuffer.gltf"
+expect_error gltf-missing-buffer "nobuffer.gltf': Assimp cannot read it" build --flatten "$tmp/nobuffer.gltf"
 head -c 1000 "$data/instances.glb" >"$tmp/truncated.glb"
 expect_error glb-truncated "truncated.glb': Assimp cannot read it" build --flatten "$tmp/truncated.glb"
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n' \

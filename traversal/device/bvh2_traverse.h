@@ -55,16 +55,13 @@ BVHLAB_HD BVHLAB_FORCEINLINE float slab_entry(float lox, float hix, float loy, f
     return tn <= min_f(tf, tmax) ? tn : INFINITY;
 }
 
-/// The stack walk of a BVH2 over any leaf contents: near child first, each leaf handed to
-/// `leaf(first, count, tmax, hit)` as soon as its box is hit, which tests its entries, may
-/// shorten tmax and set hit, and returns true to end the walk (an any-hit query's first hit).
-/// traverse_bvh2 passes Woop triangles; the two-level traversal passes instances.
-template <class Leaf>
-BVHLAB_HD BVHLAB_FORCEINLINE Hit walk_bvh2(const accel::Bvh2Node* nodes, const Ray& ray, Leaf&& leaf,
-                                           TraversalCounters* counters) {
+/// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
+template <bool kAnyHit>
+BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::WoopTriangle* tris,
+                                   const uint32_t* tri_ids, const Ray& ray, TraversalCounters* counters = nullptr) {
     Hit hit = Hit::miss();
     float tmax = ray.tmax;
-    const Vec3 o = ray.org, inv = safe_reciprocal(ray.dir);
+    const Vec3 o = ray.org, d = ray.dir, inv = safe_reciprocal(ray.dir);
     int32_t stack[kBvh2StackSize];
     int sp = 0;
     int32_t node = 0;
@@ -86,7 +83,17 @@ BVHLAB_HD BVHLAB_FORCEINLINE Hit walk_bvh2(const accel::Bvh2Node* nodes, const R
                 continue;
             }
             if (counters) ++counters->leaves;
-            if (leaf(accel::Bvh2Node::leaf_first(ref), accel::Bvh2Node::leaf_count(ref), tmax, hit)) return hit;
+            const uint32_t first = accel::Bvh2Node::leaf_first(ref);
+            const uint32_t end = first + accel::Bvh2Node::leaf_count(ref);
+            for (uint32_t k = first; k < end; ++k) {
+                if (counters) ++counters->tri_tests;
+                float t, u, v;
+                if (tris[k].intersect(o, d, ray.tmin, tmax, t, u, v)) {
+                    hit = {int32_t(tri_ids[k]), t, u, v};
+                    tmax = t;
+                    if (kAnyHit) return hit;
+                }
+            }
         }
         if (nnext == 2) {
             // Visit the nearer child first; the farther one waits on the stack.
@@ -101,28 +108,6 @@ BVHLAB_HD BVHLAB_FORCEINLINE Hit walk_bvh2(const accel::Bvh2Node* nodes, const R
         }
     }
     return hit;
-}
-
-/// Closest hit (kAnyHit = false) or any hit (kAnyHit = true) of `ray`.
-template <bool kAnyHit>
-BVHLAB_HD inline Hit traverse_bvh2(const accel::Bvh2Node* nodes, const accel::WoopTriangle* tris,
-                                   const uint32_t* tri_ids, const Ray& ray, TraversalCounters* counters = nullptr) {
-    const Vec3 o = ray.org, d = ray.dir;
-    return walk_bvh2(
-        nodes, ray,
-        [&](uint32_t first, uint32_t count, float& tmax, Hit& hit) {
-            for (uint32_t k = first; k < first + count; ++k) {
-                if (counters) ++counters->tri_tests;
-                float t, u, v;
-                if (tris[k].intersect(o, d, ray.tmin, tmax, t, u, v)) {
-                    hit = {int32_t(tri_ids[k]), t, u, v};
-                    tmax = t;
-                    if (kAnyHit) return true;
-                }
-            }
-            return false;
-        },
-        counters);
 }
 
 /// The same over a view.
