@@ -7,9 +7,12 @@
 Standard library only; the output is deterministic, so running it again changes nothing.
   instances.gltf / instances.glb  three meshes: a cube of two primitives (plastic, glass) placed
                                   by three nodes (one under a rotated parent), a gold floor quad
-                                  and a lamp quad placed once each; a perspective camera
+                                  (with vertex normals) and a lamp quad placed once each; a perspective camera
                                   (yfov 0.8, aspect 1.5) at (0.5, 0.5, 6) looking down -z.
   cube_ascii.ply / cube_binary.ply  the same unit cube (8 vertices, 6 quads) in both encodings.
+  smooth_spheres.obj              five icospheres of radius 1 (320 triangles each; white, plastic,
+                                  glass, metal, mirror of glass_mirror.mtl) with their analytic
+                                  normals as `vn`, on a floor and under a lamp that have none.
 """
 import base64
 import json
@@ -51,6 +54,7 @@ def gltf_document():
     cube_idx_b = add(flat(CUBE_TRIS[6:]), "H", 18, 5123, "SCALAR", 34963)
     quad_pos = add(flat(QUAD_V), "f", 12, 5126, "VEC3", 34962, ([-2, 0, -2], [2, 0, 2]))
     quad_uv = add(flat(QUAD_UV), "f", 8, 5126, "VEC2", 34962)
+    quad_normal = add([0.0, 1.0, 0.0] * 4, "f", 12, 5126, "VEC3", 34962)
     quad_idx = add(flat(QUAD_TRIS), "H", 6, 5123, "SCALAR", 34963)
     lamp_pos = add(flat(LAMP_V), "f", 12, 5126, "VEC3", 34962, ([0, 3, 0], [1, 3, 1]))
     s = math.sqrt(0.5)
@@ -73,7 +77,8 @@ def gltf_document():
         "meshes": [
             {"name": "cube", "primitives": [{"attributes": {"POSITION": cube_pos}, "indices": cube_idx_a, "material": 0},
                                             {"attributes": {"POSITION": cube_pos}, "indices": cube_idx_b, "material": 3}]},
-            {"name": "quad", "primitives": [{"attributes": {"POSITION": quad_pos, "TEXCOORD_0": quad_uv},
+            {"name": "quad", "primitives": [{"attributes": {"POSITION": quad_pos, "NORMAL": quad_normal,
+                                                            "TEXCOORD_0": quad_uv},
                                              "indices": quad_idx, "material": 1}]},
             {"name": "lamp", "primitives": [{"attributes": {"POSITION": lamp_pos}, "indices": quad_idx, "material": 2}]},
         ],
@@ -128,12 +133,63 @@ def write_ply(path, binary):
             f.write(struct.pack("<B4i", 4, *q) if binary else ("4 %d %d %d %d\n" % q).encode())
 
 
+def icosphere(levels):
+    """Vertices on the unit sphere and triangles of an icosahedron subdivided `levels` times."""
+    t = (1.0 + math.sqrt(5.0)) / 2.0
+    unit = lambda p: tuple(c / math.sqrt(sum(x * x for x in p)) for c in p)
+    v = [unit(p) for p in [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+                           (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+         (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(levels):
+        mid = {}
+
+        def midpoint(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                v.append(unit(tuple((x + y) / 2 for x, y in zip(v[a], v[b]))))
+                mid[key] = len(v) - 1
+            return mid[key]
+        g = []
+        for a, b, c in f:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            g += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = g
+    return v, f
+
+
+def write_smooth_spheres(path):
+    lines = ["# Shading-normal test scene, written by bvhlab data/make_format_scenes.py: five icospheres of",
+             "# radius 1 (320 triangles each) with their analytic normals as vn, one per renderer BSDF, on a",
+             "# floor and under a lamp whose faces have no vn (the geometric normal shades them).",
+             "mtllib glass_mirror.mtl"]
+    fmt = lambda p: " ".join("%.9g" % c for c in p)
+    nv = 0
+    for p in [(-7, -1, -7), (7, -1, -7), (7, -1, 7), (-7, -1, 7), (-1, 6, -1), (1, 6, -1), (1, 6, 1), (-1, 6, 1)]:
+        lines.append("v " + fmt(p))
+    lines += ["usemtl white", "f 1 3 2", "f 1 4 3", "usemtl light", "f 5 6 7", "f 5 7 8"]
+    nv = 8
+    sv, sf = icosphere(2)
+    for k, mtl in enumerate(["white", "plastic", "glass", "metal", "mirror"]):
+        cx = -4.4 + 2.2 * k
+        lines.append("o sphere-" + mtl)
+        lines += ["v " + fmt((cx + x, y, z)) for x, y, z in sv]
+        lines += ["vn " + fmt(n) for n in sv]
+        lines.append("usemtl " + mtl)
+        lines += ["f " + " ".join("%d//%d" % (nv + i + 1, nv + i + 1 - 8) for i in tri) for tri in sf]
+        nv += len(sv)
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
     write_gltf(os.path.join(out, "instances.gltf"))
     write_glb(os.path.join(out, "instances.glb"))
     write_ply(os.path.join(out, "cube_ascii.ply"), binary=False)
     write_ply(os.path.join(out, "cube_binary.ply"), binary=True)
+    write_smooth_spheres(os.path.join(out, "smooth_spheres.obj"))
 
 
 if __name__ == "__main__":

@@ -132,6 +132,8 @@ void RenderScene::load_textures(const TextureOptions& opts) {
 RenderScene::RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures)
     : mesh_(mesh) {
     BVHLAB_CHECK(mesh.triangle_count() > 0, "cannot render a scene with no triangles");
+    BVHLAB_CHECK(mesh.normals.empty() || mesh.normals.size() == 3 * mesh.triangle_count(),
+                 "a mesh's shading normals must be 3 per triangle, or none");
     materials_.push_back(default_material());
     for (const scene::Material& m : mesh.materials) {
         if (const std::string p = scene::material_problem(m); !p.empty())
@@ -237,6 +239,7 @@ SceneView RenderScene::view() const {
     v.vertices = mesh_.vertices.data();
     v.indices = mesh_.indices.data();
     v.material_ids = material_ids_.data();
+    v.normals = mesh_.normals.empty() ? nullptr : mesh_.normals.data();
     v.materials = materials_.data();
     v.lights.tris = light_tris_.data();
     v.lights.table = alias_.data();

@@ -55,6 +55,21 @@ bool count_drop(TriangleCheck check, DropCounts& drops) {
     return check == TriangleCheck::kOk;
 }
 
+Vec3 unit_or_zero(Vec3 n) {
+    const double x = n.x, y = n.y, z = n.z, len = std::sqrt(x * x + y * y + z * z);
+    if (!(len > 0.0) || !std::isfinite(len)) return {0.0f, 0.0f, 0.0f};
+    return {float(x / len), float(y / len), float(z / len)};
+}
+
+void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2) {
+    Vec3 u[3] = {unit_or_zero(n0), unit_or_zero(n1), unit_or_zero(n2)};
+    bool ok = given;
+    for (const Vec3& v : u) ok = ok && (v.x != 0.0f || v.y != 0.0f || v.z != 0.0f);
+    for (Vec3& v : u)
+        if (!ok) v = {0.0f, 0.0f, 0.0f};
+    mesh.normals.insert(mesh.normals.end(), u, u + 3);
+}
+
 bool add_triangle_checked(TriangleMesh& mesh, Vec3 a, Vec3 b, Vec3 c, int32_t material) {
     a = flush_denormals(a);
     b = flush_denormals(b);

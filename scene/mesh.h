@@ -29,6 +29,11 @@ struct TriangleMesh {
     /// Texture coordinates per corner, 6 floats per triangle (u0 v0 u1 v1 u2 v2), when the OBJ
     /// has `vt` lines; empty otherwise. A face without `vt` references gets zeros.
     std::vector<float> texcoords;
+    /// Shading normals per corner, 3 per triangle, when the file gives vertex normals (OBJ `vn`,
+    /// glTF NORMAL, PLY nx ny nz); empty otherwise. Each is a unit vector, or all three corners of a
+    /// triangle are 0 where the file gives that triangle none (the renderer then uses the
+    /// geometric normal). append_corner_normals keeps that rule.
+    std::vector<Vec3> normals;
     std::vector<Material> materials;
     DropCounts dropped;
 
@@ -62,6 +67,14 @@ inline Vec3 flush_denormals(Vec3 v) {
     auto f = [](float x) { return x != 0.0f && std::fabs(x) < 1.17549435e-38f ? 0.0f : x; };  // FLT_MIN; -0 stays
     return {f(v.x), f(v.y), f(v.z)};
 }
+
+/// n as a unit vector (normalised in double precision), or 0 when it is not finite or has no
+/// length.
+Vec3 unit_or_zero(Vec3 n);
+
+/// Appends the shading normals of one triangle's corners to mesh.normals: each made a unit
+/// vector, or all three 0 when any of them is 0, non-finite or missing (`given` false).
+void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2);
 
 /// Appends a triangle unless it has a non-finite vertex or zero area, which it counts in
 /// mesh.dropped instead; denormal coordinates become 0 (flush_denormals). Returns true when

@@ -34,6 +34,16 @@ Transform Transform::inverse() const {
     return inv;
 }
 
+Vec3 Transform::normal(Vec3 n) const {
+    // The cofactor matrix of M is det(M) M^-T: its rows applied to n, with det's sign.
+    const double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
+    const double s = determinant() < 0.0 ? -1.0 : 1.0;
+    const double x = n.x, y = n.y, z = n.z;
+    return unit_or_zero({float(s * ((e * i - f * h) * x + (f * g - d * i) * y + (d * h - e * g) * z)),
+                         float(s * ((c * h - b * i) * x + (a * i - c * g) * y + (b * g - a * h) * z)),
+                         float(s * ((b * f - c * e) * x + (c * d - a * f) * y + (a * e - b * d) * z))});
+}
+
 Transform Transform::operator*(const Transform& inner) const {
     Transform out;
     for (int row = 0; row < 3; ++row) {
@@ -88,10 +98,11 @@ TriangleMesh flatten(const InstancedScene& scene, bool keep_all) {
     TriangleMesh out;
     out.materials = scene.materials;
     out.dropped = scene.dropped;
-    bool texcoords = false;
+    bool texcoords = false, normals = false;
     uint64_t vertices = 0;
     for (const Instance& inst : scene.instances) {
         texcoords = texcoords || !scene.meshes[inst.mesh].texcoords.empty();
+        normals = normals || !scene.meshes[inst.mesh].normals.empty();
         vertices += scene.meshes[inst.mesh].vertices.size();
     }
     if (vertices > 0xffffffffull)
@@ -120,9 +131,23 @@ TriangleMesh flatten(const InstancedScene& scene, bool keep_all) {
                     out.texcoords.insert(out.texcoords.end(), mesh.texcoords.begin() + 6 * t,
                                          mesh.texcoords.begin() + 6 * t + 6);
             }
+            if (normals) {
+                const bool given = !mesh.normals.empty();
+                const Vec3* n = given ? &mesh.normals[3 * t] : nullptr;
+                append_corner_normals(out, given, given ? inst.transform.normal(n[0]) : Vec3{},
+                                      given ? inst.transform.normal(n[1]) : Vec3{},
+                                      given ? inst.transform.normal(n[2]) : Vec3{});
+            }
         }
     }
     return out;
+}
+
+std::vector<uint64_t> instance_first_ids(const InstancedScene& scene) {
+    std::vector<uint64_t> first(1, 0);
+    for (const Instance& inst : scene.instances)
+        first.push_back(first.back() + scene.meshes[inst.mesh].triangle_count());
+    return first;
 }
 
 uint64_t placed_mesh_count(const InstancedScene& scene) {

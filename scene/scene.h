@@ -29,6 +29,10 @@ struct Transform {
         return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
                 m[8] * v.x + m[9] * v.y + m[10] * v.z};
     }
+    /// A surface normal of object space in the world: n by the inverse transpose of M, as a unit
+    /// vector (0 for a zero or non-finite n). Normals of a non-uniformly scaled, sheared or
+    /// mirrored mesh stay perpendicular to its transformed surface.
+    Vec3 normal(Vec3 n) const;
     bool is_identity() const { return *this == Transform{}; }
     /// The determinant of M (0 for a map that flattens space, which no instance may have).
     double determinant() const;
@@ -87,6 +91,11 @@ InstancedScene single_instance(TriangleMesh mesh);
 /// two-level hits (instance i's triangle k is the triangles of instances 0..i-1 plus k), which
 /// is how hits of a two-level BVH are checked in world space.
 TriangleMesh flatten(const InstancedScene& scene, bool keep_all = false);
+
+/// Where each instance's triangles start in the scene-wide numbering of two-level hits and of
+/// flatten(scene, true): first[i] is the triangles of instances 0..i-1, and the last entry (one
+/// past the instances) is every instance's.
+std::vector<uint64_t> instance_first_ids(const InstancedScene& scene);
 
 /// Meshes that some instance places.
 uint64_t placed_mesh_count(const InstancedScene& scene);

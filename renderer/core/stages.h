@@ -32,6 +32,7 @@ struct SceneView {
     const Vec3* vertices;
     const uint32_t* indices;
     const int32_t* material_ids;      ///< per triangle, -1 for none
+    const Vec3* normals;              ///< shading normals, 3 per triangle (TriangleMesh::normals), or null
     const RenderMaterial* materials;  ///< [0] is the default material, then the mesh's
     LightView lights;
     TextureView textures;
@@ -92,6 +93,29 @@ BVHLAB_HD inline Vec3 base_colour(const SceneView& s, const RenderMaterial& m, u
     float u, v;
     triangle_texcoords(s.textures.texcoords, tri, b1, b2, u, v);
     return sample_texture(s.textures.texels, s.textures.info[m.texture], u, v);
+}
+
+/// The shading normal at barycentrics (b1, b2) of triangle `tri`, whose unit geometric normal is
+/// ng: its corners' normals interpolated and normalised, turned to ng's side; ng itself where the
+/// mesh has no normals, the triangle's corners have none (zeros), or they cancel out.
+BVHLAB_HD inline Vec3 shading_normal(const SceneView& s, uint32_t tri, float b1, float b2, Vec3 ng) {
+    if (!s.normals) return ng;
+    const Vec3* c = s.normals + 3 * size_t(tri);
+    const Vec3 n = c[0] * (1.0f - b1 - b2) + c[1] * b1 + c[2] * b2;
+    const float len = length(n);
+    if (!(len > 1e-6f)) return ng;
+    return n * ((dot(n, ng) < 0.0f ? -1.0f : 1.0f) / len);
+}
+
+/// Whether a path that arrives from wo (pointing away from the surface) and leaves along wi
+/// crosses the geometric surface as the shading frame says it does: reflection (both on one side
+/// of the shading normal n) must stay on one side of ng, transmission must cross it. Shading
+/// normals bend the frame; without this guard a reflected ray can leave through the back of the
+/// surface, or light from behind a wall leak onto its front.
+BVHLAB_HD inline bool consistent_sides(Vec3 ng, Vec3 n, Vec3 wo, Vec3 wi) {
+    const bool reflect_shading = (dot(n, wo) > 0.0f) == (dot(n, wi) > 0.0f);
+    const bool reflect_geometric = (dot(ng, wo) > 0.0f) == (dot(ng, wi) > 0.0f);
+    return reflect_shading == reflect_geometric;
 }
 
 BVHLAB_HD inline const RenderMaterial& material_of(const SceneView& s, uint32_t tri) {
@@ -158,9 +182,14 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     const Vec3 pos = ray.org + ray.dir * hit.t;
     const RenderMaterial& m = material_of(s, tri);
     const Vec3 base = base_colour(s, m, tri, hit.u, hit.v);
+    const Vec3 wo = ray.dir * -1.0f;
+    // The shading normal, unless wo sees it from the other side than ng (a grazing view of a
+    // strongly bent normal): BSDFs take wo on the frame's side, so ng then.
+    Vec3 ns = shading_normal(s, tri, hit.u, hit.v, ng);
+    if ((dot(ns, wo) > 0.0f) != (dot(ng, wo) > 0.0f)) ns = ng;
     if (bounce == 0 && albedo) {
         albedo[px] = material_albedo(m, base);
-        normal[px] = dot(ng, ray.dir) > 0.0f ? ng * -1.0f : ng;
+        normal[px] = dot(ns, wo) < 0.0f ? ns * -1.0f : ns;
     }
     Vec3 add = splat(0.0f);
     if (bsdf_counts && max3(m.emission) > 0.0f) {
@@ -174,9 +203,8 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     radiance[px] = radiance[px] + add;
     if (bounce + 1 >= p.max_depth) return out;
 
-    const Vec3 wo = ray.dir * -1.0f;
     const bool opaque = m.type != BsdfType::kGlass;
-    const Vec3 n = opaque && dot(ng, wo) < 0.0f ? ng * -1.0f : ng;
+    const Vec3 n = opaque && dot(ns, wo) < 0.0f ? ns * -1.0f : ns;
     const Frame frame = Frame::around(n);
     const Vec3 wo_l = frame.to_local(wo);
     const uint32_t pixel = pixel_of(p, px), sample = sample_of(p, px);
@@ -217,9 +245,9 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
             pdf_l = cos_l > 0.0f ? triangle_light_pdf(s.lights, lt, 0.5f * larea2, dist, cos_l) : 0.0f;
             le = material_of(s, lt).emission;
         }
-        float pdf_b;
+        float pdf_b = 0.0f;
         const Vec3 wi_l = frame.to_local(dir);
-        Vec3 fcos = eval_bsdf(m, base, wo_l, wi_l, pdf_b);
+        Vec3 fcos = consistent_sides(ng, n, wo, dir) ? eval_bsdf(m, base, wo_l, wi_l, pdf_b) : splat(0.0f);
         if (p.bug == PlantedBug::kNoCosine && wi_l.z > 0.0f) fcos = fcos * (1.0f / wi_l.z);
         if (pdf_l > 0.0f && max3(fcos) > 0.0f) {
             const float w = p.strategy == Strategy::kMis ? power_heuristic(pdf_l, pdf_b) : 1.0f;
@@ -241,6 +269,7 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
         beta = beta * (1.0f / q);
     }
     const Vec3 dir = normalize(frame.to_world(bs.wi));
+    if (!consistent_sides(ng, n, wo, dir)) return out;
     out.next_ray = {offset_point(pos, ng, dir, s.offset), 0.0f, dir, INFINITY};
     out.next_throughput = beta;
     out.next_pdf = bs.delta ? 0.0f : bs.pdf;

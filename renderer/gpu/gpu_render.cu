@@ -20,7 +20,7 @@ using trav::DeviceBuffer;
 
 /// The scene's arrays on the device and the view the stages read.
 struct DeviceScene {
-    DeviceBuffer<Vec3> vertices;
+    DeviceBuffer<Vec3> vertices, normals;
     DeviceBuffer<uint32_t> indices, light_tris;
     DeviceBuffer<int32_t> material_ids;
     DeviceBuffer<RenderMaterial> materials;
@@ -35,6 +35,7 @@ struct DeviceScene {
 
     explicit DeviceScene(const RenderScene& s)
         : vertices(s.mesh().vertices),
+          normals(s.mesh().normals),
           indices(s.mesh().indices),
           light_tris(s.light_tris()),
           material_ids(s.material_ids()),
@@ -53,6 +54,7 @@ struct DeviceScene {
         view.vertices = vertices.data();
         view.indices = indices.data();
         view.material_ids = material_ids.data();
+        view.normals = s.mesh().normals.empty() ? nullptr : normals.data();
         view.materials = materials.data();
         view.lights.tris = light_tris.data();
         view.lights.table = alias.data();

@@ -411,6 +411,11 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
     for (size_t v : non_finite)
         if (v < nv) mesh.vertices[v] = {NAN, NAN, NAN};
     const size_t nt = attrib.texcoords.size() / 2;
+    const size_t nn = attrib.normals.size() / 3;
+    // Normals per corner only when some face refers to one (a file may list vn lines it never uses).
+    bool normals = false;
+    for (const auto& shape : shapes)
+        for (const tinyobj::index_t& ref : shape.mesh.indices) normals = normals || ref.normal_index >= 0;
     for (const auto& shape : shapes) {
         size_t offset = 0;
         for (size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
@@ -422,6 +427,8 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
             }
             uint32_t idx[3];
             float uv[6] = {};
+            Vec3 n[3] = {};
+            bool has_n = true;
             for (int k = 0; k < 3; ++k) {
                 const tinyobj::index_t& ref = shape.mesh.indices[offset + k];
                 const int vi = ref.vertex_index;
@@ -433,6 +440,13 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
                     uv[2 * k] = attrib.texcoords[2 * size_t(ref.texcoord_index)];
                     uv[2 * k + 1] = attrib.texcoords[2 * size_t(ref.texcoord_index) + 1];
                 }
+                if (ref.normal_index >= 0) {
+                    if (size_t(ref.normal_index) >= nn) throw Error("'" + path + "': normal index out of range");
+                    const float* a = &attrib.normals[3 * size_t(ref.normal_index)];
+                    n[k] = {a[0], a[1], a[2]};
+                } else {
+                    has_n = false;
+                }
             }
             offset += 3;
             const TriangleCheck check =
@@ -440,6 +454,7 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
             if (!count_drop(check, mesh.dropped)) continue;
             mesh.indices.insert(mesh.indices.end(), idx, idx + 3);
             if (nt) mesh.texcoords.insert(mesh.texcoords.end(), uv, uv + 6);
+            if (normals) append_corner_normals(mesh, has_n, n[0], n[1], n[2]);
             const int mat = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
             mesh.material_ids.push_back(mat >= 0 && size_t(mat) < materials.size() ? mat : -1);
         }

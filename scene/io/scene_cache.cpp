@@ -192,6 +192,9 @@ Entry parse_entry(const std::string& data) {
         const auto has_texcoords = in.pod<uint8_t>();
         if (has_texcoords > 1) throw Unusable{"its texture-coordinate flag is neither 0 nor 1"};
         if (has_texcoords) in.array(mesh.texcoords, 6 * nt, "texture coordinate");
+        const auto has_normals = in.pod<uint8_t>();
+        if (has_normals > 1) throw Unusable{"its normal flag is neither 0 nor 1"};
+        if (has_normals) in.array(mesh.normals, 3 * nt, "normal");
         for (uint32_t i : mesh.indices)
             if (i >= mesh.vertices.size()) throw Unusable{"an index is out of range"};
         for (int32_t m : mesh.material_ids)
@@ -282,6 +285,8 @@ void write_entry(const std::string& path, const std::string& file, uint64_t file
         out.array(m.material_ids);
         out.pod(uint8_t(!m.texcoords.empty()));
         out.array(m.texcoords);
+        out.pod(uint8_t(!m.normals.empty()));
+        out.array(m.normals);
     }
     out.pod(uint64_t(scene.instances.size()));
     out.array(scene.instances);

@@ -18,7 +18,8 @@
 
 namespace bvhlab::scene {
 
-constexpr uint32_t kSceneCacheVersion = 4;  // 2: material parameters; 3: texcoords; 4: meshes, instances, camera
+// 2: material parameters; 3: texcoords; 4: meshes, instances, camera; 5: shading normals
+constexpr uint32_t kSceneCacheVersion = 5;
 
 /// $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab, else $HOME/.cache/bvhlab ("" when none is set).
 std::string default_scene_cache_dir();

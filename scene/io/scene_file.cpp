@@ -199,7 +199,7 @@ void collect(const aiNode* node, const aiMatrix4x4& parent, std::vector<Placemen
 }
 
 /// Appends the triangles of `meshes` to `out`, through `t`, dropping bad ones.
-void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Transform& t, bool texcoords,
+void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Transform& t, bool texcoords, bool normals,
             bool materials, TriangleMesh& out) {
     for (unsigned id : meshes) {
         const aiMesh& am = *scene.mMeshes[id];
@@ -210,6 +210,8 @@ void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Tra
             out.vertices.push_back(flush_denormals(t.point({p.x, p.y, p.z})));
         }
         const aiVector3D* uv = am.mTextureCoords[0];
+        const aiVector3D* vn = am.mNormals;
+        const auto normal = [&](unsigned v) { return t.normal({vn[v].x, vn[v].y, vn[v].z}); };
         for (unsigned f = 0; f < am.mNumFaces; ++f) {
             const aiFace& face = am.mFaces[f];
             if (face.mNumIndices != 3) continue;
@@ -225,6 +227,9 @@ void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Tra
                     out.texcoords.push_back(uv ? uv[i[k]].x : 0.0f);
                     out.texcoords.push_back(uv ? uv[i[k]].y : 0.0f);
                 }
+            if (normals)
+                append_corner_normals(out, vn != nullptr, vn ? normal(i[0]) : Vec3{}, vn ? normal(i[1]) : Vec3{},
+                                      vn ? normal(i[2]) : Vec3{});
         }
     }
 }
@@ -301,7 +306,11 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
     std::vector<Placement> placements;
     if (as->mRootNode) collect(as->mRootNode, aiMatrix4x4(), placements);
     bool texcoords = false;
-    for (unsigned i = 0; i < as->mNumMeshes; ++i) texcoords = texcoords || as->mMeshes[i]->mTextureCoords[0];
+    bool normals = false;
+    for (unsigned i = 0; i < as->mNumMeshes; ++i) {
+        texcoords = texcoords || as->mMeshes[i]->mTextureCoords[0];
+        normals = normals || as->mMeshes[i]->mNormals;
+    }
 
     std::map<std::vector<unsigned>, uint32_t> uses;
     for (auto it = placements.begin(); it != placements.end();) {
@@ -319,13 +328,13 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
     std::map<std::vector<unsigned>, uint32_t> shared;  // node mesh list -> index into s.meshes
     for (const Placement& p : placements) {
         if (uses[p.meshes] == 1) {
-            append(*as, p.meshes, p.transform, texcoords, materials, world);
+            append(*as, p.meshes, p.transform, texcoords, normals, materials, world);
             continue;
         }
         auto [it, added] = shared.emplace(p.meshes, uint32_t(s.meshes.size() + 1));  // +1: world is first
         if (added) {
             s.meshes.emplace_back();
-            append(*as, p.meshes, Transform{}, texcoords, materials, s.meshes.back());
+            append(*as, p.meshes, Transform{}, texcoords, normals, materials, s.meshes.back());
         }
         s.instances.push_back({p.transform, it->second, 0});
     }

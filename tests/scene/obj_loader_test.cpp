@@ -198,6 +198,29 @@ TEST(ObjLoader, TextureAndNormalReferencesOutOfRange) {
     EXPECT_EQ(scene::load_obj(later.path()).triangle_count(), 1u);
 }
 
+/// The three components of each vector, for comparisons.
+std::vector<float> components(const std::vector<Vec3>& v) {
+    std::vector<float> out;
+    for (const Vec3& x : v) out.insert(out.end(), {x.x, x.y, x.z});
+    return out;
+}
+
+// Shading normals per corner, made unit vectors; a face without vn, or with a zero vn at any
+// corner, gets zeros at all three (the renderer shades it by its geometric normal); a file whose
+// faces refer to no vn has none at all.
+TEST(ObjLoader, KeepsUnitNormalsPerCorner) {
+    test::TempFile obj("vn.obj",
+                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 2\nvn 0 3 4\nvn 0 0 0\n"
+                       "f 1//1 2//2 3//1\nf 2 4 3\nf 2//1 4//3 3//2\nf 1/1/1 2/1/-2 3/1/1\nvt 0 0\n");
+    const scene::TriangleMesh m = scene::load_obj(obj.path());
+    ASSERT_EQ(m.triangle_count(), 4u);
+    const std::vector<float> want = {0, 0, 1, 0, 0.6f, 0.8f, 0, 0, 1, 0, 0, 0, 0, 0,    0,    0, 0, 0,
+                                     0, 0, 0, 0, 0,    0,    0, 0, 0, 0, 0, 1, 0, 0.6f, 0.8f, 0, 0, 1};
+    EXPECT_EQ(components(m.normals), want);
+    test::TempFile unused("unused_vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1 2 3\n");
+    EXPECT_TRUE(scene::load_obj(unused.path()).normals.empty());
+}
+
 // Texture coordinates per corner, as the faces reference them; a face without vt gets zeros,
 // a file without vt none at all, and a vt reference past the end is an error.
 TEST(ObjLoader, KeepsTextureCoordinatesPerCorner) {

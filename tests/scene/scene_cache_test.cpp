@@ -37,7 +37,7 @@ struct Fixture {
               "illum 7\nmap_Kd tex\\red.png\n");
         write(obj,
               "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 2\nv nan 0 0\nvt 0.25 0.5\nvt 1 0\n"
-              "usemtl red\nf 1/1 2/2 3/1\nf 2 4 3\nf 1 5 6\nf 1 2 2\n");
+              "vn 0 0.6 0.8\nusemtl red\nf 1/1/1 2/2/1 3/1/1\nf 2 4 3\nf 1 5 6\nf 1 2 2\n");
     }
     ~Fixture() { fs::remove_all(dir); }
     static void write(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
@@ -48,6 +48,11 @@ struct Fixture {
     }
 };
 
+void expect_same_normals(const TriangleMesh& a, const TriangleMesh& b) {
+    ASSERT_EQ(a.normals.size(), b.normals.size());
+    EXPECT_EQ(0, std::memcmp(a.normals.data(), b.normals.data(), a.normals.size() * sizeof(Vec3)));
+}
+
 void expect_same(const SceneLoad& a, const SceneLoad& b) {
     EXPECT_EQ(a.scene_hash, b.scene_hash);
     ASSERT_EQ(a.mesh.vertices.size(), b.mesh.vertices.size());
@@ -56,6 +61,7 @@ void expect_same(const SceneLoad& a, const SceneLoad& b) {
     EXPECT_EQ(a.mesh.indices, b.mesh.indices);
     EXPECT_EQ(a.mesh.material_ids, b.mesh.material_ids);
     EXPECT_EQ(a.mesh.texcoords, b.mesh.texcoords);
+    expect_same_normals(a.mesh, b.mesh);
     ASSERT_EQ(a.mesh.materials.size(), b.mesh.materials.size());
     for (size_t i = 0; i < a.mesh.materials.size(); ++i) {
         EXPECT_EQ(a.mesh.materials[i].name, b.mesh.materials[i].name);
@@ -105,6 +111,9 @@ TEST(SceneCache, AHitGivesWhatTheParseGave) {
     EXPECT_EQ(second.mesh.triangle_count(), 2u);
     EXPECT_EQ(second.mesh.dropped.total(), 2u);
     EXPECT_EQ(second.mesh.materials.at(0).emission.z, 3.0f);
+    ASSERT_EQ(second.mesh.normals.size(), 6u);  // the first face's vn, zeros for the second's
+    EXPECT_NEAR(second.mesh.normals[1].y, 0.6f, 1e-6f);
+    EXPECT_EQ(second.mesh.normals[5].z, 0.0f);
     expect_same(second, load_obj_cached(fx.obj.string(), "", ""));  // the cache off: a plain parse
     const auto entries = list_scene_cache(fx.cache.string());
     ASSERT_EQ(entries.size(), 1u);
@@ -278,6 +287,7 @@ void expect_same_scene(const InstancedScene& a, const InstancedScene& b) {
         EXPECT_EQ(a.meshes[m].indices, b.meshes[m].indices);
         EXPECT_EQ(a.meshes[m].material_ids, b.meshes[m].material_ids);
         EXPECT_EQ(a.meshes[m].texcoords, b.meshes[m].texcoords);
+        expect_same_normals(a.meshes[m], b.meshes[m]);
         EXPECT_EQ(scene_hash(a.meshes[m]), scene_hash(b.meshes[m]));
     }
     ASSERT_EQ(a.instances.size(), b.instances.size());

@@ -161,6 +161,73 @@ TEST(SceneFile, FlattenPlacesEveryInstanceInTheWorld) {
     EXPECT_EQ(world_triangles(flat), world_triangles(by_hand));
 }
 
+// Normals go through the inverse transpose: under a non-uniform scale, a shear or a mirror the
+// flattened corner normals stay perpendicular to the flattened triangle (M n would not), unit
+// length; an instance of a mesh without normals gets zeros beside one with them.
+TEST(SceneFile, FlattenTurnsNormalsWithTheSurface) {
+    InstancedScene s;
+    TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 1, 0, 0, 0, 1}});
+    const Vec3 n = unit_or_zero(cross(m.vertex(0, 1) - m.vertex(0, 0), m.vertex(0, 2) - m.vertex(0, 0)));
+    append_corner_normals(m, true, n, n * 3.0f, n);
+    s.meshes.push_back(m);
+    s.meshes.push_back(test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}}));
+    Transform stretch, shear, mirror;
+    stretch.m[0] = 2.0f;  // x doubled
+    stretch.m[3] = 5.0f;  // and moved
+    shear.m[1] = 0.7f;    // x += 0.7 y
+    shear.m[10] = 0.25f;  // z quartered
+    mirror.m[5] = -1.0f;  // y mirrored
+    for (const Transform& t : {stretch, shear, mirror}) s.instances.push_back({t, 0, 0});
+    s.instances.push_back({Transform{}, 1, 0});
+    const TriangleMesh flat = flatten(s);
+    ASSERT_EQ(flat.triangle_count(), 4u);
+    ASSERT_EQ(flat.normals.size(), 12u);
+    for (size_t t = 0; t < 3; ++t) {
+        SCOPED_TRACE(t);
+        const Vec3 ng =
+            unit_or_zero(cross(flat.vertex(t, 1) - flat.vertex(t, 0), flat.vertex(t, 2) - flat.vertex(t, 0)));
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(length(flat.normals[3 * t + k]), 1.0f, 1e-6f);
+            EXPECT_NEAR(std::fabs(dot(flat.normals[3 * t + k], ng)), 1.0f, 1e-6f);
+        }
+    }
+    // The stretch by hand: M^-T n = (n.x / 2, n.y, n.z), normalised; M n would be (2 n.x, n.y, n.z).
+    expect_near(flat.normals[0], unit_or_zero({n.x / 2.0f, n.y, n.z}));
+    for (int k = 9; k < 12; ++k) expect_near(flat.normals[size_t(k)], {0.0f, 0.0f, 0.0f}, 0.0f);
+    // A turn about z by 90 degrees turns a normal with it.
+    Transform turn;
+    turn.m[0] = 0.0f, turn.m[1] = -1.0f, turn.m[4] = 1.0f, turn.m[5] = 0.0f;
+    expect_near(turn.normal({1.0f, 0.0f, 0.0f}), {0.0f, 1.0f, 0.0f});
+    expect_near(turn.normal({0.0f, 0.0f, 0.0f}), {0.0f, 0.0f, 0.0f}, 0.0f);
+}
+
+// Vertex normals from glTF (NORMAL) and PLY (nx ny nz), in world space for meshes placed once;
+// meshes of the same file without them get zeros.
+TEST(SceneFile, ReadsVertexNormalsOfGltfAndPly) {
+    const InstancedScene s = load_assimp(test::data_dir() + "/instances.gltf");
+    size_t floor = 0;
+    for (const TriangleMesh& m : s.meshes) {
+        ASSERT_EQ(m.normals.size(), 3 * m.triangle_count());
+        for (size_t t = 0; t < m.triangle_count(); ++t) {
+            const bool is_floor = m.material_ids[t] == int32_t(&material_named(s, "gold") - s.materials.data());
+            floor += is_floor;
+            for (int k = 0; k < 3; ++k)
+                expect_near(m.normals[3 * t + size_t(k)], is_floor ? Vec3{0, 1, 0} : Vec3{0, 0, 0}, 0.0f);
+        }
+    }
+    EXPECT_EQ(floor, 2u);
+    TempFile ply("normals.ply",
+                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "property float nx\nproperty float ny\nproperty float nz\nelement face 1\n"
+                 "property list uchar int vertex_indices\nend_header\n0 0 0 0 0 2\n1 0 0 0 0.6 0.8\n0 1 0 0 0 1\n"
+                 "3 0 1 2\n");
+    const TriangleMesh m = flatten(load_assimp(ply.path()));
+    ASSERT_EQ(m.normals.size(), 3u);
+    expect_near(m.normals[0], {0, 0, 1});
+    expect_near(m.normals[1], {0, 0.6f, 0.8f});
+    expect_near(m.normals[2], {0, 0, 1});
+}
+
 TEST(SceneFile, FlattenOffsetsMaterialsAndDropsWhatATransformDegenerates) {
     InstancedScene s;
     TriangleMesh m = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}});

@@ -410,13 +410,14 @@ fi
 edit_records "$tmp/small.rays" "$tmp/damaged.rays" f $((3 * 32 + 16)) 0.5 --keep-checksum
 expect_error damaged-rays "damaged.rays' is damaged: its checksum does not match" verify "$tmp/cb_in.obj" --rays "$tmp/damaged.rays"
 "$bin" -q bench "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits-out "$tmp/small.hits" --runs 1 >/dev/null
-edit_records "$tmp/small.hits" "$tmp/foreign.hits" ifff $((5 * 16)) 999999 1.0 0.1 0.1  # hit 5: a triangle the scene lacks
+# Hit records (version 3): tri, t, u, v, then the instance and the triangle of its mesh; 24 bytes.
+edit_records "$tmp/small.hits" "$tmp/foreign.hits" ifffii $((5 * 24)) 999999 1.0 0.1 0.1 0 999999  # hit 5: a triangle the scene lacks
 expect_error foreign-hits "hit 5 names triangle 999999" verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/foreign.hits"
 # Made-up hits never pass as ties: "triangle 5, t = 0" in records 0-5 (once 2,065 of 3,072 such
 # records passed as interval-end ties), and a real hit file still passes.
 cp "$tmp/small.hits" "$tmp/fake.hits"
 for r in 0 1 2 3 4 5; do
-    edit_records "$tmp/fake.hits" "$tmp/fake2.hits" ifff $((r * 16)) 5 0.0 0.0 0.0 && mv "$tmp/fake2.hits" "$tmp/fake.hits"
+    edit_records "$tmp/fake.hits" "$tmp/fake2.hits" ifffii $((r * 24)) 5 0.0 0.0 0.0 0 5 && mv "$tmp/fake2.hits" "$tmp/fake.hits"
 done
 if "$bin" -q verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/fake.hits" --json >"$tmp/out" 2>"$tmp/err"; then
     fail=$((fail + 1)); echo "FAIL fake-hits: verify passed a hit file with made-up hits"
@@ -432,6 +433,19 @@ if "$bin" -q verify "$tmp/cb_in.obj" --rays "$tmp/small.rays" --hits "$tmp/small
 else
     fail=$((fail + 1)); echo "FAIL real-hits: verify refused the hits bench wrote:"; sed 's/^/    /' "$tmp/err" | head -5
 fi
+# An instanced scene's hit file names (instance, triangle) beside the scene-wide id: it verifies
+# against the same scene, and against the scene made one mesh (--flatten) its numbering is refused.
+"$bin" -q rays "gen:instances:$tmp/cb_in.obj:3:1" --type primary --width 8 --height 8 -o "$tmp/inst.rays" >/dev/null &&
+    "$bin" -q bench "gen:instances:$tmp/cb_in.obj:3:1" --rays "$tmp/inst.rays" --device cpu --hits-out "$tmp/inst.hits" \
+        --runs 1 >/dev/null
+if "$bin" -q verify "gen:instances:$tmp/cb_in.obj:3:1" --rays "$tmp/inst.rays" --hits "$tmp/inst.hits" >/dev/null 2>"$tmp/err" &&
+    python3 -c 'import struct,sys; d=open(sys.argv[1],"rb").read(); n=struct.unpack_from("<Q",d,16)[0]; w=[struct.unpack_from("<ifffii",d,48+24*i)[0::4] for i in range(n)]; assert struct.unpack_from("<I",d,8)[0]==3 and {x[1] for x in w if x[0]>=0}=={0,1,2}, w' "$tmp/inst.hits"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL instanced-hits: an instanced hit file did not verify or name 3 instances:"; sed 's/^/    /' "$tmp/err" | head -5
+fi
+expect_error instanced-hits-flattened "as instance [12]'s triangle .* but in this scene it is instance 0's" \
+    --flatten verify "gen:instances:$tmp/cb_in.obj:3:1" --rays "$tmp/inst.rays" --hits "$tmp/inst.hits"
 # --structure all: every structure in one table (8 structures x 1 ray type), and its refusals.
 if [ "$("$bin" -q verify "$tmp/cb_in.obj" --structure all --types primary --width 32 --height 24 --json 2>/dev/null |
     python3 -c 'import json,sys; print(sorted({(r["structure"], r["kernel"]) for r in map(json.loads, sys.stdin) if r["mismatches"] == 0}))')" = \

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "accel/core/check.h"
+#include "accel/core/checksum.h"
 #include "tests/support/test_support.h"
 
 namespace bvhlab::trav {
@@ -17,6 +18,15 @@ namespace {
 void expect_error(const std::string& path, const std::string& what) {
     try {
         read_ray_file(path);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+}
+
+void expect_hit_error(const std::string& path, const std::string& what) {
+    try {
+        read_hit_file(path);
         FAIL() << "no error";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
@@ -159,6 +169,82 @@ TEST(HitFile, RoundTrip) {
     EXPECT_THROW(read_ray_file(f.path()), Error);
 }
 
+/// A hit file of `version` (2 or 3) with these record bytes, header and checksum as the writer
+/// makes them: files that write_hit_file no longer writes, or would refuse to.
+void write_raw_hit_file(const std::string& path, uint32_t version, uint64_t count, const std::string& records) {
+    std::string bytes("BVHLHITS", 8);
+    bytes.append(reinterpret_cast<const char*>(&version), 4);
+    bytes.append(4, '\0');  // flags: closest hit
+    bytes.append(reinterpret_cast<const char*>(&count), 8);
+    bytes.append("old-writer");
+    bytes.append(kFileWriterBytes - 10, '\0');
+    const uint64_t sum = accel::fnv1a_words(records.data(), records.size(), accel::fnv1a_words(bytes.data(), 48));
+    bytes += records;
+    bytes.append(reinterpret_cast<const char*>(&sum), 8);
+    std::ofstream(path, std::ios::binary) << bytes;
+}
+
+// Version 3 hit files say each hit's instance and the triangle of its mesh beside the
+// scene-wide id; check_hit_ids holds all three against the scene's numbering. Version 2 files
+// (16-byte records, no instances) are still read.
+TEST(HitFile, Version3CarriesInstancesAndVersion2IsStillRead) {
+    test::TempFile f("instanced.hits");
+    const InstanceFirstIds first = {0, 10, 10, 25};  // instance 1 places an empty mesh
+    const HitSet a{{{12, 1.0f, 0.1f, 0.2f}, {3, 2.0f, 0.3f, 0.4f}, Hit::miss(), {10, 3.0f, 0.5f, 0.0f}},
+                   Query::kClosest};
+    write_hit_file(f.path(), a, first);
+    EXPECT_EQ(test::read_file_bytes(f.path()).size(), 48u + 4 * 24 + 8);
+    const HitSet b = read_hit_file(f.path());
+    EXPECT_EQ(b.version, 3u);
+    ASSERT_EQ(b.instances.size(), 4u);
+    const std::vector<std::pair<int, int>> want = {{2, 2}, {0, 3}, {-1, -1}, {2, 0}};
+    for (size_t i = 0; i < 4; ++i) {
+        EXPECT_EQ(b.hits[i].tri, a.hits[i].tri);
+        EXPECT_EQ(b.instances[i].instance, want[i].first) << i;
+        EXPECT_EQ(b.instances[i].tri, want[i].second) << i;
+    }
+    EXPECT_NO_THROW(check_hit_ids(b, first, f.path()));
+    try {
+        check_hit_ids(b, {0, 25}, f.path());  // the same ids in a scene of one mesh
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("hit 0 names triangle 12 as instance 2's triangle 2, but in this scene it "
+                                             "is instance 0's triangle 12"),
+                  std::string::npos)
+            << e.what();
+    }
+    // Without a numbering: one instance, 0.
+    write_hit_file(f.path(), a);
+    EXPECT_EQ(read_hit_file(f.path()).instances[0].instance, 0);
+    EXPECT_EQ(read_hit_file(f.path()).instances[0].tri, 12);
+    EXPECT_THROW(write_hit_file(f.path(), a, {0, 12}), Error);  // id 12 is outside 12 triangles
+    // A miss that names an instance, and a hit that names none, are refused.
+    const Hit miss = Hit::miss(), hit{4, 1.0f, 0.0f, 0.0f};
+    const int32_t where_miss[2] = {0, 0}, where_hit[2] = {-1, 4};
+    std::string rec(reinterpret_cast<const char*>(&miss), 16);
+    rec.append(reinterpret_cast<const char*>(where_miss), 8);
+    write_raw_hit_file(f.path(), 3, 1, rec);
+    expect_hit_error(f.path(), "hit 0 has instance 0 and triangle 0 for a miss");
+    rec.assign(reinterpret_cast<const char*>(&hit), 16);
+    rec.append(reinterpret_cast<const char*>(where_hit), 8);
+    write_raw_hit_file(f.path(), 3, 1, rec);
+    expect_hit_error(f.path(), "negative for a hit");
+    // Version 2: the 16-byte records alone.
+    rec.assign(reinterpret_cast<const char*>(&hit), 16);
+    rec.append(reinterpret_cast<const char*>(&miss), 16);
+    write_raw_hit_file(f.path(), 2, 2, rec);
+    const HitSet old = read_hit_file(f.path());
+    EXPECT_EQ(old.version, 2u);
+    EXPECT_EQ(old.writer, "old-writer");
+    ASSERT_EQ(old.hits.size(), 2u);
+    EXPECT_EQ(old.hits[0].tri, 4);
+    EXPECT_EQ(old.hits[1].tri, -1);
+    EXPECT_TRUE(old.instances.empty());
+    EXPECT_NO_THROW(check_hit_ids(old, first, f.path()));
+    write_raw_hit_file(f.path(), 4, 0, "");
+    expect_hit_error(f.path(), "version 4; this build reads versions 1 to 3");
+}
+
 TEST(RayFile, InvalidRaysAreRefusedWithTheirIndex) {
     // Each of these once reached Embree (which aborts on a NaN direction) or the kernels.
     const float nan = std::nanf("");
@@ -201,9 +287,9 @@ TEST(HitFile, InvalidHitsAndForeignIdsAreRefused) {
     write_hit_file(f.path(), {{{5, std::nanf(""), 0.1f, 0.1f}}, Query::kClosest});
     EXPECT_THROW(read_hit_file(f.path()), Error);  // NaN t on a hit
     const HitSet ok{{{5, 1.0f, 0.1f, 0.1f}, Hit::miss()}, Query::kClosest};
-    EXPECT_NO_THROW(check_hit_ids(ok, 6, f.path()));
+    EXPECT_NO_THROW(check_hit_ids(ok, {0, 6}, f.path()));
     try {
-        check_hit_ids(ok, 5, f.path());  // the hits of a larger scene
+        check_hit_ids(ok, {0, 5}, f.path());  // the hits of a larger scene
         FAIL() << "no error";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("hit 0 names triangle 5"), std::string::npos) << e.what();

@@ -107,7 +107,7 @@ void register_bench(CLI::App& app, Globals& g) {
             const trav::RaySet set = read_rays_for(o->rays_file, "bench");
             std::vector<trav::Hit> out;
             bench_set(set, "file", nullptr, &out);
-            if (!o->hits_out.empty()) trav::write_hit_file(o->hits_out, {out, set.query, git_commit()});
+            if (!o->hits_out.empty()) trav::write_hit_file(o->hits_out, {out, set.query, git_commit()}, s.first_ids);
             return;
         }
         trav::RayProtocol proto(s.mesh, oracle, o->rays.for_scene(s));

@@ -113,7 +113,7 @@ void register_verify(CLI::App& app, Globals& g) {
         if (hits->count()) {
             const trav::RaySet set = read_rays_for(o->rays_file, "verify");
             trav::HitSet hs = trav::read_hit_file(o->hits_file);
-            trav::check_hit_ids(hs, s.mesh.triangle_count(), o->hits_file);
+            trav::check_hit_ids(hs, s.first_ids, o->hits_file);
             if (hs.hits.size() != set.rays.size())
                 throw Error("hit file has " + std::to_string(hs.hits.size()) + " hits for " +
                             std::to_string(set.rays.size()) + " rays");

@@ -304,11 +304,13 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         Stage st(g, "placing " + std::to_string(placed.triangle_count()) + " triangles of " +
                         std::to_string(s.instances) + " instances in world space");
         s.mesh = scene::flatten(placed, /*keep_all=*/true);
+        s.first_ids = scene::instance_first_ids(placed);
         s.placed = std::make_shared<const scene::InstancedScene>(std::move(placed));
     } else {
         std::optional<Stage> st;
         if (!one_mesh) st.emplace(g, "flattening " + std::to_string(s.instances) + " instances");
         s.mesh = scene::single_mesh(std::move(placed), true, "scene '" + spec + "'");
+        s.first_ids = {0, s.mesh.triangle_count()};
     }
     if (!one_mesh) s.hash.clear();  // the file's hash is not the flattened mesh's
     if (file_camera) {

@@ -87,6 +87,9 @@ struct Scene {
     /// A scene that places some mesh more than once, without --flatten: structures are built
     /// two-level over it, and Embree checks them with its own instances. Null otherwise.
     std::shared_ptr<const scene::InstancedScene> placed;
+    /// The instance numbering of hit ids (trav::InstanceFirstIds): the instances' first ids for
+    /// a two-level scene, {0, triangles} for one mesh (--flatten makes any scene one).
+    std::vector<uint64_t> first_ids;
     uint64_t instances = 1;  ///< instances in the scene file (1 for a single mesh)
     uint64_t meshes = 1;     ///< distinct meshes they place
     trav::Camera camera;

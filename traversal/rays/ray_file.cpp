@@ -3,6 +3,7 @@
 // a checksum (version 2); version 1 files (24-byte header, no writer or checksum) are read too.
 #include "traversal/rays/ray_file.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -72,9 +73,27 @@ void write_records(const std::string& path, const char* magic, uint32_t version,
     });
 }
 
-/// Reads the records of a ray or hit file and sets `set`'s query, writer and version.
+/// A hit of a version 3 file.
+struct HitRecord3 {
+    Hit hit;
+    HitInstance where;
+};
+static_assert(sizeof(HitRecord3) == 24, "version 3 hit records are 24 bytes");
+
+/// The version field of a file whose header can be read, else 0 (read_records then says why).
+uint32_t peek_version(const std::string& path) {
+    if (std::filesystem::is_directory(path)) return 0;
+    File f(std::fopen(path.c_str(), "rb"), &std::fclose);
+    Header h{};
+    if (!f || std::fread(&h, sizeof h, 1, f.get()) != 1) return 0;
+    return h.version;
+}
+
+/// Reads the records of a ray or hit file and sets `set`'s query, writer and version. Files of
+/// version 1 and of `version` are read; `readable` names every version the caller reads.
 template <typename T, typename Set>
-std::vector<T> read_records(const std::string& path, const char* magic, uint32_t version, const char* what, Set& set) {
+std::vector<T> read_records(const std::string& path, const char* magic, uint32_t version, const char* what, Set& set,
+                            const char* readable) {
     File f = open(path, "rb");
     HeaderV2 h{};
     if (std::fread(&h.base, sizeof h.base, 1, f.get()) != 1)
@@ -84,7 +103,7 @@ std::vector<T> read_records(const std::string& path, const char* magic, uint32_t
     const bool v1 = h.base.version == 1;
     if (h.base.version != version && !v1)
         throw Error("'" + path + "' has " + what + " version " + std::to_string(h.base.version) +
-                    "; this build reads versions 1 and " + std::to_string(version));
+                    "; this build reads versions " + readable);
     if (h.base.flags & ~kFlagAnyHit)
         throw Error("'" + path + "' sets unknown flag bits 0x" + std::to_string(h.base.flags & ~kFlagAnyHit));
     set.query = (h.base.flags & kFlagAnyHit) ? Query::kAny : Query::kClosest;
@@ -145,7 +164,7 @@ std::string invalid_ray(const Ray& r) {
 
 RaySet read_ray_file(const std::string& path) {
     RaySet s;
-    s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s);
+    s.rays = read_records<Ray>(path, "BVHLRAYS", kRayFileVersion, "bvhlab ray file", s, "1 and 2");
     for (size_t i = 0; i < s.rays.size(); ++i) {
         const std::string why = invalid_ray(s.rays[i]);
         if (!why.empty()) throw Error("ray file '" + path + "': ray " + std::to_string(i) + " has " + why);
@@ -153,13 +172,46 @@ RaySet read_ray_file(const std::string& path) {
     return s;
 }
 
-void write_hit_file(const std::string& path, const HitSet& set) {
-    write_records(path, "BVHLHITS", kHitFileVersion, set.query, set.hits, set.writer);
+HitInstance split_hit_id(const InstanceFirstIds& first, uint64_t id) {
+    BVHLAB_CHECK(first.size() >= 2 && id < first.back(), "split_hit_id: an id outside the instances' range");
+    // The last instance whose first id is <= id (instances of empty meshes share a first id).
+    const auto it = std::upper_bound(first.begin(), first.end() - 1, id) - 1;
+    return {int32_t(it - first.begin()), int32_t(id - *it)};
+}
+
+void write_hit_file(const std::string& path, const HitSet& set, const InstanceFirstIds& first) {
+    std::vector<HitRecord3> records(set.hits.size());
+    for (size_t i = 0; i < set.hits.size(); ++i) {
+        const Hit& h = set.hits[i];
+        HitInstance w{-1, -1};
+        if (h.is_hit() && first.empty()) {
+            w = {0, h.tri};
+        } else if (h.is_hit()) {
+            if (first.size() < 2 || uint64_t(h.tri) >= first.back())
+                throw Error("hit file '" + path + "': hit " + std::to_string(i) + " names triangle " +
+                            std::to_string(h.tri) + ", outside the scene's " +
+                            std::to_string(first.empty() ? 0 : first.back()) + " triangles");
+            w = split_hit_id(first, uint64_t(h.tri));
+        }
+        records[i] = {h, w};
+    }
+    write_records(path, "BVHLHITS", kHitFileVersion, set.query, records, set.writer);
 }
 
 HitSet read_hit_file(const std::string& path) {
     HitSet s;
-    s.hits = read_records<Hit>(path, "BVHLHITS", kHitFileVersion, "bvhlab hit file", s);
+    if (peek_version(path) == 3) {
+        const std::vector<HitRecord3> records =
+            read_records<HitRecord3>(path, "BVHLHITS", 3, "bvhlab hit file", s, "1 to 3");
+        s.hits.resize(records.size());
+        s.instances.resize(records.size());
+        for (size_t i = 0; i < records.size(); ++i) {
+            s.hits[i] = records[i].hit;
+            s.instances[i] = records[i].where;
+        }
+    } else {
+        s.hits = read_records<Hit>(path, "BVHLHITS", 2, "bvhlab hit file", s, "1 to 3");
+    }
     for (size_t i = 0; i < s.hits.size(); ++i) {
         const Hit& h = s.hits[i];
         if (h.tri < -1)
@@ -167,16 +219,36 @@ HitSet read_hit_file(const std::string& path) {
                         std::to_string(h.tri));
         if (h.tri >= 0 && !(std::isfinite(h.t) && std::isfinite(h.u) && std::isfinite(h.v)))
             throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has a non-finite t, u or v");
+        if (!s.instances.empty()) {
+            const HitInstance w = s.instances[i];
+            if (h.tri < 0 ? (w.instance != -1 || w.tri != -1) : (w.instance < 0 || w.tri < 0))
+                throw Error("hit file '" + path + "': hit " + std::to_string(i) + " has instance " +
+                            std::to_string(w.instance) + " and triangle " + std::to_string(w.tri) +
+                            (h.tri < 0 ? " for a miss (must be -1 and -1)" : " (negative for a hit)"));
+        }
     }
     return s;
 }
 
-void check_hit_ids(const HitSet& set, size_t triangle_count, const std::string& path) {
-    for (size_t i = 0; i < set.hits.size(); ++i)
-        if (set.hits[i].tri >= 0 && size_t(set.hits[i].tri) >= triangle_count)
+void check_hit_ids(const HitSet& set, const InstanceFirstIds& first, const std::string& path) {
+    BVHLAB_CHECK(first.size() >= 2, "check_hit_ids needs the instances' first ids and the total");
+    const uint64_t triangle_count = first.back();
+    for (size_t i = 0; i < set.hits.size(); ++i) {
+        const Hit& h = set.hits[i];
+        if (h.tri < 0) continue;
+        if (uint64_t(h.tri) >= triangle_count)
             throw Error("hit file '" + path + "': hit " + std::to_string(i) + " names triangle " +
-                        std::to_string(set.hits[i].tri) + ", but the scene has " + std::to_string(triangle_count) +
+                        std::to_string(h.tri) + ", but the scene has " + std::to_string(triangle_count) +
                         " triangles (hits of another scene?)");
+        if (set.instances.empty()) continue;
+        const HitInstance want = split_hit_id(first, uint64_t(h.tri)), got = set.instances[i];
+        if (got.instance != want.instance || got.tri != want.tri)
+            throw Error("hit file '" + path + "': hit " + std::to_string(i) + " names triangle " +
+                        std::to_string(h.tri) + " as instance " + std::to_string(got.instance) + "'s triangle " +
+                        std::to_string(got.tri) + ", but in this scene it is instance " +
+                        std::to_string(want.instance) + "'s triangle " + std::to_string(want.tri) +
+                        " (hits of another scene?)");
+    }
 }
 
 }  // namespace bvhlab::trav
