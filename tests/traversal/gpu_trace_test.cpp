@@ -301,10 +301,10 @@ TEST_P(GpuKernel, OddCountsEmptySetsAndTheDeviceCount) {
 
 INSTANTIATE_TEST_SUITE_P(Registry, GpuKernel, ::testing::ValuesIn(kernel_names()), param_name);
 
-TEST(GpuTrace, TwoLevelKernelAgreesWithEmbreeInstances) {
+TEST(GpuTrace, TwoLevelKernelsAgreeWithEmbreeInstances) {
     // Randomly turned, scaled, overlapping instances (gen:instances) of two meshes, each BLAS
-    // builder: every ray type against Embree's own instances, and the same hits as the CPU
-    // two-level traversal up to ties.
+    // builder, every two-level kernel: every ray type against Embree's own instances, and the
+    // same hits as the CPU two-level traversal up to ties.
     BVHLAB_SKIP_WITHOUT_GPU();
     for (auto kind : {scene::ProceduralKind::kStructured, scene::ProceduralKind::kSoup}) {
         const scene::InstancedScene placed = scene::make_instances(scene::make_procedural(kind, 3000, 2), 25, 5);
@@ -321,24 +321,31 @@ TEST(GpuTrace, TwoLevelKernelAgreesWithEmbreeInstances) {
             spec.epo = false;
             AccelStructure as = build_structure(placed, spec);
             SCOPED_TRACE(as.structure.name);
-            auto gpu = as.gpu_tracer();
-            EXPECT_EQ(gpu->name(), "two-level") << "the layout's default kernel";
+            EXPECT_EQ(as.gpu_tracer()->name(), "two-level") << "the layout's default kernel";
             auto cpu = as.cpu_tracer();
-            for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
-                SCOPED_TRACE(ray_type_name(t));
-                const RaySet set = proto.make(t);
-                std::vector<Hit> ours, ref, cpu_hits;
-                gpu->trace(set, ours);
-                EXPECT_EQ(unwritten_or_invalid(ours, world.triangle_count()), 0u);
-                oracle.trace(set.rays, set.query, ref);
-                const CompareReport rep = test::expect_no_real_mismatch(world, oracle, set.rays, set.query, ours, ref);
-                EXPECT_LE(double(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)]),
-                          0.001 * double(set.rays.size()) + 3);
-                cpu->trace(set, cpu_hits);
-                size_t same = 0;
-                for (size_t i = 0; i < ours.size(); ++i) same += ours[i].tri == cpu_hits[i].tri;
-                EXPECT_GE(same, ours.size() * 999 / 1000) << "GPU and CPU run the same traversal";
+            size_t kernels = 0;
+            for (const KernelInfo& k : registered_kernels()) {
+                if (k.layout != Layout::kTwoLevel) continue;
+                ++kernels;
+                auto gpu = as.gpu_tracer(k.name);
+                for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
+                    SCOPED_TRACE(std::string(k.name) + " " + ray_type_name(t));
+                    const RaySet set = proto.make(t);
+                    std::vector<Hit> ours, ref, cpu_hits;
+                    gpu->trace(set, ours);
+                    EXPECT_EQ(unwritten_or_invalid(ours, world.triangle_count()), 0u);
+                    oracle.trace(set.rays, set.query, ref);
+                    const CompareReport rep =
+                        test::expect_no_real_mismatch(world, oracle, set.rays, set.query, ours, ref);
+                    EXPECT_LE(double(rep.ties - rep.ties_by_kind[size_t(TieKind::kCoincident)]),
+                              0.001 * double(set.rays.size()) + 3);
+                    cpu->trace(set, cpu_hits);
+                    size_t same = 0;
+                    for (size_t i = 0; i < ours.size(); ++i) same += ours[i].tri == cpu_hits[i].tri;
+                    EXPECT_GE(same, ours.size() * 999 / 1000) << "GPU and CPU run the same traversal";
+                }
             }
+            EXPECT_GE(kernels, 3u) << "two-level, and the while-while forms";
         }
     }
 }

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
-// The launch of every while-while kernel: the build-time choices of trace_while_while, one
-// thread per ray or persistent threads. A while-while kernel file is then one registration.
+// The launch of every while-while kernel, single-level and two-level: the build-time choices of
+// the traversal, one thread per ray or persistent threads. A while-while kernel file is then one
+// registration.
 #pragma once
 
 #include "traversal/device/bvh2_while_while.cuh"
+#include "traversal/device/two_level_while_while.cuh"
 #include "traversal/kernels/launch_helpers.cuh"
 
 namespace bvhlab::trav {
@@ -27,6 +29,21 @@ void launch_while_while(const LaunchArgs& a) {
             launch_per_ray<kBlock, kMinBlocks>(a, kBlock, f, kSmem);
         else
             launch_per_ray(a, kBlock, f, kSmem);
+    });
+}
+
+/// The two-level forms (two_level_while_while.cuh): FMA slabs, one thread per ray or dynamic
+/// fetch.
+template <bool kSpeculative, Fetch kFetch>
+void launch_two_level_while_while(const LaunchArgs& a) {
+    constexpr int kBlock = 128;
+    static_assert(kFetch != Fetch::kPersistent, "no persistent form without dynamic fetch");
+    for_query(a, [&](auto any) {
+        const TwoLevelWhileWhileTrace<decltype(any)::value, kSpeculative, true> f{a.two_level};
+        if constexpr (kFetch == Fetch::kDynamic)
+            launch_dynamic_fetch(a, kBlock, f, a.fetch_threshold ? a.fetch_threshold : kDefaultFetchThreshold);
+        else
+            launch_per_ray(a, kBlock, f);
     });
 }
 

@@ -1,0 +1,12 @@
+// SPDX-License-Identifier: MIT
+// Kernel 'two-level-dynamic-speculative-fma': dynamic-speculative-fma over instanced scenes.
+#include "traversal/kernels/while_while_launch.cuh"
+
+namespace bvhlab::trav {
+
+BVHLAB_REGISTER_KERNEL({"two-level-dynamic-speculative-fma", Layout::kTwoLevel,
+                        "instanced scenes: dynamic-speculative-fma over the TLAS and each instance's BLAS on one stack "
+                        "(persistent threads; idle lanes start new rays once 8 of 32 are idle, --fetch-threshold)",
+                        kBvh2StackSize, false, 128, launch_two_level_while_while<true, Fetch::kDynamic>, 1024, true});
+
+}  // namespace bvhlab::trav
