@@ -68,9 +68,11 @@ __device__ __forceinline__ void two_level_step(const TwoLevelView& v, TwoLevelRa
                    m2.x * r.wd.x + m2.y * r.wd.y + m2.z * r.wd.z};
             r.slabs = Slabs(r.o, safe_reciprocal(r.d));
             const Bvh2View* b = v.blas + bf.x;
-            r.cur = {reinterpret_cast<const accel::Bvh2Node*>(__ldg(reinterpret_cast<const unsigned long long*>(&b->nodes))),
-                     reinterpret_cast<const accel::WoopTriangle*>(__ldg(reinterpret_cast<const unsigned long long*>(&b->tris))),
-                     reinterpret_cast<const uint32_t*>(__ldg(reinterpret_cast<const unsigned long long*>(&b->tri_ids)))};
+            r.cur = {
+                reinterpret_cast<const accel::Bvh2Node*>(__ldg(reinterpret_cast<const unsigned long long*>(&b->nodes))),
+                reinterpret_cast<const accel::WoopTriangle*>(
+                    __ldg(reinterpret_cast<const unsigned long long*>(&b->tris))),
+                reinterpret_cast<const uint32_t*>(__ldg(reinterpret_cast<const unsigned long long*>(&b->tri_ids)))};
             r.first_id = bf.y;
             stack[++r.sp] = kLeaveInstance;
             r.node = 0;
@@ -140,8 +142,8 @@ struct TwoLevelWhileWhileTrace {
 
     __device__ __forceinline__ void start(State& s, Stack& stack, const Ray& r) const {
         const Slabs slabs(r.org, safe_reciprocal(r.dir));
-        s = {r.org, r.dir, r.org, r.dir, slabs, {view.tlas, nullptr, nullptr}, r.tmin, r.tmax, 0.0f, 0.0f, -1, 0, 0, 0,
-             0};
+        s = {r.org, r.dir, r.org, r.dir, slabs, {view.tlas, nullptr, nullptr}, r.tmin, r.tmax, 0.0f, 0.0f,
+             -1,    0,     0,     0,     0};
         stack[0] = kWhileWhileSentinel;
     }
     __device__ __forceinline__ void step(State& s, Stack& stack) const {

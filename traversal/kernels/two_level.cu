@@ -24,6 +24,6 @@ void launch(const LaunchArgs& a) {
 BVHLAB_REGISTER_KERNEL({"two-level", Layout::kTwoLevel,
                         "instanced scenes: one thread per ray, the CPU tracer's two-level traversal (one loop and one "
                         "stack for both levels, the ray moved into each instance's space)",
-                        kBvh2StackSize, false, 128, launch, 1024, false, true, true});
+                        kBvh2StackSize, false, 128, launch, 1024, false, /*counts=*/true});
 
 }  // namespace bvhlab::trav
