@@ -56,13 +56,21 @@ bool count_drop(TriangleCheck check, DropCounts& drops) {
 }
 
 Vec3 unit_or_zero(Vec3 n) {
+    // Float unless the squared length leaves float's normal range (tiny or huge components).
+    const float len2 = n.x * n.x + n.y * n.y + n.z * n.z;
+    if (len2 > 1e-30f && len2 < 1e30f) {
+        const float len = std::sqrt(len2);
+        return {n.x / len, n.y / len, n.z / len};
+    }
     const double x = n.x, y = n.y, z = n.z, len = std::sqrt(x * x + y * y + z * z);
     if (!(len > 0.0) || !std::isfinite(len)) return {0.0f, 0.0f, 0.0f};
     return {float(x / len), float(y / len), float(z / len)};
 }
 
-void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2) {
-    Vec3 u[3] = {unit_or_zero(n0), unit_or_zero(n1), unit_or_zero(n2)};
+void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit) {
+    Vec3 u[3] = {n0, n1, n2};
+    if (!unit)
+        for (Vec3& v : u) v = unit_or_zero(v);
     bool ok = given;
     for (const Vec3& v : u) ok = ok && (v.x != 0.0f || v.y != 0.0f || v.z != 0.0f);
     for (Vec3& v : u)

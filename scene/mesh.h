@@ -74,7 +74,8 @@ Vec3 unit_or_zero(Vec3 n);
 
 /// Appends the shading normals of one triangle's corners to mesh.normals: each made a unit
 /// vector, or all three 0 when any of them is 0, non-finite or missing (`given` false).
-void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2);
+/// `unit`: the three are unit_or_zero's results already (a loader that normalises per vertex).
+void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit = false);
 
 /// Appends a triangle unless it has a non-finite vertex or zero area, which it counts in
 /// mesh.dropped instead; denormal coordinates become 0 (flush_denormals). Returns true when

@@ -34,14 +34,18 @@ Transform Transform::inverse() const {
     return inv;
 }
 
-Vec3 Transform::normal(Vec3 n) const {
-    // The cofactor matrix of M is det(M) M^-T: its rows applied to n, with det's sign.
+Transform Transform::normal_map() const {
+    // The cofactor matrix of M is det(M) M^-T; with det's sign it keeps a normal's side.
     const double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
     const double s = determinant() < 0.0 ? -1.0 : 1.0;
-    const double x = n.x, y = n.y, z = n.z;
-    return unit_or_zero({float(s * ((e * i - f * h) * x + (f * g - d * i) * y + (d * h - e * g) * z)),
-                         float(s * ((c * h - b * i) * x + (a * i - c * g) * y + (b * g - a * h) * z)),
-                         float(s * ((b * f - c * e) * x + (c * d - a * f) * y + (a * e - b * d) * z))});
+    const double r[9] = {e * i - f * h, f * g - d * i, d * h - e * g, c * h - b * i, a * i - c * g,
+                         b * g - a * h, b * f - c * e, c * d - a * f, a * e - b * d};
+    Transform out;
+    for (int row = 0; row < 3; ++row) {
+        for (int k = 0; k < 3; ++k) out.m[4 * row + k] = float(s * r[3 * row + k]);
+        out.m[4 * row + 3] = 0.0f;
+    }
+    return out;
 }
 
 Transform Transform::operator*(const Transform& inner) const {
@@ -113,6 +117,7 @@ TriangleMesh flatten(const InstancedScene& scene, bool keep_all) {
     out.material_ids.reserve(scene.triangle_count());
     for (const Instance& inst : scene.instances) {
         const TriangleMesh& mesh = scene.meshes[inst.mesh];
+        const Transform normal_map = inst.transform.normal_map();
         const auto base = uint32_t(out.vertices.size());
         for (const Vec3& v : mesh.vertices) out.vertices.push_back(flush_denormals(inst.transform.point(v)));
         for (size_t t = 0; t < mesh.triangle_count(); ++t) {
@@ -134,9 +139,9 @@ TriangleMesh flatten(const InstancedScene& scene, bool keep_all) {
             if (normals) {
                 const bool given = !mesh.normals.empty();
                 const Vec3* n = given ? &mesh.normals[3 * t] : nullptr;
-                append_corner_normals(out, given, given ? inst.transform.normal(n[0]) : Vec3{},
-                                      given ? inst.transform.normal(n[1]) : Vec3{},
-                                      given ? inst.transform.normal(n[2]) : Vec3{});
+                append_corner_normals(out, given, given ? normal_map.vector(n[0]) : Vec3{},
+                                      given ? normal_map.vector(n[1]) : Vec3{},
+                                      given ? normal_map.vector(n[2]) : Vec3{});
             }
         }
     }

@@ -32,7 +32,10 @@ struct Transform {
     /// A surface normal of object space in the world: n by the inverse transpose of M, as a unit
     /// vector (0 for a zero or non-finite n). Normals of a non-uniformly scaled, sheared or
     /// mirrored mesh stay perpendicular to its transformed surface.
-    Vec3 normal(Vec3 n) const;
+    Vec3 normal(Vec3 n) const { return unit_or_zero(normal_map().vector(n)); }
+    /// The map normal() applies before normalising: M's cofactor matrix (det(M) M^-T) times
+    /// the sign of det(M), no translation. For many normals under one transform.
+    Transform normal_map() const;
     bool is_identity() const { return *this == Transform{}; }
     /// The determinant of M (0 for a map that flattens space, which no instance may have).
     double determinant() const;

@@ -210,8 +210,16 @@ void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Tra
             out.vertices.push_back(flush_denormals(t.point({p.x, p.y, p.z})));
         }
         const aiVector3D* uv = am.mTextureCoords[0];
-        const aiVector3D* vn = am.mNormals;
-        const auto normal = [&](unsigned v) { return t.normal({vn[v].x, vn[v].y, vn[v].z}); };
+        // World-space unit normals per vertex, once (not per corner).
+        std::vector<Vec3> vn;
+        if (normals && am.mNormals) {
+            const Transform normal_map = t.normal_map();
+            vn.resize(am.mNumVertices);
+            for (unsigned v = 0; v < am.mNumVertices; ++v) {
+                const aiVector3D& n = am.mNormals[v];
+                vn[v] = unit_or_zero(normal_map.vector({n.x, n.y, n.z}));
+            }
+        }
         for (unsigned f = 0; f < am.mNumFaces; ++f) {
             const aiFace& face = am.mFaces[f];
             if (face.mNumIndices != 3) continue;
@@ -228,8 +236,8 @@ void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Tra
                     out.texcoords.push_back(uv ? uv[i[k]].y : 0.0f);
                 }
             if (normals)
-                append_corner_normals(out, vn != nullptr, vn ? normal(i[0]) : Vec3{}, vn ? normal(i[1]) : Vec3{},
-                                      vn ? normal(i[2]) : Vec3{});
+                append_corner_normals(out, !vn.empty(), vn.empty() ? Vec3{} : vn[i[0]], vn.empty() ? Vec3{} : vn[i[1]],
+                                      vn.empty() ? Vec3{} : vn[i[2]], /*unit=*/true);
         }
     }
 }
@@ -325,6 +333,18 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
     }
     // Meshes placed once go into world space, merged into one mesh placed once (first).
     TriangleMesh world;
+    size_t world_vertices = 0, world_faces = 0;  // reserved at once: a 1M-triangle glTF grew by doubling
+    for (const Placement& p : placements)
+        if (uses[p.meshes] == 1)
+            for (unsigned id : p.meshes) {
+                world_vertices += as->mMeshes[id]->mNumVertices;
+                world_faces += as->mMeshes[id]->mNumFaces;
+            }
+    world.vertices.reserve(world_vertices);
+    world.indices.reserve(3 * world_faces);
+    world.material_ids.reserve(world_faces);
+    if (texcoords) world.texcoords.reserve(6 * world_faces);
+    if (normals) world.normals.reserve(3 * world_faces);
     std::map<std::vector<unsigned>, uint32_t> shared;  // node mesh list -> index into s.meshes
     for (const Placement& p : placements) {
         if (uses[p.meshes] == 1) {
