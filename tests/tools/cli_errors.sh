@@ -556,6 +556,18 @@ expect_error instanced-out "--out writes a structure file, .* is built two-level
 [ ! -e "$tmp/two-level.tree" ] && pass=$((pass + 1)) || { fail=$((fail + 1)); echo "FAIL instanced-out wrote a file"; }
 expect_error instanced-structure-file "structure files hold single-level structures" verify "$data/instances.glb" \
     --structure "$tmp/cb.tree"
+expect_error instanced-render-kdtree "the kd-tree is single-level and the scene places a mesh more than once: --flatten" \
+    render "$data/instances.glb" --device cpu --kernel plain --structure kdtree --width 4 --height 4 --spp 1 -o "$tmp/inst.pfm"
+# An instanced scene renders two-level (the CPU two-level BVH here) and flattened, the same paths.
+if r1=$("$bin" -q render gen:instances:cornell-box:3:1 --device cpu --kernel plain --width 16 --height 12 --spp 4 \
+        -o "$tmp/inst2.pfm" --json 2>"$tmp/err") &&
+    r2=$("$bin" -q --flatten render gen:instances:cornell-box:3:1 --device cpu --kernel plain --width 16 --height 12 \
+        --spp 4 -o "$tmp/inst1.pfm" --json 2>>"$tmp/err") &&
+    python3 -c 'import json,sys; a,b=json.loads(sys.argv[1]),json.loads(sys.argv[2]); assert a["structure"]=="two-level/binned" and b["structure"]=="bvh2/binned" and a["bounces"][0]==b["bounces"][0], (a,b)' "$r1" "$r2"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL instanced-render: two-level and flattened renders differ:"; sed 's/^/    /' "$tmp/err" | head -5
+fi
 expect_error gen-instances-zero "the instance count must be 1..2\^24, not 0" build --flatten gen:instances:cornell-box:0
 expect_error gen-instances-no-count "expected gen:instances:SCENE:N\[:SEED\]" build --flatten gen:instances:cornell-box
 expect_error gen-instances-bad-seed "the seed 'x' is not a whole number" build --flatten gen:instances:cornell-box:2:x

@@ -184,10 +184,9 @@ void register_render(CLI::App& app, Globals& g) {
             {"the scene", o->scene}, {"--env", o->env}, {"--structure", o->build.structure_file()}};
         scene::refuse_clashing_files(outputs, inputs);  // before the load, and again with its files
         o->rs.aovs = o->aov;
-        // The renderer traces single-level structures: an instanced scene is rendered flattened.
-        Globals flat = g;
-        flat.flatten = true;
-        Scene s = load_scene(o->scene, flat);
+        // An instanced scene is traced two-level (unless --flatten) and shaded on its world-space
+        // mesh, whose triangle ids are the two-level hits' scene-wide ids.
+        Scene s = load_scene(o->scene, g);
         for (auto& f : s.input_files()) inputs.push_back(std::move(f));
         scene::refuse_clashing_files(outputs, inputs);
         for (const std::string& f : s.missing_material_files) {
@@ -265,7 +264,7 @@ void register_render(CLI::App& app, Globals& g) {
         std::unique_ptr<trav::Tracer> tracer;
         Built built;
         if (reference) {
-            oracle = std::make_unique<trav::EmbreeOracle>(s.mesh);
+            oracle = make_oracle(s);  // Embree's own instances for an instanced scene
             tracer = trav::make_embree_tracer(*oracle, false);
         } else {
             o->build.epo = false;  // a build figure; the render does not need it
