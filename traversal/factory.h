@@ -66,6 +66,8 @@ public:
 
     /// The structure on the GPU, uploaded on the first call. Throws bvhlab::Error without one.
     std::shared_ptr<const DeviceStructure> device();
+    /// The structure on the GPU if device() has uploaded it, else null.
+    std::shared_ptr<const DeviceStructure> uploaded() const { return device_; }
     /// The registry's default kernel for this layout (for a kd-tree: the one whose stack
     /// matches spec.kd_stack). Throws bvhlab::Error in a build without CUDA.
     const KernelInfo& default_kernel() const;

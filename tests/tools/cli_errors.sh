@@ -599,6 +599,9 @@ import json, sys
 r = json.loads(sys.stdin.readline())
 assert r["peak_host_bytes"] > 1e6, r
 assert abs(r["bytes_per_triangle"] * r["triangles"] - r["layout_bytes"]) < 1e-6 * r["layout_bytes"], r
+# Device memory: null without a GPU; with one, the upload is the layout or more, the peak no less.
+d, p = r["device_structure_bytes"], r["device_peak_bytes"]
+assert (d is None and p is None) or (d >= r["layout_bytes"] and p >= d), r
 '; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL build memory figures: $args"; fi
 done
 

@@ -8,6 +8,7 @@
 #include "scene/io/atomic_file.h"
 #include "tools/bvhlab/commands.h"
 #include "tools/bvhlab/pipeline.h"
+#include "traversal/gpu/device_buffer.h"
 
 namespace bvhlab::cli {
 
@@ -93,6 +94,14 @@ void register_build(CLI::App& app, Globals& g) {
         if (!o->out.empty()) {
             b.save(o->out, s.hash);
             b.record["structure_file"] = o->out;
+        }
+        // Device memory, where there is a GPU: the structure uploaded as a kernel reads it, and
+        // the most device memory the process held for it (null without a GPU).
+        b.record["device_structure_bytes"] = nullptr;
+        b.record["device_peak_bytes"] = nullptr;
+        if (trav::gpu_available()) {
+            b.record["device_structure_bytes"] = b.device()->bytes();
+            b.record["device_peak_bytes"] = trav::gpu_memory_use().peak;
         }
         if (g.json)
             emit(b.record);

@@ -318,6 +318,10 @@ nlohmann::json bench_ray_set(const Scene& scene, const Built& built, trav::Trace
         const trav::SmClock clk = trav::gpu_sm_clock();
         j["sm_clock_mhz"] = clk.current_mhz ? nlohmann::json(clk.current_mhz) : nlohmann::json(nullptr);
         j["sm_clock_max_mhz"] = clk.max_mhz;
+        // Device memory: the structure's upload, and the most this process has held (structure,
+        // ray queue and hits; the CUDA context not included).
+        if (const auto d = built.uploaded()) j["device_structure_bytes"] = d->bytes();
+        j["device_peak_bytes"] = trav::gpu_memory_use().peak;
     }
     if (hits_out) *hits_out = std::move(hits);
     return j;

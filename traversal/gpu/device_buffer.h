@@ -29,10 +29,17 @@ struct SmClock {
 SmClock gpu_sm_clock();
 /// Multiprocessors of the current device.
 int gpu_sm_count();
+/// Device memory this process holds through DeviceBuffer (structures, ray queues, render
+/// buffers; not the CUDA context), now and at most since it began. Zero without CUDA.
+struct GpuMemoryUse {
+    size_t current = 0;
+    size_t peak = 0;
+};
+GpuMemoryUse gpu_memory_use();
 
 namespace detail {
-void* device_malloc(size_t bytes);  ///< throws bvhlab::CudaError naming the size on failure
-void device_free(void* p) noexcept;
+void* device_malloc(size_t bytes);                 ///< throws bvhlab::CudaError naming the size on failure
+void device_free(void* p, size_t bytes) noexcept;  ///< bytes: what device_malloc was asked for
 void copy_to_device(void* d_dst, const void* h_src, size_t bytes);
 void copy_to_host(void* h_dst, const void* d_src, size_t bytes);
 void fill_device_bytes(void* d_dst, uint8_t value, size_t bytes, void* stream = nullptr);  ///< async on stream
@@ -90,7 +97,7 @@ public:
 
 private:
     void release() noexcept {
-        if (d_ptr_) detail::device_free(d_ptr_);
+        if (d_ptr_) detail::device_free(d_ptr_, bytes());
         d_ptr_ = nullptr;
         size_ = 0;
     }

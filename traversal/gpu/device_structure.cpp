@@ -50,4 +50,10 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
     }
 }
 
+size_t DeviceStructure::bytes() const {
+    return bvh_nodes_.bytes() + cw_nodes_.bytes() + bvh_tris_.bytes() + bvh_ids_.bytes() + cw_vtris_.bytes() +
+           kd_nodes_.bytes() + kd_prims_.bytes() + kd_tris_.bytes() + instances_.bytes() + blas_nodes_.bytes() +
+           blas_tris_.bytes() + blas_ids_.bytes() + blas_views_.bytes();
+}
+
 }  // namespace bvhlab::trav

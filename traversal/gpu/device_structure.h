@@ -33,6 +33,9 @@ public:
         return {bvh_nodes_.data(), bvh_ids_.data(), instances_.data(), blas_views_.data()};
     }
 
+    /// Device memory of every buffer the structure uploaded.
+    size_t bytes() const;
+
 private:
     Layout layout_;
     uint32_t depth_;

@@ -2,6 +2,8 @@
 // The CUDA runtime behind device_buffer.h: allocation, copies, events and device queries.
 #include <cuda_runtime.h>
 
+#include <atomic>
+
 #include <cctype>
 #include <cstdio>
 #include <fstream>
@@ -70,6 +72,12 @@ SmClock gpu_sm_clock() {
     return c;
 }
 
+namespace {
+std::atomic<size_t> g_current{0}, g_peak{0};  // DeviceBuffer bytes held, and the most held
+}  // namespace
+
+GpuMemoryUse gpu_memory_use() { return {g_current.load(), g_peak.load()}; }
+
 namespace detail {
 
 void* device_malloc(size_t bytes) {
@@ -79,10 +87,17 @@ void* device_malloc(size_t bytes) {
         cudaGetLastError();  // clear the sticky-free error state of a failed allocation
         throw CudaError("cannot allocate " + std::to_string(bytes) + " bytes of GPU memory: " + cudaGetErrorString(e));
     }
+    const size_t now = g_current += bytes;
+    size_t peak = g_peak.load();
+    while (now > peak && !g_peak.compare_exchange_weak(peak, now)) {
+    }
     return p;
 }
 
-void device_free(void* p) noexcept { BVHLAB_CUDA_CHECK_LOG(cudaFree(p)); }
+void device_free(void* p, size_t bytes) noexcept {
+    BVHLAB_CUDA_CHECK_LOG(cudaFree(p));
+    g_current -= bytes;
+}
 
 void copy_to_device(void* d_dst, const void* h_src, size_t bytes) {
     BVHLAB_CUDA_CHECK(cudaMemcpy(d_dst, h_src, bytes, cudaMemcpyHostToDevice));

@@ -20,10 +20,11 @@ std::string gpu_description() { return "none"; }
 std::string gpu_driver() { return "none"; }
 SmClock gpu_sm_clock() { return {}; }
 int gpu_sm_count() { throw Error(kNoCuda); }
+GpuMemoryUse gpu_memory_use() { return {}; }
 
 namespace detail {
 void* device_malloc(size_t) { throw Error(kNoCuda); }
-void device_free(void*) noexcept {}
+void device_free(void*, size_t) noexcept {}
 void copy_to_device(void*, const void*, size_t) { throw Error(kNoCuda); }
 void copy_to_host(void*, const void*, size_t) { throw Error(kNoCuda); }
 void fill_device_bytes(void*, uint8_t, size_t, void*) { throw Error(kNoCuda); }
