@@ -205,6 +205,8 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
 
     const bool opaque = m.type != BsdfType::kGlass;
     const Vec3 n = opaque && dot(ns, wo) < 0.0f ? ns * -1.0f : ns;
+    // Without shading normals n is ±ng and the sides always agree: the guard is skipped.
+    const bool bent = s.normals != nullptr;
     const Frame frame = Frame::around(n);
     const Vec3 wo_l = frame.to_local(wo);
     const uint32_t pixel = pixel_of(p, px), sample = sample_of(p, px);
@@ -247,7 +249,7 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
         }
         float pdf_b = 0.0f;
         const Vec3 wi_l = frame.to_local(dir);
-        Vec3 fcos = consistent_sides(ng, n, wo, dir) ? eval_bsdf(m, base, wo_l, wi_l, pdf_b) : splat(0.0f);
+        Vec3 fcos = (!bent || consistent_sides(ng, n, wo, dir)) ? eval_bsdf(m, base, wo_l, wi_l, pdf_b) : splat(0.0f);
         if (p.bug == PlantedBug::kNoCosine && wi_l.z > 0.0f) fcos = fcos * (1.0f / wi_l.z);
         if (pdf_l > 0.0f && max3(fcos) > 0.0f) {
             const float w = p.strategy == Strategy::kMis ? power_heuristic(pdf_l, pdf_b) : 1.0f;
@@ -269,7 +271,7 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
         beta = beta * (1.0f / q);
     }
     const Vec3 dir = normalize(frame.to_world(bs.wi));
-    if (!consistent_sides(ng, n, wo, dir)) return out;
+    if (bent && !consistent_sides(ng, n, wo, dir)) return out;
     out.next_ray = {offset_point(pos, ng, dir, s.offset), 0.0f, dir, INFINITY};
     out.next_throughput = beta;
     out.next_pdf = bs.delta ? 0.0f : bs.pdf;
