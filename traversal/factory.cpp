@@ -223,10 +223,6 @@ AccelStructure build_structure(const scene::InstancedScene& placed, const Struct
         throw Error(
             "the kd-tree is single-level and the scene places a mesh more than once: --flatten makes it one "
             "mesh");
-    if (spec_in.is_cwbvh())
-        throw Error(
-            "two-level structures have BVH2 bottom levels (layout bvh2); --flatten makes the scene one mesh "
-            "for the cwbvh layout");
     if (placed.instances.empty()) throw Error("the scene places no mesh: nothing to build a structure over");
     for (const scene::TriangleMesh& m : placed.meshes)
         if (const std::string p = scene::domain_problem(m); !p.empty() && m.triangle_count() > 0) throw Error(p);
@@ -238,22 +234,38 @@ AccelStructure build_structure(const scene::InstancedScene& placed, const Struct
     vo.allow_duplicates = spec.kind() == accel::BuilderKind::kSbvh;
     const auto t0 = std::chrono::steady_clock::now();
     {
-        auto st =
-            begin(stage, "building " + std::to_string(scene::placed_mesh_count(placed)) + " " + spec.builder +
-                             " SAH BLAS and the TLAS over " + std::to_string(placed.instances.size()) + " instances");
-        b.structure.two_level = accel::build_two_level(placed, [&](const scene::TriangleMesh& m) {
-            accel::BuildTree tree = accel::run_builder(spec.kind(), m, spec.options).tree;
-            const std::string err = accel::validate(tree, m, spec.options.config, vo);
-            if (!err.empty()) throw Error("builder '" + spec.builder + "' produced an invalid BLAS: " + err);
-            return tree;
-        });
+        auto st = begin(stage, "building " + std::to_string(scene::placed_mesh_count(placed)) + " " + spec.builder +
+                                   " SAH BLAS" + (spec.is_cwbvh() ? " (collapsed to 8-wide)" : "") +
+                                   " and the TLAS over " + std::to_string(placed.instances.size()) + " instances");
+        accel::BlasLayout blas_layout;
+        blas_layout.wide = spec.is_cwbvh();
+        blas_layout.collapse =
+            spec.collapse == "greedy" ? accel::CollapseMethod::kGreedy : accel::CollapseMethod::kSahOptimal;
+        blas_layout.tris = spec.cw_tris == "vertices" ? accel::CwTris::kVertices : accel::CwTris::kWoop;
+        b.structure.two_level = accel::build_two_level(
+            placed,
+            [&](const scene::TriangleMesh& m) {
+                accel::BuildTree tree = accel::run_builder(spec.kind(), m, spec.options).tree;
+                const std::string err = accel::validate(tree, m, spec.options.config, vo);
+                if (!err.empty()) throw Error("builder '" + spec.builder + "' produced an invalid BLAS: " + err);
+                return tree;
+            },
+            blas_layout);
     }
     b.result.build_ms = ms_since(t0);
     const accel::TwoLevelBvh& t = b.structure.two_level;
-    b.structure.layout = Layout::kTwoLevel;
-    b.structure.name = "two-level/" + spec.builder;
+    b.structure.layout = t.wide() ? Layout::kTwoLevelCwbvh : Layout::kTwoLevel;
+    b.structure.name = std::string(!t.wide()                    ? "two-level/"
+                                   : spec.cw_tris == "vertices" ? "two-level-cwbvh-vertices/"
+                                                                : "two-level-cwbvh/") +
+                       spec.builder;
     size_t blas_nodes = 0, blas_refs = 0, blas_bytes = 0;
     for (const accel::Bvh2& x : t.blas) {
+        blas_nodes += x.nodes.size();
+        blas_refs += x.tri_ids.size();
+        blas_bytes += x.bytes();
+    }
+    for (const accel::Cwbvh& x : t.cw_blas) {
         blas_nodes += x.nodes.size();
         blas_refs += x.tri_ids.size();
         blas_bytes += x.bytes();
@@ -343,7 +355,7 @@ std::unique_ptr<Tracer> AccelStructure::gpu_tracer(const std::string& kernel, st
 }
 
 void AccelStructure::save(const std::string& path, const std::string& scene_hash) const {
-    if (structure.layout == Layout::kTwoLevel)
+    if (is_two_level(structure.layout))
         throw Error("structure files hold single-level structures; a two-level BVH is rebuilt from its scene");
     accel::TreeFileMeta meta;
     if (loaded_meta) {  // re-saving a loaded file keeps its provenance

@@ -93,9 +93,11 @@ private:
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
 
 /// Builds the two-level BVH of an instanced scene: a BLAS per placed mesh by spec's BVH builder
-/// and options, each validated, under a binned TLAS (layout "two-level", name
-/// "two-level/<builder>"; hits name triangles by scene-wide ids, accel::TwoLevelBvh). Throws
-/// bvhlab::Error for the kd-tree and the cwbvh layout (single-level: flatten the scene first).
+/// and options, each validated, in spec's layout (bvh2, or cwbvh with its collapse and triangle
+/// format), under a binned TLAS (layout "two-level" or "two-level-cwbvh", name
+/// "two-level/<builder>" or "two-level-cwbvh/<builder>"; hits name triangles by scene-wide ids,
+/// accel::TwoLevelBvh). Throws bvhlab::Error for the kd-tree (single-level: flatten the scene
+/// first).
 AccelStructure build_structure(const scene::InstancedScene& scene, const StructureSpec& spec,
                                const StageHook& stage = {});
 

@@ -16,25 +16,31 @@
 namespace bvhlab::trav {
 
 /// The traversal layouts. A kernel traces exactly one of them.
-enum class Layout : uint32_t { kBvh2 = 0, kKd = 1, kCwbvh = 2, kTwoLevel = 3 };
+/// kTwoLevel has BVH2 BLAS, kTwoLevelCwbvh compressed 8-wide ones (both a BVH2 TLAS).
+enum class Layout : uint32_t { kBvh2 = 0, kKd = 1, kCwbvh = 2, kTwoLevel = 3, kTwoLevelCwbvh = 4 };
 
-/// "bvh2", "kdtree", "cwbvh" or "two-level".
+/// "bvh2", "kdtree", "cwbvh", "two-level" or "two-level-cwbvh".
 inline const char* layout_name(Layout layout) {
-    return layout == Layout::kBvh2    ? "bvh2"
-           : layout == Layout::kKd    ? "kdtree"
-           : layout == Layout::kCwbvh ? "cwbvh"
-                                      : "two-level";
+    return layout == Layout::kBvh2       ? "bvh2"
+           : layout == Layout::kKd       ? "kdtree"
+           : layout == Layout::kCwbvh    ? "cwbvh"
+           : layout == Layout::kTwoLevel ? "two-level"
+                                         : "two-level-cwbvh";
 }
 
+/// Whether `layout` is one of the two-level layouts (Structure::two_level).
+inline bool is_two_level(Layout layout) { return layout == Layout::kTwoLevel || layout == Layout::kTwoLevelCwbvh; }
+
 struct Structure {
-    /// "bvh2/binned", "bvh2/sweep", "bvh2/sbvh", "cwbvh/<builder>", "kdtree", or
-    /// "two-level/<builder>" (BVH2 BLAS by that builder under a binned TLAS)
+    /// "bvh2/binned", "bvh2/sweep", "bvh2/sbvh", "cwbvh/<builder>", "kdtree",
+    /// "two-level/<builder>" (BVH2 BLAS by that builder under a binned TLAS), or
+    /// "two-level-cwbvh/<builder>" (the same BLAS collapsed to CWBVHs)
     std::string name;
     Layout layout = Layout::kBvh2;
     accel::Bvh2 bvh2;              ///< the structure when layout == kBvh2
     accel::KdLayout kd;            ///< the structure when layout == kKd
     accel::Cwbvh cwbvh;            ///< the structure when layout == kCwbvh
-    accel::TwoLevelBvh two_level;  ///< the structure when layout == kTwoLevel (hits: scene-wide ids)
+    accel::TwoLevelBvh two_level;  ///< the structure of both two-level layouts (hits: scene-wide ids)
 
     /// Stack entries a full-stack traversal needs (interior nodes on the longest path).
     /// For a two-level BVH: the deeper of its TLAS and BLAS stacks (each level has its own).

@@ -12,6 +12,7 @@
 #include "accel/builders/binned_sah.h"
 #include "accel/core/check.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "accel/layouts/cwbvh_convert.h"
 
 namespace bvhlab::accel {
 
@@ -20,22 +21,21 @@ namespace {
 /// BLAS levels whose boxes bound an instance in the world (up to 2^levels boxes, 8 corners each).
 constexpr int kFrontierLevels = 4;
 
-/// The boxes of a BVH2's nodes `levels` below the root (fewer where leaves end sooner): their
-/// transformed corners bound an instance far tighter than the root box's when it is turned.
-std::vector<AABB> frontier_boxes(const Bvh2& bvh, int levels) {
+/// The boxes of a binary tree's nodes `levels` below the root (fewer where leaves end sooner):
+/// their transformed corners bound an instance far tighter than the root box's when it is turned.
+std::vector<AABB> frontier_boxes(const BuildTree& tree, int levels) {
+    if (tree.nodes[0].is_leaf()) return {tree.nodes[0].bounds};
     std::vector<AABB> out;
-    std::vector<std::pair<int32_t, int>> todo{{0, 0}};
+    std::vector<std::pair<uint32_t, int>> todo{{0u, 0}};
     while (!todo.empty()) {
         const auto [node, level] = todo.back();
         todo.pop_back();
-        const Bvh2Node& n = bvh.nodes[size_t(node)];
-        for (int k = 0; k < 2; ++k) {
-            const AABB box = n.child_box(k);
-            if (box.is_empty()) continue;  // a root leaf's second slot
-            if (n.child[k] >= 0 && level + 1 < levels)
-                todo.push_back({n.child[k], level + 1});
+        const uint32_t first = tree.nodes[node].first_index;
+        for (uint32_t c = first; c < first + 2; ++c) {
+            if (!tree.nodes[c].is_leaf() && level + 1 < levels)
+                todo.push_back({c, level + 1});
             else
-                out.push_back(box);
+                out.push_back(tree.nodes[c].bounds);
         }
     }
     return out;
@@ -55,12 +55,14 @@ AABB world_box(const std::vector<AABB>& boxes, const scene::Transform& t) {
 uint32_t TwoLevelBvh::blas_depth() const {
     uint32_t d = 0;
     for (const Bvh2& b : blas) d = std::max(d, b.depth);
+    for (const Cwbvh& b : cw_blas) d = std::max(d, b.depth);
     return d;
 }
 
 size_t TwoLevelBvh::bytes() const {
     size_t n = tlas.bytes() + instances.size() * sizeof(InstanceRecord);
     for (const Bvh2& b : blas) n += b.bytes();
+    for (const Cwbvh& b : cw_blas) n += b.bytes();
     return n;
 }
 
@@ -71,7 +73,7 @@ uint32_t TwoLevelBvh::instance_of_id(uint32_t id) const {
     return uint32_t(it - instances.begin()) - 1;
 }
 
-TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build) {
+TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build, const BlasLayout& layout) {
     if (scene.instances.empty()) throw Error("a two-level BVH needs at least one instance");
     const uint64_t world = scene.triangle_count();
     if (world > 0x7fffffffull)
@@ -84,17 +86,29 @@ TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilde
         BVHLAB_CHECK(inst.mesh < scene.meshes.size(), "an instance of a mesh the scene does not have");
         placed[inst.mesh] = true;
     }
-    out.blas.resize(scene.meshes.size());
-    tbb::parallel_for(size_t(0), scene.meshes.size(), [&](size_t m) {
-        if (placed[m]) out.blas[m] = convert_to_bvh2(build(scene.meshes[m]), scene.meshes[m]);
-    });
+    if (layout.wide)
+        out.cw_blas.resize(scene.meshes.size());
+    else
+        out.blas.resize(scene.meshes.size());
     std::vector<std::vector<AABB>> boxes(scene.meshes.size());
-    for (size_t m = 0; m < scene.meshes.size(); ++m)
-        if (placed[m]) boxes[m] = frontier_boxes(out.blas[m], kFrontierLevels);
+    tbb::parallel_for(size_t(0), scene.meshes.size(), [&](size_t m) {
+        if (!placed[m]) return;
+        const scene::TriangleMesh& mesh = scene.meshes[m];
+        const BuildTree tree = build(mesh);
+        boxes[m] = frontier_boxes(tree, kFrontierLevels);
+        if (!layout.wide) {
+            out.blas[m] = convert_to_bvh2(tree, mesh);
+            return;
+        }
+        const WideTree wide = collapse_to_wide(tree, mesh, layout.collapse);
+        const std::string err = validate_wide(wide, mesh.triangle_count(), tree.prim_indices);
+        BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide BLAS: " + err);
+        out.cw_blas[m] = convert_to_cwbvh(wide, mesh, layout.tris);
+    });
 
+    const std::vector<uint64_t> first = scene::instance_first_ids(scene);
     std::vector<PrimRef> refs(scene.instances.size());
     out.instances.resize(scene.instances.size());
-    uint64_t first = 0;
     for (size_t i = 0; i < scene.instances.size(); ++i) {
         const scene::Instance& inst = scene.instances[i];
         const double det = inst.transform.determinant();
@@ -103,9 +117,8 @@ TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilde
         InstanceRecord& r = out.instances[i];
         std::memcpy(r.world_to_object, inst.transform.inverse().m, sizeof r.world_to_object);
         r.blas = inst.mesh;
-        r.first_id = uint32_t(first);
+        r.first_id = uint32_t(first[i]);
         r.reserved[0] = r.reserved[1] = 0;
-        first += scene.meshes[inst.mesh].triangle_count();
         refs[i] = {world_box(boxes[inst.mesh], inst.transform), uint32_t(i)};
     }
     // One instance per leaf: testing an instance costs a whole BLAS traversal, far more than the

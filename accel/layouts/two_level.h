@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
-// A two-level BVH: one bottom-level BVH2 (BLAS) per mesh, in the mesh's own space, and a
-// top-level BVH2 (TLAS) over the instances' world boxes, one instance per leaf entry. A ray
-// reaching an instance is moved into the instance's space and traced through its mesh's BLAS
-// (traversal/device/two_level_traverse.h), as in Embree, OptiX and tinybvh.
+// A two-level BVH: one bottom-level BVH (BLAS) per mesh, in the mesh's own space, in the BVH2 or
+// the compressed 8-wide layout, and a top-level BVH2 (TLAS) over the instances' world boxes, one
+// instance per leaf entry. A ray reaching an instance is moved into the instance's space and
+// traced through its mesh's BLAS (traversal/device/two_level_traverse.h and
+// two_level_cwbvh_traverse.h), as in Embree, OptiX and tinybvh.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +12,8 @@
 
 #include "accel/core/build_tree.h"
 #include "accel/layouts/bvh2_node.h"
+#include "accel/layouts/cwbvh_node.h"
+#include "accel/passes/collapse_wide.h"
 #include "scene/scene.h"
 
 namespace bvhlab::accel {
@@ -41,12 +44,19 @@ static_assert(sizeof(InstanceRecord) == 64 && alignof(InstanceRecord) == 16, "In
 /// instance and its triangle (instance_of_id), and every single-level tool (the comparison,
 /// hit files) reads two-level hits unchanged. At most 2^31 - 1 triangles in the world.
 struct TwoLevelBvh {
-    std::vector<Bvh2> blas;  ///< one per mesh of the scene (an empty Bvh2 for a mesh no instance places)
-    Bvh2 tlas;               ///< over instance boxes: tlas.tri_ids are instance indices, no triangles
+    /// One per mesh of the scene when the BLAS are BVH2s (an empty Bvh2 for a mesh no instance
+    /// places); empty when they are CWBVHs.
+    std::vector<Bvh2> blas;
+    /// One per mesh of the scene when the BLAS are CWBVHs (an empty Cwbvh for a mesh no instance
+    /// places); empty when they are BVH2s.
+    std::vector<Cwbvh> cw_blas;
+    Bvh2 tlas;  ///< over instance boxes: tlas.tri_ids are instance indices, no triangles
     std::vector<InstanceRecord> instances;
     uint64_t world_triangles = 0;  ///< triangles of every instance
 
-    /// Interior nodes on the longest TLAS path plus the deepest BLAS: the two stacks' entries.
+    /// Whether the BLAS are CWBVHs.
+    bool wide() const { return !cw_blas.empty(); }
+    /// Interior nodes on the longest TLAS path, and the deepest BLAS: the two stacks' entries.
     uint32_t tlas_depth() const { return tlas.depth; }
     uint32_t blas_depth() const;
     size_t bytes() const;
@@ -57,11 +67,20 @@ struct TwoLevelBvh {
 /// A BVH builder over one mesh, as the caller chooses it (any BVH builder and options).
 using MeshBuilder = std::function<BuildTree(const scene::TriangleMesh&)>;
 
-/// Builds the BLAS of every placed mesh with `build` and a binned-SAH TLAS over the instances'
-/// world boxes: the transformed corners of the BLAS's boxes four levels below its root (up to 16
-/// boxes), far tighter than the root box's corners for a turned instance. Throws
-/// bvhlab::Error for a scene without instances or with more than 2^31 - 1 world triangles, and
-/// for a singular instance transform.
-TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build);
+/// The BLAS layout: BVH2 (with Woop triangles), or each binary BLAS collapsed to 8-wide and
+/// compressed (Ylitie et al. 2017) as the single-level cwbvh layout is.
+struct BlasLayout {
+    bool wide = false;
+    CollapseMethod collapse = CollapseMethod::kSahOptimal;
+    CwTris tris = CwTris::kWoop;
+};
+
+/// Builds the BLAS of every placed mesh with `build` (in `layout`) and a binned-SAH TLAS over the
+/// instances' world boxes: the transformed corners of the binary BLAS's boxes four levels below
+/// its root (up to 16 boxes), far tighter than the root box's corners for a turned instance.
+/// Throws bvhlab::Error for a scene without instances or with more than 2^31 - 1 world
+/// triangles, and for a singular instance transform.
+TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilder& build,
+                            const BlasLayout& layout = {});
 
 }  // namespace bvhlab::accel

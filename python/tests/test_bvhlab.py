@@ -227,7 +227,7 @@ def test_kernels_name_one_default_per_layout():
     assert len({k["name"] for k in ks}) == len(ks)
     defaults = [(k["layout"], k["short_stack"]) for k in ks if k["default"]]
     assert sorted(defaults) == sorted({("bvh2", False), ("cwbvh", False), ("kdtree", False), ("kdtree", True),
-                                       ("two-level", False)})
+                                       ("two-level", False), ("two-level-cwbvh", False)})
 
 
 @needs_gpu

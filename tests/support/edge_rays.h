@@ -74,16 +74,20 @@ inline std::vector<AABB> structure_boxes(const trav::Structure& s) {
             for (int slot = 0; slot < 2; ++slot)
                 if (!n.child_box(slot).is_empty()) boxes.push_back(n.child_box(slot));  // a root leaf's 2nd is empty
     };
+    const auto cwbvh_boxes = [&boxes](const accel::Cwbvh& cw) {
+        for (const accel::CwbvhNode& n : cw.nodes)
+            for (uint32_t slot = 0; slot < 8; ++slot)
+                if (n.meta[slot] != 0) boxes.push_back(accel::decode_child_box(n, slot));
+    };
     if (s.layout == trav::Layout::kBvh2) {
         bvh2_boxes(s.bvh2);
-    } else if (s.layout == trav::Layout::kTwoLevel) {
+    } else if (trav::is_two_level(s.layout)) {
         // The TLAS's world boxes and each BLAS's (object space: the world's under identity).
         bvh2_boxes(s.two_level.tlas);
         for (const accel::Bvh2& b : s.two_level.blas) bvh2_boxes(b);
+        for (const accel::Cwbvh& b : s.two_level.cw_blas) cwbvh_boxes(b);
     } else if (s.layout == trav::Layout::kCwbvh) {
-        for (const accel::CwbvhNode& n : s.cwbvh.nodes)
-            for (uint32_t slot = 0; slot < 8; ++slot)
-                if (n.meta[slot] != 0) boxes.push_back(accel::decode_child_box(n, slot));
+        cwbvh_boxes(s.cwbvh);
     } else {
         std::vector<std::pair<uint32_t, AABB>> todo{{0u, s.kd.tree.bounds}};
         while (!todo.empty()) {

@@ -29,20 +29,19 @@ inline bool built_with_cuda() {
     if (const std::string why = ::bvhlab::trav::no_gpu_reason(); !why.empty()) GTEST_SKIP() << "no GPU: " << why
 
 /// A structure of `layout` from the library's factory (no EPO: the tests do not read it). For
-/// the two-level layout, the mesh placed once (identity): triangle ids are the mesh's.
+/// the two-level layouts, the mesh placed once (identity): triangle ids are the mesh's.
 inline Structure make_structure(const scene::TriangleMesh& mesh, Layout layout, accel::BuilderKind builder,
                                 accel::CwTris tris = accel::CwTris::kWoop) {
     StructureSpec spec;
-    if (layout == Layout::kTwoLevel) {
-        spec.builder = accel::builder_name(builder);
-        spec.epo = false;
-        return build_structure(scene::single_instance(mesh), spec).structure;
-    }
     spec.builder = layout == Layout::kKd ? "kdtree" : accel::builder_name(builder);
-    spec.layout = layout == Layout::kCwbvh ? "cwbvh" : "bvh2";
+    spec.layout = layout == Layout::kCwbvh || layout == Layout::kTwoLevelCwbvh ? "cwbvh" : "bvh2";
     spec.cw_tris = tris == accel::CwTris::kVertices ? "vertices" : "woop";
     spec.epo = false;
+    if (is_two_level(layout)) return build_structure(scene::single_instance(mesh), spec).structure;
     return build_structure(mesh, spec).structure;
 }
+
+/// Whether `layout`'s triangles come in both CWBVH formats (Woop and vertices).
+inline bool has_cw_tris(Layout layout) { return layout == Layout::kCwbvh || layout == Layout::kTwoLevelCwbvh; }
 
 }  // namespace bvhlab::trav

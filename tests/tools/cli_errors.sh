@@ -549,8 +549,12 @@ expect_error gen-seed-negative "--seed: '-1' is not a non-negative integer" gen 
 # Scene formats through Assimp, instanced scenes and gen:instances.
 expect_error instanced-kdtree "the kd-tree is single-level and the scene places a mesh more than once: --flatten" \
     build --structure kdtree "$data/instances.glb"
-expect_error instanced-cwbvh "two-level structures have BVH2 bottom levels .*--flatten" build --layout cwbvh \
-    gen:instances:cornell-box:3
+# The cwbvh layout of an instanced scene is two-level with CWBVH bottom levels.
+if "$bin" -q build --layout cwbvh gen:instances:cornell-box:3 --json | python3 -c '
+import json, sys
+r = json.loads(sys.stdin.readline())
+assert r["structure"] == "two-level-cwbvh/binned" and r["layout"] == "two-level-cwbvh" and r["instances"] == 3, r
+'; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL instanced-cwbvh: not a two-level-cwbvh build"; fi
 expect_error instanced-out "--out writes a structure file, .* is built two-level .*--flatten" build "$data/instances.glb" \
     -o "$tmp/two-level.tree"
 [ ! -e "$tmp/two-level.tree" ] && pass=$((pass + 1)) || { fail=$((fail + 1)); echo "FAIL instanced-out wrote a file"; }

@@ -13,6 +13,7 @@
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
 #include "accel/layouts/kd_convert.h"
+#include "accel/layouts/two_level.h"
 #include "accel/passes/collapse_wide.h"
 #include "tests/support/agreement.h"
 #include "tests/support/edge_rays.h"
@@ -121,6 +122,30 @@ TEST(EdgeRays, EveryBvhAndCwbvhAgreesWithEmbree) {
                 expect_edge_rays_agree(
                     mesh, oracle, cw,
                     [&](const std::vector<Ray>& r, Query q, std::vector<Hit>& h) { trace_cpu(cw.cwbvh, r, q, h); }, 8);
+            }
+        }
+    }
+}
+
+TEST(EdgeRays, TwoLevelBvhsAgreeWithEmbree) {
+    // The lattice placed once (identity): the rays graze the TLAS's box and each BLAS's, BVH2
+    // and CWBVH, through the two-level traversals.
+    for (size_t i = 0; i < lattices().size(); ++i) {
+        const scene::TriangleMesh& mesh = lattices()[i];
+        SCOPED_TRACE("lattice " + std::to_string(i + 1));
+        const EmbreeOracle oracle(mesh);
+        for (auto builder : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
+            for (bool wide : {false, true}) {
+                Structure s;
+                s.layout = wide ? Layout::kTwoLevelCwbvh : Layout::kTwoLevel;
+                s.two_level = accel::build_two_level(
+                    scene::single_instance(mesh),
+                    [&](const scene::TriangleMesh& m) { return accel::run_builder(builder, m, {}).tree; }, {wide});
+                SCOPED_TRACE(std::string(accel::builder_name(builder)) + (wide ? " two-level cwbvh" : " two-level"));
+                expect_edge_rays_agree(
+                    mesh, oracle, s,
+                    [&](const std::vector<Ray>& r, Query q, std::vector<Hit>& h) { trace_cpu(s.two_level, r, q, h); },
+                    10);
             }
         }
     }

@@ -214,10 +214,11 @@ TEST(StructureFactory, DefaultKernelsComeFromTheRegistry) {
     std::set<std::pair<int, bool>> seen;
     for (const KernelInfo& k : registered_kernels())
         if (k.is_default) EXPECT_TRUE(seen.insert({int(k.layout), k.short_stack}).second) << k.name;
-    EXPECT_EQ(seen.size(), 5u);  // bvh2, cwbvh, two-level, and the kd-tree's two
+    EXPECT_EQ(seen.size(), 6u);  // bvh2, cwbvh, both two-level layouts, and the kd-tree's two
     EXPECT_EQ(default_kernel(Layout::kBvh2).layout, Layout::kBvh2);
     EXPECT_EQ(default_kernel(Layout::kCwbvh).layout, Layout::kCwbvh);
     EXPECT_EQ(default_kernel(Layout::kTwoLevel).layout, Layout::kTwoLevel);
+    EXPECT_EQ(default_kernel(Layout::kTwoLevelCwbvh).layout, Layout::kTwoLevelCwbvh);
     EXPECT_FALSE(full.default_kernel().short_stack);
     EXPECT_TRUE(shorty.default_kernel().short_stack);
     EXPECT_EQ(shorty.gpu_options(shorty.default_kernel()).kd_stack, 3);

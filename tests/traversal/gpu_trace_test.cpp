@@ -139,8 +139,7 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
                                       {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
         if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
         // A CWBVH's vertex-triple leaves (--cw-tris vertices) are a second kernel instance.
-        if (kernel.layout == Layout::kCwbvh)
-            variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
+        if (has_cw_tris(kernel.layout)) variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
         expect_kernel_agrees(
             kernel, scene.mesh, cfg, variants, [](const CompareReport& rep) { return double(rep.ties); }, 0.001, 1.0);
     }
@@ -182,7 +181,7 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEdgeAndPlaneRays) {
         const EmbreeOracle oracle(mesh);
         std::vector<Variant> variants{{accel::BuilderKind::kBinned, accel::CwTris::kWoop},
                                       {accel::BuilderKind::kSbvh, accel::CwTris::kWoop}};
-        if (kernel.layout == Layout::kCwbvh) variants.push_back({accel::BuilderKind::kSbvh, accel::CwTris::kVertices});
+        if (has_cw_tris(kernel.layout)) variants.push_back({accel::BuilderKind::kSbvh, accel::CwTris::kVertices});
         if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
         for_each_gpu_tracer(kernel, mesh, variants, [&](const Structure& s, Tracer& tracer) {
             const std::vector<Ray> rays = test::edge_rays(test::structure_boxes(s), mesh.bounds(), seed + 6, 400);
@@ -209,7 +208,7 @@ TEST_P(GpuKernel, CountersEqualTheCpuReferences) {
         SCOPED_TRACE(scene.name);
         const test::PinnedRays rays(scene);
         std::vector<accel::CwTris> formats{accel::CwTris::kWoop};
-        if (kernel.layout == Layout::kCwbvh) formats.push_back(accel::CwTris::kVertices);
+        if (has_cw_tris(kernel.layout)) formats.push_back(accel::CwTris::kVertices);
         for (accel::CwTris tris : formats) {
             const Structure s = make_structure(scene.mesh, kernel.layout, accel::BuilderKind::kBinned, tris);
             SCOPED_TRACE(s.name);
@@ -315,17 +314,24 @@ TEST(GpuTrace, TwoLevelKernelsAgreeWithEmbreeInstances) {
         cfg.primary = {128, 96, 1, 0};
         cfg.ao_length = 0.05f * world.diagonal();
         RayProtocol proto(world, oracle, cfg);
-        for (auto builder : {accel::BuilderKind::kBinned, accel::BuilderKind::kSbvh}) {
+        for (const auto& [builder, layout] :
+             std::vector<std::pair<accel::BuilderKind, std::string>>{{accel::BuilderKind::kBinned, "bvh2"},
+                                                                     {accel::BuilderKind::kSbvh, "bvh2"},
+                                                                     {accel::BuilderKind::kBinned, "cwbvh"},
+                                                                     {accel::BuilderKind::kSbvh, "cwbvh"}}) {
             StructureSpec spec;
             spec.builder = accel::builder_name(builder);
+            spec.layout = layout;
             spec.epo = false;
             AccelStructure as = build_structure(placed, spec);
             SCOPED_TRACE(as.structure.name);
-            EXPECT_EQ(as.gpu_tracer()->name(), "two-level-dynamic-speculative-fma") << "the layout's default kernel";
+            EXPECT_EQ(as.gpu_tracer()->name(),
+                      layout == "bvh2" ? "two-level-dynamic-speculative-fma" : "two-level-dynamic-cwbvh")
+                << "the layout's default kernel";
             auto cpu = as.cpu_tracer();
             size_t kernels = 0;
             for (const KernelInfo& k : registered_kernels()) {
-                if (k.layout != Layout::kTwoLevel) continue;
+                if (k.layout != as.structure.layout) continue;
                 ++kernels;
                 auto gpu = as.gpu_tracer(k.name);
                 for (RayType t : {RayType::kPrimary, RayType::kAo, RayType::kDiffuse, RayType::kShadow}) {
@@ -350,7 +356,7 @@ TEST(GpuTrace, TwoLevelKernelsAgreeWithEmbreeInstances) {
                     EXPECT_GE(same, ours.size() * 999 / 1000) << "GPU and CPU run the same traversal";
                 }
             }
-            EXPECT_GE(kernels, 3u) << "two-level, and the while-while forms";
+            EXPECT_GE(kernels, layout == "bvh2" ? 3u : 1u) << "two-level, the while-while forms; dynamic-cwbvh";
         }
     }
 }

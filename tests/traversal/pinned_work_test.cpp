@@ -89,14 +89,18 @@ nlohmann::json measure() {
     const Camera camera = framing_camera(flat);
     const test::PinnedScene world{"instances-12", std::move(flat), camera};
     const test::PinnedRays rays(world);
-    const accel::TwoLevelBvh two_level = accel::build_two_level(placed, [](const scene::TriangleMesh& m) {
-        return accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree;
-    });
-    for (const auto& [type, set] : rays.sets) {
-        std::vector<TraversalCounters> c;
-        std::vector<Hit> h;
-        trace_cpu(two_level, set.rays, set.query, h, &c);
-        work[world.name + "/two-level-binned/" + type] = test::summarise_work(c);
+    for (bool wide : {false, true}) {
+        const accel::TwoLevelBvh two_level = accel::build_two_level(
+            placed,
+            [](const scene::TriangleMesh& m) { return accel::run_builder(accel::BuilderKind::kBinned, m, {}).tree; },
+            {wide});
+        for (const auto& [type, set] : rays.sets) {
+            std::vector<TraversalCounters> c;
+            std::vector<Hit> h;
+            trace_cpu(two_level, set.rays, set.query, h, &c);
+            work[world.name + (wide ? "/two-level-cwbvh-binned/" : "/two-level-binned/") + type] =
+                test::summarise_work(c);
+        }
     }
     return {{"work", work}, {"sah", sah}};
 }

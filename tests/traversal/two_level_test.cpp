@@ -22,12 +22,14 @@ accel::MeshBuilder builder_of(accel::BuilderKind kind) {
     return [kind](const scene::TriangleMesh& m) { return accel::run_builder(kind, m, {}).tree; };
 }
 
-/// The two-level BVH of `placed` (BLAS by `kind`) against Embree's instances, every ray type,
-/// hits checked in world space on the flattened scene (ids as the two-level numbering).
-void expect_two_level_agreement(const scene::InstancedScene& placed, accel::BuilderKind kind, uint32_t w = 96,
-                                uint32_t h = 72) {
-    SCOPED_TRACE(accel::builder_name(kind));
-    const accel::TwoLevelBvh bvh = accel::build_two_level(placed, builder_of(kind));
+/// The two-level BVH of `placed` (BLAS by `kind`, in `layout`) against Embree's instances, every
+/// ray type, hits checked in world space on the flattened scene (ids as the two-level numbering).
+void expect_two_level_agreement(const scene::InstancedScene& placed, accel::BuilderKind kind,
+                                const accel::BlasLayout& layout = {}, uint32_t w = 96, uint32_t h = 72) {
+    SCOPED_TRACE(std::string(accel::builder_name(kind)) + (layout.wide ? " cwbvh" : " bvh2") +
+                 (layout.tris == accel::CwTris::kVertices ? " vertices" : ""));
+    const accel::TwoLevelBvh bvh = accel::build_two_level(placed, builder_of(kind), layout);
+    ASSERT_EQ(bvh.wide(), layout.wide);
     const scene::TriangleMesh world = scene::flatten(placed, /*keep_all=*/true);
     ASSERT_EQ(world.triangle_count(), bvh.world_triangles);
     const EmbreeOracle oracle(placed);
@@ -52,6 +54,10 @@ TEST(TwoLevel, GeneratedInstancesAgreeWithEmbreeInstances) {
             const scene::InstancedScene placed = scene::make_instances(base, n, 11 + n);
             for (auto b : {accel::BuilderKind::kBinned, accel::BuilderKind::kSweep, accel::BuilderKind::kSbvh})
                 expect_two_level_agreement(placed, b);
+            // CWBVH BLAS: both collapses, both triangle formats.
+            expect_two_level_agreement(placed, accel::BuilderKind::kBinned, {true});
+            expect_two_level_agreement(placed, accel::BuilderKind::kSbvh,
+                                       {true, accel::CollapseMethod::kGreedy, accel::CwTris::kVertices});
         }
     }
 }
@@ -65,7 +71,8 @@ TEST(TwoLevel, GltfSceneAgreesWithEmbreeInstances) {
     // centres lies exactly on the face's diagonal: shared-edge ties by construction, beyond the
     // cap meant for scenes without such alignments. A small turn of the view breaks it.
     placed.camera->target = placed.camera->target + Vec3{0.0123f, 0.0071f, 0.0f};
-    expect_two_level_agreement(placed, accel::BuilderKind::kBinned, 160, 120);
+    expect_two_level_agreement(placed, accel::BuilderKind::kBinned, {}, 160, 120);
+    expect_two_level_agreement(placed, accel::BuilderKind::kBinned, {true}, 160, 120);
 }
 
 TEST(TwoLevel, SeveralMeshesAndSceneWideIds) {
@@ -98,6 +105,13 @@ TEST(TwoLevel, SeveralMeshesAndSceneWideIds) {
     EXPECT_EQ(bvh.instance_of_id(uint32_t(bvh.world_triangles - 1)), 10u);
     EXPECT_EQ(bvh.tlas.tri_ids.size(), 11u) << "one TLAS entry per instance";
     expect_two_level_agreement(placed, accel::BuilderKind::kBinned);
+    const accel::TwoLevelBvh wide = accel::build_two_level(placed, builder_of(accel::BuilderKind::kBinned), {true});
+    EXPECT_TRUE(wide.blas.empty());
+    ASSERT_EQ(wide.cw_blas.size(), 3u);
+    EXPECT_TRUE(wide.cw_blas[2].nodes.empty()) << "a mesh no instance places gets no BLAS";
+    EXPECT_EQ(wide.tlas.nodes.size(), bvh.tlas.nodes.size()) << "the same TLAS over the same boxes";
+    for (size_t i = 0; i < 11; ++i) EXPECT_EQ(wide.instances[i].first_id, bvh.instances[i].first_id);
+    expect_two_level_agreement(placed, accel::BuilderKind::kBinned, {true});
 }
 
 TEST(TwoLevel, DetectsABrokenTwoLevelBvh) {
@@ -112,8 +126,13 @@ TEST(TwoLevel, DetectsABrokenTwoLevelBvh) {
     const RaySet set = RayProtocol(world, oracle, cfg).make(RayType::kPrimary);
     std::vector<Hit> ref;
     oracle.trace(set.rays, set.query, ref);
-    for (int defect = 0; defect < 2; ++defect) {
-        accel::TwoLevelBvh bvh = accel::build_two_level(placed, builder_of(accel::BuilderKind::kBinned));
+    for (int defect = 0; defect < 4; ++defect) {
+        // Defects 0 and 1 on BVH2 BLAS, 2 and 3 on CWBVH BLAS.
+        accel::TwoLevelBvh bvh = accel::build_two_level(placed, builder_of(accel::BuilderKind::kBinned), {defect >= 2});
+        if (defect >= 2) {
+            if (defect == 2) bvh.instances[1].world_to_object[3] += 0.05f * world.diagonal();
+            if (defect == 3) std::swap(bvh.instances[2].first_id, bvh.instances[3].first_id);
+        }
         if (defect == 0) bvh.instances[1].world_to_object[3] += 0.05f * world.diagonal();  // moved
         if (defect == 1) std::swap(bvh.instances[2].first_id, bvh.instances[3].first_id);  // ids swapped
         std::vector<Hit> ours;

@@ -30,11 +30,13 @@ void print_build_table(const Scene& s, const Built& b) {
         return;
     }
     std::printf("scene        %s (%zu triangles, hash %s)\n", s.name.c_str(), s.mesh.triangle_count(), s.hash.c_str());
-    if (b.structure.layout == trav::Layout::kTwoLevel) {
-        std::printf("two-level    %s BLAS over %llu meshes (%llu triangles stored), binned TLAS over %llu instances\n",
-                    r["builder"].get<std::string>().c_str(), (unsigned long long)r["meshes"].get<uint64_t>(),
-                    (unsigned long long)r["stored_triangles"].get<uint64_t>(),
-                    (unsigned long long)r["instances"].get<uint64_t>());
+    if (trav::is_two_level(b.structure.layout)) {
+        std::printf(
+            "two-level    %s %s BLAS over %llu meshes (%llu triangles stored), binned TLAS over %llu instances\n",
+            r["builder"].get<std::string>().c_str(),
+            b.structure.layout == trav::Layout::kTwoLevelCwbvh ? "cwbvh" : "bvh2",
+            (unsigned long long)r["meshes"].get<uint64_t>(), (unsigned long long)r["stored_triangles"].get<uint64_t>(),
+            (unsigned long long)r["instances"].get<uint64_t>());
         std::printf("build        %.1f ms\n", b.result.build_ms);
         std::printf("nodes        %llu BLAS (depth %u), %llu TLAS (depth %u)\n",
                     (unsigned long long)r["blas_nodes"].get<uint64_t>(), r["blas_depth"].get<uint32_t>(),

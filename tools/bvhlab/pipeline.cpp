@@ -129,13 +129,15 @@ void TraceOptions::validate(BuildOptions& build) const {
         } else {
             layout = trav::find_kernel(kernel).layout;
         }
-        if (layout == trav::Layout::kCwbvh) {
+        const bool wide = layout == trav::Layout::kCwbvh || layout == trav::Layout::kTwoLevelCwbvh;
+        if (wide) {
             if (build.is_kdtree())
                 throw Error("kernel '" + kernel + "' traces a CWBVH, which is built from a BVH, not a kd-tree");
             if (build.layout_flag->count() && !build.is_cwbvh())
                 throw Error("kernel '" + kernel + "' traces --layout cwbvh, not --layout " + build.layout);
             build.layout = "cwbvh";
-        } else if (layout == trav::Layout::kBvh2 && build.is_cwbvh() && !build.is_kdtree()) {
+        } else if ((layout == trav::Layout::kBvh2 || layout == trav::Layout::kTwoLevel) && build.is_cwbvh() &&
+                   !build.is_kdtree()) {
             throw Error("kernel '" + kernel + "' traces --layout bvh2, not --layout cwbvh");
         }
     }

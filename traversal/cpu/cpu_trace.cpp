@@ -77,6 +77,23 @@ void trace_cpu(const accel::Cwbvh& cw, const std::vector<Ray>& rays, Query query
 void trace_cpu(const accel::TwoLevelBvh& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
                std::vector<TraversalCounters>* counters) {
     check_bvh2_stack(bvh.tlas);
+    if (bvh.wide()) {
+        std::vector<CwbvhView> blas(bvh.cw_blas.size());
+        bool vertices = false;
+        for (size_t m = 0; m < bvh.cw_blas.size(); ++m) {
+            const accel::Cwbvh& cw = bvh.cw_blas[m];
+            check_cwbvh_stack(cw);
+            blas[m] = {cw.nodes.data(), cw.tris.data(), cw.tri_ids.data(), cw.vtris.data()};
+            vertices = vertices || cw.tri_format == accel::CwTris::kVertices;
+        }
+        const TwoLevelView view{
+            bvh.tlas.nodes.data(), bvh.tlas.tri_ids.data(), bvh.instances.data(), nullptr, blas.data(), vertices};
+        trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
+            return view.cw_vertices ? traverse_two_level_cwbvh<decltype(any)::value, true>(view, ray, c)
+                                    : traverse_two_level_cwbvh<decltype(any)::value, false>(view, ray, c);
+        });
+        return;
+    }
     std::vector<Bvh2View> blas(bvh.blas.size());
     for (size_t m = 0; m < bvh.blas.size(); ++m) {
         check_bvh2_stack(bvh.blas[m]);

@@ -9,6 +9,7 @@
 #include "traversal/device/bvh2_traverse.h"
 #include "traversal/device/cwbvh_traverse.h"
 #include "traversal/device/ray.h"
+#include "traversal/device/two_level_cwbvh_traverse.h"
 #include "traversal/device/two_level_traverse.h"
 
 namespace bvhlab::trav {
@@ -25,7 +26,8 @@ void trace_cpu(const accel::Bvh2& bvh, const std::vector<Ray>& rays, Query query
                std::vector<TraversalCounters>* counters = nullptr);
 void trace_cpu(const accel::Cwbvh& cw, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
                std::vector<TraversalCounters>* counters = nullptr);
-/// The same over a two-level BVH: hits name triangles by scene-wide ids (TwoLevelBvh).
+/// The same over a two-level BVH, BVH2 or CWBVH BLAS: hits name triangles by scene-wide ids
+/// (TwoLevelBvh).
 void trace_cpu(const accel::TwoLevelBvh& bvh, const std::vector<Ray>& rays, Query query, std::vector<Hit>& hits,
                std::vector<TraversalCounters>* counters = nullptr);
 

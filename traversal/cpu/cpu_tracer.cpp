@@ -16,7 +16,7 @@ void trace_cpu_counted(const Structure& s, int kd_stack, const RaySet& set, std:
         trace_cpu(s.bvh2, set.rays, set.query, hits, counters);
     } else if (s.layout == Layout::kCwbvh) {
         trace_cpu(s.cwbvh, set.rays, set.query, hits, counters);
-    } else if (s.layout == Layout::kTwoLevel) {
+    } else if (is_two_level(s.layout)) {
         trace_cpu(s.two_level, set.rays, set.query, hits, counters);
     } else {
         trace_kd_cpu(s.kd, kd_stack, set.rays, set.query, hits, counters);
@@ -35,10 +35,11 @@ public:
         } else if (s.layout == Layout::kCwbvh) {
             check_cwbvh_stack(s.cwbvh);
             name_ = "cpu-cwbvh";
-        } else if (s.layout == Layout::kTwoLevel) {
+        } else if (is_two_level(s.layout)) {
             check_bvh2_stack(s.two_level.tlas);
             for (const accel::Bvh2& b : s.two_level.blas) check_bvh2_stack(b);
-            name_ = "cpu-two-level-stack";
+            for (const accel::Cwbvh& b : s.two_level.cw_blas) check_cwbvh_stack(b);
+            name_ = s.two_level.wide() ? "cpu-two-level-cwbvh" : "cpu-two-level-stack";
         } else {
             check_kd_stack(s.kd, kd_stack);
             name_ = kd_stack == kKdFullStack ? "cpu-kd-stack" : "cpu-kd-shortstack-" + std::to_string(kd_stack);

@@ -6,6 +6,7 @@
 
 #include "accel/layouts/two_level.h"
 #include "traversal/device/bvh2_traverse.h"
+#include "traversal/device/cwbvh_traverse.h"
 
 namespace bvhlab::trav {
 
@@ -14,7 +15,9 @@ struct TwoLevelView {
     const accel::Bvh2Node* tlas;
     const uint32_t* tlas_ids;  ///< instance index of each TLAS leaf entry
     const accel::InstanceRecord* instances;
-    const Bvh2View* blas;  ///< one view per BLAS
+    const Bvh2View* blas;                ///< one view per BLAS (BVH2 BLAS), else null
+    const CwbvhView* cw_blas = nullptr;  ///< one view per BLAS (CWBVH BLAS), else null
+    bool cw_vertices = false;            ///< the CWBVH BLAS hold vertex triangles (CwTris::kVertices)
 };
 
 /// Closest or any hit of `ray`, the triangle named by its scene-wide id (TwoLevelBvh). One loop

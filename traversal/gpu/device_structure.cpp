@@ -17,6 +17,40 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         bvh_tris_.upload(s.cwbvh.tris);
         cw_vtris_.upload(s.cwbvh.vtris);
         bvh_ids_.upload(s.cwbvh.tri_ids);
+    } else if (s.layout == Layout::kTwoLevelCwbvh) {
+        const accel::TwoLevelBvh& t = s.two_level;
+        bvh_nodes_.upload(t.tlas.nodes);
+        bvh_ids_.upload(t.tlas.tri_ids);
+        instances_.upload(t.instances);
+        // Every BLAS in one set of buffers; each view points at its own part (child and triangle
+        // bases in a CWBVH node are relative to its own arrays).
+        std::vector<accel::CwbvhNode> nodes;
+        std::vector<accel::WoopTriangle> tris;
+        std::vector<accel::VertexTriangle> vtris;
+        std::vector<uint32_t> ids;
+        std::vector<size_t> node_at, tri_at, vtri_at, id_at;
+        for (const accel::Cwbvh& b : t.cw_blas) {
+            node_at.push_back(nodes.size());
+            tri_at.push_back(tris.size());
+            vtri_at.push_back(vtris.size());
+            id_at.push_back(ids.size());
+            nodes.insert(nodes.end(), b.nodes.begin(), b.nodes.end());
+            tris.insert(tris.end(), b.tris.begin(), b.tris.end());
+            vtris.insert(vtris.end(), b.vtris.begin(), b.vtris.end());
+            ids.insert(ids.end(), b.tri_ids.begin(), b.tri_ids.end());
+        }
+        cw_nodes_.upload(nodes);
+        blas_tris_.upload(tris);
+        cw_vtris_.upload(vtris);
+        blas_ids_.upload(ids);
+        std::vector<CwbvhView> views;
+        for (size_t m = 0; m < t.cw_blas.size(); ++m) {
+            const bool woop = t.cw_blas[m].tri_format == accel::CwTris::kWoop;
+            cw_vertices_ = !woop;  // one format for every BLAS (build_two_level's BlasLayout)
+            views.push_back({cw_nodes_.data() + node_at[m], woop ? blas_tris_.data() + tri_at[m] : nullptr,
+                             blas_ids_.data() + id_at[m], woop ? nullptr : cw_vtris_.data() + vtri_at[m]});
+        }
+        cw_views_.upload(views);
     } else if (s.layout == Layout::kTwoLevel) {
         const accel::TwoLevelBvh& t = s.two_level;
         bvh_nodes_.upload(t.tlas.nodes);
@@ -53,7 +87,7 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
 size_t DeviceStructure::bytes() const {
     return bvh_nodes_.bytes() + cw_nodes_.bytes() + bvh_tris_.bytes() + bvh_ids_.bytes() + cw_vtris_.bytes() +
            kd_nodes_.bytes() + kd_prims_.bytes() + kd_tris_.bytes() + instances_.bytes() + blas_nodes_.bytes() +
-           blas_tris_.bytes() + blas_ids_.bytes() + blas_views_.bytes();
+           blas_tris_.bytes() + blas_ids_.bytes() + blas_views_.bytes() + cw_views_.bytes();
 }
 
 }  // namespace bvhlab::trav

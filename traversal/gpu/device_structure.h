@@ -28,9 +28,11 @@ public:
     /// The device view of a CWBVH layout (null pointers for the other layouts).
     CwbvhView cwbvh() const { return {cw_nodes_.data(), bvh_tris_.data(), bvh_ids_.data(), cw_vtris_.data()}; }
     /// The device view of a two-level layout (null pointers for the other layouts): the TLAS in
-    /// the BVH2 buffers (its ids are instance indices), every BLAS concatenated behind it.
+    /// the BVH2 buffers (its ids are instance indices), every BLAS concatenated behind it (the
+    /// BVH2 BLAS views, or the CWBVH ones, null for the other kind).
     TwoLevelView two_level() const {
-        return {bvh_nodes_.data(), bvh_ids_.data(), instances_.data(), blas_views_.data()};
+        return {bvh_nodes_.data(),  bvh_ids_.data(),  instances_.data(),
+                blas_views_.data(), cw_views_.data(), cw_vertices_};
     }
 
     /// Device memory of every buffer the structure uploaded.
@@ -52,7 +54,9 @@ private:
     DeviceBuffer<accel::Bvh2Node> blas_nodes_;
     DeviceBuffer<accel::WoopTriangle> blas_tris_;
     DeviceBuffer<uint32_t> blas_ids_;
-    DeviceBuffer<Bvh2View> blas_views_;  // one per BLAS, pointing into the three buffers above
+    DeviceBuffer<Bvh2View> blas_views_;  // one per BVH2 BLAS, pointing into the three buffers above
+    bool cw_vertices_ = false;           // the CWBVH BLAS hold vertex triangles
+    DeviceBuffer<CwbvhView> cw_views_;   // one per CWBVH BLAS, into cw_nodes_, blas_tris_, blas_ids_, cw_vtris_
 };
 
 }  // namespace bvhlab::trav

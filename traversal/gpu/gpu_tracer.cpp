@@ -34,7 +34,7 @@ LaunchArgs make_args(const DeviceStructure& s, RayQueue& queue, Query query, uin
         a.bvh2 = s.bvh2();
     else if (s.layout() == Layout::kCwbvh)
         a.cwbvh = s.cwbvh();
-    else if (s.layout() == Layout::kTwoLevel)
+    else if (is_two_level(s.layout()))
         a.two_level = s.two_level();
     else
         a.kd = s.kd();
