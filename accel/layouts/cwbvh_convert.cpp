@@ -100,8 +100,7 @@ AABB decode_child_box(const CwbvhNode& node, uint32_t slot, double* lo, double* 
     return b;
 }
 
-Cwbvh convert_to_cwbvh(const WideTree& w, const scene::TriangleMesh& mesh, CwTris tri_format,
-                       std::vector<std::array<AABB, kWideArity>>* slot_boxes) {
+Cwbvh convert_cwbvh_nodes(const WideTree& w, std::vector<std::array<AABB, kWideArity>>* slot_boxes) {
     BVHLAB_CHECK(!w.nodes.empty(), "cannot convert an empty WideTree");
     Cwbvh out;
     out.depth = w.depth;
@@ -141,6 +140,12 @@ Cwbvh convert_to_cwbvh(const WideTree& w, const scene::TriangleMesh& mesh, CwTri
                 (*slot_boxes)[oi][slot] = child_of_slot[slot] < 0 ? AABB::empty() : n.child[child_of_slot[slot]].box;
         }
     }
+    return out;
+}
+
+Cwbvh convert_to_cwbvh(const WideTree& w, const scene::TriangleMesh& mesh, CwTris tri_format,
+                       std::vector<std::array<AABB, kWideArity>>* slot_boxes) {
+    Cwbvh out = convert_cwbvh_nodes(w, slot_boxes);
     out.tri_format = tri_format;
     if (tri_format == CwTris::kWoop)
         out.tris.resize(out.tri_ids.size());

@@ -19,6 +19,11 @@ namespace bvhlab::accel {
 Cwbvh convert_to_cwbvh(const WideTree& tree, const scene::TriangleMesh& mesh, CwTris tri_format = CwTris::kWoop,
                        std::vector<std::array<AABB, kWideArity>>* slot_boxes = nullptr);
 
+/// The nodes, leaf references (tri_ids = the wide tree's prim_indices in leaf order) and depth of
+/// the same conversion, without triangles: for trees over other primitives (the two-level top
+/// level, whose references are instances).
+Cwbvh convert_cwbvh_nodes(const WideTree& tree, std::vector<std::array<AABB, kWideArity>>* slot_boxes = nullptr);
+
 /// The box slot `slot` of `node` decodes to, in double precision (exact for every scene the
 /// converter accepts): what the conservativeness tests compare with the exact child boxes.
 AABB decode_child_box(const CwbvhNode& node, uint32_t slot, double* lo = nullptr, double* hi = nullptr);

@@ -63,7 +63,7 @@ size_t TwoLevelBvh::bytes() const {
     size_t n = tlas.bytes() + instances.size() * sizeof(InstanceRecord);
     for (const Bvh2& b : blas) n += b.bytes();
     for (const Cwbvh& b : cw_blas) n += b.bytes();
-    return n;
+    return n + cw_tlas.bytes();
 }
 
 uint32_t TwoLevelBvh::instance_of_id(uint32_t id) const {
@@ -126,7 +126,15 @@ TwoLevelBvh build_two_level(const scene::InstancedScene& scene, const MeshBuilde
     BinnedSahBuilder::Config cfg;
     cfg.min_leaf_size = 1;
     cfg.max_leaf_size = 1;
-    out.tlas = convert_bvh2_nodes(BinnedSahBuilder(cfg).build(std::move(refs)));
+    const BuildTree tlas = BinnedSahBuilder(cfg).build(std::move(refs));
+    out.tlas = convert_bvh2_nodes(tlas);
+    if (layout.wide) {
+        // Leaves of one instance need no splitting, so the collapse never reads a mesh.
+        const WideTree wide = collapse_to_wide(tlas, scene::TriangleMesh{}, CollapseMethod::kSahOptimal);
+        const std::string err = validate_wide(wide, scene.instances.size(), tlas.prim_indices);
+        BVHLAB_CHECK(err.empty(), "the collapse produced an invalid wide TLAS: " + err);
+        out.cw_tlas = convert_cwbvh_nodes(wide);
+    }
     // The traversal enters a TLAS leaf's first instance only.
     for (const Bvh2Node& n : out.tlas.nodes)
         for (int32_t ref : n.child)

@@ -51,6 +51,9 @@ struct TwoLevelBvh {
     /// places); empty when they are BVH2s.
     std::vector<Cwbvh> cw_blas;
     Bvh2 tlas;  ///< over instance boxes: tlas.tri_ids are instance indices, no triangles
+    /// The same TLAS collapsed to 8-wide (SAH-optimal) and compressed when the BLAS are CWBVHs
+    /// (its tri_ids are instance indices, a leaf slot holds up to three), else empty.
+    Cwbvh cw_tlas;
     std::vector<InstanceRecord> instances;
     uint64_t world_triangles = 0;  ///< triangles of every instance
 

@@ -86,6 +86,7 @@ inline std::vector<AABB> structure_boxes(const trav::Structure& s) {
         bvh2_boxes(s.two_level.tlas);
         for (const accel::Bvh2& b : s.two_level.blas) bvh2_boxes(b);
         for (const accel::Cwbvh& b : s.two_level.cw_blas) cwbvh_boxes(b);
+        if (!s.two_level.cw_tlas.nodes.empty()) cwbvh_boxes(s.two_level.cw_tlas);
     } else if (s.layout == trav::Layout::kCwbvh) {
         cwbvh_boxes(s.cwbvh);
     } else {

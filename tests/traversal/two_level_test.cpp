@@ -4,6 +4,8 @@
 // each BVH builder for the BLAS. Zero real mismatches allowed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
 #include "accel/layouts/two_level.h"
@@ -110,6 +112,12 @@ TEST(TwoLevel, SeveralMeshesAndSceneWideIds) {
     ASSERT_EQ(wide.cw_blas.size(), 3u);
     EXPECT_TRUE(wide.cw_blas[2].nodes.empty()) << "a mesh no instance places gets no BLAS";
     EXPECT_EQ(wide.tlas.nodes.size(), bvh.tlas.nodes.size()) << "the same TLAS over the same boxes";
+    EXPECT_TRUE(bvh.cw_tlas.nodes.empty());
+    ASSERT_FALSE(wide.cw_tlas.nodes.empty()) << "and its 8-wide form";
+    std::vector<uint32_t> entered = wide.cw_tlas.tri_ids;
+    std::sort(entered.begin(), entered.end());
+    for (uint32_t i = 0; i < 11; ++i) EXPECT_EQ(entered[i], i) << "each instance in one leaf entry";
+    EXPECT_LT(wide.cw_tlas.depth, wide.tlas.depth);
     for (size_t i = 0; i < 11; ++i) EXPECT_EQ(wide.instances[i].first_id, bvh.instances[i].first_id);
     expect_two_level_agreement(placed, accel::BuilderKind::kBinned, {true});
 }

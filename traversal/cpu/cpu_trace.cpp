@@ -86,8 +86,11 @@ void trace_cpu(const accel::TwoLevelBvh& bvh, const std::vector<Ray>& rays, Quer
             blas[m] = {cw.nodes.data(), cw.tris.data(), cw.tri_ids.data(), cw.vtris.data()};
             vertices = vertices || cw.tri_format == accel::CwTris::kVertices;
         }
-        const TwoLevelView view{
+        check_cwbvh_stack(bvh.cw_tlas);
+        TwoLevelView view{
             bvh.tlas.nodes.data(), bvh.tlas.tri_ids.data(), bvh.instances.data(), nullptr, blas.data(), vertices};
+        view.cw_tlas = bvh.cw_tlas.nodes.data();
+        view.cw_tlas_ids = bvh.cw_tlas.tri_ids.data();
         trace_set(rays, query, hits, counters, [&](auto any, const Ray& ray, TraversalCounters* c) {
             return view.cw_vertices ? traverse_two_level_cwbvh<decltype(any)::value, true>(view, ray, c)
                                     : traverse_two_level_cwbvh<decltype(any)::value, false>(view, ray, c);

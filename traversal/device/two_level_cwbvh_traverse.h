@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
-// Two-level traversal with compressed 8-wide BLAS (accel::TwoLevelBvh::cw_blas), written once for
-// host and device: the CPU tracer and the GPU kernel 'two-level-dynamic-cwbvh' run this code.
-// The TLAS is a BVH2 over instance boxes (one instance per leaf); a step visits one node of
-// whichever level the ray is in: a TLAS node (two slab tests, near child first), or, inside an
-// instance, one cwbvh_step of the instance's BLAS with the ray moved into the instance's space.
+// Two-level traversal of the two-level-cwbvh layout (accel::TwoLevelBvh with cw_tlas and
+// cw_blas), written once for host and device: the CPU tracer and the GPU kernel
+// 'two-level-dynamic-cwbvh' run this code. Both levels are compressed 8-wide BVHs, so a step is
+// the same node fetch and eight-box test whichever level a lane is in (cwbvh_traverse.h);
+// only what follows differs: a BLAS step tests the triangles of the leaves it entered, a TLAS
+// step enters the first instance of the leaves it entered. One stack holds both levels: node
+// groups, the instances of a TLAS node still to enter (instance groups), and under each
+// instance's entries a mark that, popped, moves the ray back to the world.
 #pragma once
 
 #include "traversal/device/cwbvh_traverse.h"
@@ -11,29 +14,31 @@
 
 namespace bvhlab::trav {
 
-/// The TLAS's stack and the current BLAS's node-group stack.
+/// Entries of the shared stack: per TLAS level a node group and an instance group, the mark,
+/// per BLAS level a node group.
+constexpr int kTwoLevelCwbvhStackSize = 3 * kCwbvhStackSize + 1;
+
 struct TwoLevelCwbvhStack {
-    CwbvhStack cw;
-    int32_t tlas[kBvh2StackSize];
+    uint32_t base[kTwoLevelCwbvhStackSize];
+    uint32_t bits[kTwoLevelCwbvhStackSize];  ///< a node group (bits 24..31 set), an instance group (bits 0..23), or 0:
+                                             ///< the mark
 };
 
-/// A ray in flight through a two-level BVH with CWBVH BLAS: what a dynamic-fetch kernel keeps
-/// between steps. `cw` is the ray in the space of the level it is in (the world in the TLAS) with
-/// the closest t so far; `wo`, `wd` the ray in the world.
+/// A ray in flight: what a dynamic-fetch kernel keeps between steps. `cw` is the ray in the
+/// space of the level it is in (the world in the TLAS), its node group and closest t; `wo`,
+/// `wd` the ray in the world.
 struct TwoLevelCwbvhState {
     CwbvhState cw;
     Vec3 wo, wd;
-    CwbvhView cur;     // the BLAS the ray is in
-    uint32_t first_id;  // its instance's first scene-wide id
-    int32_t id_hit;     // scene-wide id of the closest hit, or -1
-    int32_t node;       // the next TLAS node (>= 0) while in the TLAS
-    int tlas_sp;
+    const accel::CwbvhNode* nodes;  // the level's nodes: the TLAS's, or the instance's BLAS's
+    uint32_t blas, first_id;        // the instance's BLAS and its first scene-wide id
+    int32_t id_hit;                 // scene-wide id of the closest hit, or -1
     bool in_blas, done;
 };
 
 namespace tlc_detail {
 
-/// `s.cw`'s ray axes for origin o and direction d.
+/// `s`'s ray axes for origin o and direction d.
 BVHLAB_HD BVHLAB_FORCEINLINE void set_axes(CwbvhState& s, Vec3 o, Vec3 d) {
     const Vec3 inv = safe_reciprocal(d);
     s.d = d;
@@ -46,115 +51,127 @@ BVHLAB_HD BVHLAB_FORCEINLINE void set_axes(CwbvhState& s, Vec3 o, Vec3 d) {
     }
 }
 
-/// A TLAS node: four 16-byte read-only loads on the device.
-BVHLAB_HD BVHLAB_FORCEINLINE accel::Bvh2Node load_tlas_node(const accel::Bvh2Node* p) {
-#if defined(__CUDA_ARCH__)
-    accel::Bvh2Node n;
-    const float4* q = reinterpret_cast<const float4*>(p);
-    float4* out = reinterpret_cast<float4*>(&n);
-    BVHLAB_UNROLL
-    for (int i = 0; i < 4; ++i) out[i] = __ldg(q + i);
-    return n;
-#else
-    return *p;
-#endif
-}
-static_assert(sizeof(accel::Bvh2Node) == 64 && alignof(accel::Bvh2Node) >= 16, "four 16-byte loads");
-
-/// Moves the ray into the instance of TLAS leaf `leaf` and starts its BLAS at the root.
-BVHLAB_HD BVHLAB_FORCEINLINE void enter(const TwoLevelView& v, TwoLevelCwbvhState& s, int32_t leaf) {
-    const accel::InstanceRecord& inst = v.instances[v.tlas_ids[accel::Bvh2Node::leaf_first(leaf)]];
-    set_axes(s.cw, inst.point(s.wo), inst.vector(s.wd));
-    s.cur = v.cw_blas[inst.blas];
-    s.first_id = inst.first_id;
+/// The root of the level whose nodes are `nodes`: the one interior child (slot 0) of a virtual
+/// parent whose children start at node 0, as cwbvh_start.
+BVHLAB_HD BVHLAB_FORCEINLINE void start_level(TwoLevelCwbvhState& s, const accel::CwbvhNode* nodes) {
+    s.nodes = nodes;
     s.cw.group_base = 0;
     s.cw.group_bits = (1u << (accel::CwbvhNode::kInteriorBit + s.cw.axes.octant)) | 1u;
-    s.cw.sp = 0;
-    s.in_blas = true;
 }
 
-/// The TLAS entry on top of the stack: a node to visit next, or an instance (a TLAS leaf) to
-/// enter; the end of the ray when the stack is empty.
-BVHLAB_HD BVHLAB_FORCEINLINE void pop_tlas(const TwoLevelView& v, TwoLevelCwbvhState& s,
-                                           const TwoLevelCwbvhStack& stack, TraversalCounters* counters) {
-    if (s.tlas_sp == 0) {
-        s.done = true;
-        return;
+BVHLAB_HD BVHLAB_FORCEINLINE void push(TwoLevelCwbvhState& s, TwoLevelCwbvhStack& st, uint32_t base, uint32_t bits) {
+    st.base[s.cw.sp] = base;
+    st.bits[s.cw.sp++] = bits;
+}
+
+/// Enters the first instance of an instance group (TLAS leaf slots from `base`): the rest of
+/// the group and the mark wait on the stack, the ray moves into the instance's space and starts
+/// its BLAS at the root.
+BVHLAB_HD BVHLAB_FORCEINLINE void enter(const TwoLevelView& v, TwoLevelCwbvhState& s, TwoLevelCwbvhStack& st,
+                                        uint32_t base, uint32_t bits) {
+    const uint32_t k = base + lowest_bit(bits);
+    bits &= bits - 1u;
+    if (bits) push(s, st, base, bits);
+    push(s, st, 0u, 0u);
+    const accel::InstanceRecord& inst = v.instances[v.cw_tlas_ids[k]];
+    set_axes(s.cw, inst.point(s.wo), inst.vector(s.wd));
+    s.blas = inst.blas;
+    s.first_id = inst.first_id;
+    s.in_blas = true;
+    start_level(s, v.cw_blas[inst.blas].nodes);
+}
+
+/// Pops until the ray has a node group to visit: a mark moves it back to the world, an
+/// instance group enters its next instance; the ray is done when the stack is empty.
+BVHLAB_HD BVHLAB_FORCEINLINE void settle(const TwoLevelView& v, TwoLevelCwbvhState& s, TwoLevelCwbvhStack& st) {
+    while (!(s.cw.group_bits & 0xFF000000u)) {
+        if (s.cw.sp == 0) {
+            s.done = true;
+            return;
+        }
+        --s.cw.sp;
+        const uint32_t base = st.base[s.cw.sp], bits = st.bits[s.cw.sp];
+        if (bits == 0) {  // the mark: back to the world
+            s.in_blas = false;
+            s.nodes = v.cw_tlas;
+            set_axes(s.cw, s.wo, s.wd);
+        } else if (bits & 0xFF000000u) {
+            s.cw.group_base = base;
+            s.cw.group_bits = bits;
+        } else {
+            enter(v, s, st, base, bits);
+        }
     }
-    const int32_t ref = stack.tlas[--s.tlas_sp];
-    if (ref >= 0) {
-        s.node = ref;
-        return;
-    }
-    if (counters) ++counters->leaves;
-    enter(v, s, ref);
 }
 
 }  // namespace tlc_detail
 
 /// Starts `ray` at the TLAS root.
-BVHLAB_HD BVHLAB_FORCEINLINE void two_level_cwbvh_start(TwoLevelCwbvhState& s, const Ray& ray) {
+BVHLAB_HD BVHLAB_FORCEINLINE void two_level_cwbvh_start(const TwoLevelView& v, TwoLevelCwbvhState& s, const Ray& ray) {
     tlc_detail::set_axes(s.cw, ray.org, ray.dir);
     s.cw.tmin = ray.tmin;
     s.cw.t_hit = ray.tmax;
     s.cw.u_hit = s.cw.v_hit = 0.0f;
     s.cw.k_hit = -1;
-    s.cw.group_base = s.cw.group_bits = 0;
     s.cw.sp = 0;
     s.wo = ray.org;
     s.wd = ray.dir;
-    s.cur = {nullptr, nullptr, nullptr, nullptr};
-    s.first_id = 0;
+    s.blas = s.first_id = 0;
     s.id_hit = -1;
-    s.node = 0;
-    s.tlas_sp = 0;
     s.in_blas = s.done = false;
+    tlc_detail::start_level(s, v.cw_tlas);
 }
 
-/// One step: one TLAS node, or one node of the current instance's BLAS (cwbvh_step) and its
-/// triangles. A TLAS leaf taken moves the ray into its instance; the BLAS finished, the ray
-/// returns to the world and the TLAS stack. Counters add up both levels (an instance entered
-/// counts as a leaf).
+/// One step: the nearest interior child left in the node group, of the TLAS or of the current
+/// BLAS, is fetched and its eight boxes tested (as cwbvh_step); what is left of the group waits
+/// on the stack. In a BLAS the triangles of the leaves entered are tested; in the TLAS the
+/// first instance of the leaves entered is entered (the children entered wait under it).
+/// Counters add up both levels.
 template <bool kAnyHit, bool kVertexTris = false>
 BVHLAB_HD BVHLAB_FORCEINLINE void two_level_cwbvh_step(const TwoLevelView& v, TwoLevelCwbvhState& s,
-                                                       TwoLevelCwbvhStack& stack, TraversalCounters* counters) {
+                                                       TwoLevelCwbvhStack& st, TraversalCounters* counters) {
+    CwbvhState& c = s.cw;
+    const uint32_t bit = highest_bit(c.group_bits & 0xFF000000u);
+    c.group_bits &= ~(1u << bit);
+    const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ c.axes.octant;
+    const uint32_t node = c.group_base + popc32(c.group_bits & ((1u << slot) - 1u) & 0xFFu);
+    if (c.group_bits & 0xFF000000u) tlc_detail::push(s, st, c.group_base, c.group_bits);
+    uint32_t w[20];
+    cw_detail::load_node(s.nodes + node, w);
+    uint32_t leaves = 0;
+    const uint32_t hits = cw_detail::intersect_children(w, c.axes, c.tmin, c.t_hit, v.cw_one, leaves);
+    if (counters) {
+        ++counters->nodes;
+        counters->leaves += leaves;
+    }
+    c.group_base = w[cw_detail::kWordChildBase];
+    c.group_bits = (hits & 0xFF000000u) | (w[cw_detail::kWordExponents] >> 24);
+    const uint32_t leaf_base = w[cw_detail::kWordTriBase];
+    uint32_t leaf_bits = hits & 0x00FFFFFFu;
     if (s.in_blas) {
-        cwbvh_step<kAnyHit, kVertexTris>(s.cur, s.cw, stack.cw, counters);
-        if (s.cw.k_hit >= 0) {
-            s.id_hit = int32_t(s.first_id + s.cur.tri_ids[s.cw.k_hit]);
-            s.cw.k_hit = -1;
-            if (kAnyHit) {
-                s.done = true;
-                return;
+        const CwbvhView& b = v.cw_blas[s.blas];
+        while (leaf_bits) {
+            const uint32_t k = leaf_base + lowest_bit(leaf_bits);
+            leaf_bits &= leaf_bits - 1u;
+            if (counters) ++counters->tri_tests;
+            float t, u, vv;
+            if (cw_detail::intersect_tri<kVertexTris>(b, k, c.axes.o, c.d, c.tmin, c.t_hit, t, u, vv)) {
+                c.t_hit = t;
+                c.u_hit = u;
+                c.v_hit = vv;
+                s.id_hit = int32_t(s.first_id + b.tri_ids[k]);
+                if (kAnyHit) {  // any hit ends the ray
+                    s.done = true;
+                    return;
+                }
             }
         }
-        if (!cwbvh_done(s.cw)) return;
-        s.in_blas = false;  // back to the world
-        tlc_detail::set_axes(s.cw, s.wo, s.wd);
-        tlc_detail::pop_tlas(v, s, stack, counters);
+    } else if (leaf_bits) {
+        if (c.group_bits & 0xFF000000u) tlc_detail::push(s, st, c.group_base, c.group_bits);
+        tlc_detail::enter(v, s, st, leaf_base, leaf_bits);
         return;
     }
-    const accel::Bvh2Node n = tlc_detail::load_tlas_node(v.tlas + s.node);
-    if (counters) ++counters->nodes;
-    const Vec3 o = s.cw.axes.o, inv{s.cw.axes.inv[0], s.cw.axes.inv[1], s.cw.axes.inv[2]};
-    const float t0 =
-        slab_entry(n.c0_lo_x, n.c0_hi_x, n.c0_lo_y, n.c0_hi_y, n.c0_lo_z, n.c0_hi_z, o, inv, s.cw.tmin, s.cw.t_hit);
-    const float t1 =
-        slab_entry(n.c1_lo_x, n.c1_hi_x, n.c1_lo_y, n.c1_hi_y, n.c1_lo_z, n.c1_hi_z, o, inv, s.cw.tmin, s.cw.t_hit);
-    const bool hit0 = t0 != INFINITY, hit1 = t1 != INFINITY;
-    if (!hit0 && !hit1) {
-        tlc_detail::pop_tlas(v, s, stack, counters);
-        return;
-    }
-    const bool first0 = hit0 && (!hit1 || t0 <= t1);
-    const int32_t next = first0 ? n.child[0] : n.child[1];
-    if (hit0 && hit1) stack.tlas[s.tlas_sp++] = first0 ? n.child[1] : n.child[0];
-    if (next >= 0) {
-        s.node = next;
-        return;
-    }
-    if (counters) ++counters->leaves;
-    tlc_detail::enter(v, s, next);
+    tlc_detail::settle(v, s, st);
 }
 
 /// Whether the ray has finished.
@@ -165,13 +182,13 @@ BVHLAB_HD BVHLAB_FORCEINLINE Hit two_level_cwbvh_result(const TwoLevelCwbvhState
     return s.id_hit < 0 ? Hit::miss() : Hit{s.id_hit, s.cw.t_hit, s.cw.u_hit, s.cw.v_hit};
 }
 
-/// Closest or any hit of `ray` through a two-level BVH whose BLAS are CWBVHs (v.cw_blas).
+/// Closest or any hit of `ray` through a two-level-cwbvh layout.
 template <bool kAnyHit, bool kVertexTris = false>
 BVHLAB_HD inline Hit traverse_two_level_cwbvh(const TwoLevelView& v, const Ray& ray,
                                               TraversalCounters* counters = nullptr) {
     TwoLevelCwbvhState s;
     TwoLevelCwbvhStack stack;
-    two_level_cwbvh_start(s, ray);
+    two_level_cwbvh_start(v, s, ray);
     while (!two_level_cwbvh_done(s)) two_level_cwbvh_step<kAnyHit, kVertexTris>(v, s, stack, counters);
     return two_level_cwbvh_result(s);
 }

@@ -15,9 +15,12 @@ struct TwoLevelView {
     const accel::Bvh2Node* tlas;
     const uint32_t* tlas_ids;  ///< instance index of each TLAS leaf entry
     const accel::InstanceRecord* instances;
-    const Bvh2View* blas;                ///< one view per BLAS (BVH2 BLAS), else null
-    const CwbvhView* cw_blas = nullptr;  ///< one view per BLAS (CWBVH BLAS), else null
-    bool cw_vertices = false;            ///< the CWBVH BLAS hold vertex triangles (CwTris::kVertices)
+    const Bvh2View* blas;                       ///< one view per BLAS (BVH2 BLAS), else null
+    const CwbvhView* cw_blas = nullptr;         ///< one view per BLAS (CWBVH BLAS), else null
+    bool cw_vertices = false;                   ///< the CWBVH BLAS hold vertex triangles (CwTris::kVertices)
+    const accel::CwbvhNode* cw_tlas = nullptr;  ///< the 8-wide TLAS (two-level-cwbvh), else null
+    const uint32_t* cw_tlas_ids = nullptr;      ///< instance index of each of its leaf entries
+    uint32_t cw_one = accel::kCwbvhUnpackOne;   ///< see cwbvh_unpack: a kernel parameter, not a literal
 };
 
 /// Closest or any hit of `ray`, the triangle named by its scene-wide id (TwoLevelBvh). One loop

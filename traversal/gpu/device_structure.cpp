@@ -19,8 +19,10 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         bvh_ids_.upload(s.cwbvh.tri_ids);
     } else if (s.layout == Layout::kTwoLevelCwbvh) {
         const accel::TwoLevelBvh& t = s.two_level;
-        bvh_nodes_.upload(t.tlas.nodes);
+        bvh_nodes_.upload(t.tlas.nodes);  // the BVH2 form of the TLAS, for the kernel that walks it
         bvh_ids_.upload(t.tlas.tri_ids);
+        cw_tlas_nodes_.upload(t.cw_tlas.nodes);
+        cw_tlas_ids_.upload(t.cw_tlas.tri_ids);
         instances_.upload(t.instances);
         // Every BLAS in one set of buffers; each view points at its own part (child and triangle
         // bases in a CWBVH node are relative to its own arrays).
@@ -87,7 +89,8 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
 size_t DeviceStructure::bytes() const {
     return bvh_nodes_.bytes() + cw_nodes_.bytes() + bvh_tris_.bytes() + bvh_ids_.bytes() + cw_vtris_.bytes() +
            kd_nodes_.bytes() + kd_prims_.bytes() + kd_tris_.bytes() + instances_.bytes() + blas_nodes_.bytes() +
-           blas_tris_.bytes() + blas_ids_.bytes() + blas_views_.bytes() + cw_views_.bytes();
+           blas_tris_.bytes() + blas_ids_.bytes() + blas_views_.bytes() + cw_views_.bytes() + cw_tlas_nodes_.bytes() +
+           cw_tlas_ids_.bytes();
 }
 
 }  // namespace bvhlab::trav

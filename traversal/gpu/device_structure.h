@@ -31,8 +31,11 @@ public:
     /// the BVH2 buffers (its ids are instance indices), every BLAS concatenated behind it (the
     /// BVH2 BLAS views, or the CWBVH ones, null for the other kind).
     TwoLevelView two_level() const {
-        return {bvh_nodes_.data(),  bvh_ids_.data(),  instances_.data(),
-                blas_views_.data(), cw_views_.data(), cw_vertices_};
+        TwoLevelView v{bvh_nodes_.data(),  bvh_ids_.data(),  instances_.data(),
+                       blas_views_.data(), cw_views_.data(), cw_vertices_};
+        v.cw_tlas = cw_tlas_nodes_.data();
+        v.cw_tlas_ids = cw_tlas_ids_.data();
+        return v;
     }
 
     /// Device memory of every buffer the structure uploaded.
@@ -56,7 +59,9 @@ private:
     DeviceBuffer<uint32_t> blas_ids_;
     DeviceBuffer<Bvh2View> blas_views_;  // one per BVH2 BLAS, pointing into the three buffers above
     bool cw_vertices_ = false;           // the CWBVH BLAS hold vertex triangles
-    DeviceBuffer<CwbvhView> cw_views_;   // one per CWBVH BLAS, into cw_nodes_, blas_tris_, blas_ids_, cw_vtris_
+    DeviceBuffer<CwbvhView> cw_views_;
+    DeviceBuffer<accel::CwbvhNode> cw_tlas_nodes_;  // the 8-wide TLAS of a two-level-cwbvh layout
+    DeviceBuffer<uint32_t> cw_tlas_ids_;  // one per CWBVH BLAS, into cw_nodes_, blas_tris_, blas_ids_, cw_vtris_
 };
 
 }  // namespace bvhlab::trav

@@ -75,7 +75,8 @@ __global__ void persistent_kernel(RayQueueView q, uint32_t* next_ray, PerRay f) 
 /// Without it a warp waits for its slowest lane (on furball's diffuse rays 18% of lanes were
 /// busy per issued instruction). `Trace` is resumable: State, Stack, start, step, done, result.
 template <class Trace>
-__global__ void dynamic_fetch_kernel(RayQueueView q, uint32_t* next_ray, Trace f, uint32_t threshold) {
+__device__ __forceinline__ void dynamic_fetch_loop(const RayQueueView& q, uint32_t* next_ray, const Trace& f,
+                                                   uint32_t threshold) {
     const uint32_t count = __ldg(q.count);
     const uint32_t lane = threadIdx.x & 31u;
     typename Trace::State s;
@@ -107,6 +108,19 @@ __global__ void dynamic_fetch_kernel(RayQueueView q, uint32_t* next_ray, Trace f
             }
         }
     }
+}
+
+template <class Trace>
+__global__ void dynamic_fetch_kernel(RayQueueView q, uint32_t* next_ray, Trace f, uint32_t threshold) {
+    dynamic_fetch_loop(q, next_ray, f, threshold);
+}
+
+/// The same held to __launch_bounds__(kMaxThreads, kMinBlocks): (128, 8) keeps the compiler to
+/// 64 registers, so that 8 blocks of 128 fit on an SM.
+template <class Trace, int kMaxThreads, int kMinBlocks>
+__global__ void __launch_bounds__(kMaxThreads, kMinBlocks)
+    dynamic_fetch_kernel_bounded(RayQueueView q, uint32_t* next_ray, Trace f, uint32_t threshold) {
+    dynamic_fetch_loop(q, next_ray, f, threshold);
 }
 
 inline int block_of(const LaunchArgs& a, int default_block) { return a.block_size ? a.block_size : default_block; }
@@ -169,13 +183,20 @@ void launch_persistent(const LaunchArgs& a, int default_block, const PerRay& f) 
     BVHLAB_CHECK_LAUNCH();
 }
 
-template <class Trace>
+/// kMinBlocks > 0 launches dynamic_fetch_kernel_bounded<kMaxThreads, kMinBlocks>.
+template <int kMaxThreads = 1024, int kMinBlocks = 0, class Trace>
 void launch_dynamic_fetch(const LaunchArgs& a, int default_block, const Trace& f, uint32_t threshold) {
     const int block = block_of(a, default_block);
-    const uint32_t grid = persistent_grid(dynamic_fetch_kernel<Trace>, block, a.capacity);
-    if (grid == 0) return;
-    dynamic_fetch_kernel<<<grid, block, 0, static_cast<cudaStream_t>(a.stream)>>>(a.queue, a.d_next_ray, f, threshold);
-    BVHLAB_CHECK_LAUNCH();
+    auto launch = [&](auto* kernel) {
+        const uint32_t grid = persistent_grid(kernel, block, a.capacity);
+        if (grid == 0) return;
+        kernel<<<grid, block, 0, static_cast<cudaStream_t>(a.stream)>>>(a.queue, a.d_next_ray, f, threshold);
+        BVHLAB_CHECK_LAUNCH();
+    };
+    if constexpr (kMinBlocks > 0)
+        launch(dynamic_fetch_kernel_bounded<Trace, kMaxThreads, kMinBlocks>);
+    else
+        launch(dynamic_fetch_kernel<Trace>);
 }
 
 /// Calls `launch(std::true_type{})` for any-hit queries and `launch(std::false_type{})` for
