@@ -22,7 +22,7 @@ struct Bvh2TlasStack {
 struct Bvh2TlasState {
     CwbvhState cw;
     Vec3 wo, wd;
-    CwbvhView cur;     // the BLAS the ray is in
+    CwbvhView cur;      // the BLAS the ray is in
     uint32_t first_id;  // its instance's first scene-wide id
     int32_t id_hit;     // scene-wide id of the closest hit, or -1
     int32_t node;       // the next TLAS node (>= 0) while in the TLAS
@@ -31,19 +31,6 @@ struct Bvh2TlasState {
 };
 
 namespace bvh2_tlas_detail {
-
-/// `s.cw`'s ray axes for origin o and direction d.
-BVHLAB_HD BVHLAB_FORCEINLINE void set_axes(CwbvhState& s, Vec3 o, Vec3 d) {
-    const Vec3 inv = safe_reciprocal(d);
-    s.d = d;
-    s.axes.o = o;
-    s.axes.inv[0] = inv.x, s.axes.inv[1] = inv.y, s.axes.inv[2] = inv.z;
-    s.axes.octant = 0;
-    for (int k = 0; k < 3; ++k) {
-        s.axes.neg[k] = s.axes.inv[k] < 0.0f;
-        s.axes.octant |= uint32_t(!s.axes.neg[k]) << k;
-    }
-}
 
 /// A TLAS node: four 16-byte read-only loads on the device.
 BVHLAB_HD BVHLAB_FORCEINLINE accel::Bvh2Node load_tlas_node(const accel::Bvh2Node* p) {
@@ -63,7 +50,7 @@ static_assert(sizeof(accel::Bvh2Node) == 64 && alignof(accel::Bvh2Node) >= 16, "
 /// Moves the ray into the instance of TLAS leaf `leaf` and starts its BLAS at the root.
 BVHLAB_HD BVHLAB_FORCEINLINE void enter(const TwoLevelView& v, Bvh2TlasState& s, int32_t leaf) {
     const accel::InstanceRecord& inst = v.instances[v.tlas_ids[accel::Bvh2Node::leaf_first(leaf)]];
-    set_axes(s.cw, inst.point(s.wo), inst.vector(s.wd));
+    cw_detail::set_ray(s.cw, inst.point(s.wo), inst.vector(s.wd));
     s.cur = v.cw_blas[inst.blas];
     s.first_id = inst.first_id;
     s.cw.group_base = 0;
@@ -74,8 +61,8 @@ BVHLAB_HD BVHLAB_FORCEINLINE void enter(const TwoLevelView& v, Bvh2TlasState& s,
 
 /// The TLAS entry on top of the stack: a node to visit next, or an instance (a TLAS leaf) to
 /// enter; the end of the ray when the stack is empty.
-BVHLAB_HD BVHLAB_FORCEINLINE void pop_tlas(const TwoLevelView& v, Bvh2TlasState& s,
-                                           const Bvh2TlasStack& stack, TraversalCounters* counters) {
+BVHLAB_HD BVHLAB_FORCEINLINE void pop_tlas(const TwoLevelView& v, Bvh2TlasState& s, const Bvh2TlasStack& stack,
+                                           TraversalCounters* counters) {
     if (s.tlas_sp == 0) {
         s.done = true;
         return;
@@ -93,7 +80,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void pop_tlas(const TwoLevelView& v, Bvh2TlasState&
 
 /// Starts `ray` at the TLAS root.
 BVHLAB_HD BVHLAB_FORCEINLINE void bvh2_tlas_start(Bvh2TlasState& s, const Ray& ray) {
-    bvh2_tlas_detail::set_axes(s.cw, ray.org, ray.dir);
+    cw_detail::set_ray(s.cw, ray.org, ray.dir);
     s.cw.tmin = ray.tmin;
     s.cw.t_hit = ray.tmax;
     s.cw.u_hit = s.cw.v_hit = 0.0f;
@@ -115,8 +102,8 @@ BVHLAB_HD BVHLAB_FORCEINLINE void bvh2_tlas_start(Bvh2TlasState& s, const Ray& r
 /// returns to the world and the TLAS stack. Counters add up both levels (an instance entered
 /// counts as a leaf).
 template <bool kAnyHit, bool kVertexTris = false>
-BVHLAB_HD BVHLAB_FORCEINLINE void bvh2_tlas_step(const TwoLevelView& v, Bvh2TlasState& s,
-                                                       Bvh2TlasStack& stack, TraversalCounters* counters) {
+BVHLAB_HD BVHLAB_FORCEINLINE void bvh2_tlas_step(const TwoLevelView& v, Bvh2TlasState& s, Bvh2TlasStack& stack,
+                                                 TraversalCounters* counters) {
     if (s.in_blas) {
         cwbvh_step<kAnyHit, kVertexTris>(s.cur, s.cw, stack.cw, counters);
         if (s.cw.k_hit >= 0) {
@@ -129,7 +116,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void bvh2_tlas_step(const TwoLevelView& v, Bvh2Tlas
         }
         if (!cwbvh_done(s.cw)) return;
         s.in_blas = false;  // back to the world
-        bvh2_tlas_detail::set_axes(s.cw, s.wo, s.wd);
+        cw_detail::set_ray(s.cw, s.wo, s.wd);
         bvh2_tlas_detail::pop_tlas(v, s, stack, counters);
         return;
     }

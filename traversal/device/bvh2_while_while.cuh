@@ -100,6 +100,31 @@ struct SharedStack {
 /// Dynamic shared memory per thread of a kernel whose stack is a SharedStack.
 constexpr uint32_t kSharedStackBytes = (kBvh2StackSize + 1) * sizeof(int32_t);
 
+/// One node of the while-while node loop: the node's two boxes tested, the near child hit next
+/// (child 0 on equal entry distances, as traverse_bvh2), the far one pushed when both are hit,
+/// or the top of the stack when neither is. Shared by while_while_step and the two-level step.
+template <class Slabs, class Stack>
+__device__ __forceinline__ void visit_node(const accel::Bvh2Node* nodes, const Slabs& slabs, float tmin, float t_hit,
+                                           Stack& stack, int& sp, int32_t& node) {
+    // One 64-bit address and immediate offsets (4 * node + 1 in int arithmetic had cost an
+    // address computation per load).
+    const float4* p = reinterpret_cast<const float4*>(nodes + node);
+    const float4 c0 = __ldg(p + 0);  // child 0: lo.x hi.x lo.y hi.y
+    const float4 c1 = __ldg(p + 1);  // child 1: lo.x hi.x lo.y hi.y
+    const float4 zz = __ldg(p + 2);  // lo.z hi.z of child 0, then child 1
+    const int2 ch = __ldg(reinterpret_cast<const int2*>(p + 3));
+    float t0, t1;
+    const bool hit0 = slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, tmin, t_hit, t0);
+    const bool hit1 = slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, tmin, t_hit, t1);
+    if (!hit0 && !hit1) {
+        node = stack[sp--];
+    } else {
+        const bool first0 = hit0 && (!hit1 || t0 <= t1);
+        node = first0 ? ch.x : ch.y;
+        if (hit0 && hit1) stack[++sp] = first0 ? ch.y : ch.x;
+    }
+}
+
 }  // namespace ww_detail
 
 /// The traversal stack of the while-while family: local memory, or shared memory.
@@ -129,24 +154,7 @@ __device__ __forceinline__ void while_while_step(const Bvh2View& v, Vec3 o, Vec3
                                                  float& t_hit, float& u_hit, float& v_hit, int32_t& k_hit, Stack& stack,
                                                  int& sp, int32_t& node, int32_t& leaf) {
     while (uint32_t(node) < uint32_t(kWhileWhileSentinel)) {
-        // One 64-bit address and immediate offsets (4 * node + 1 in int arithmetic had cost an
-        // address computation per load).
-        const float4* p = reinterpret_cast<const float4*>(v.nodes + node);
-        const float4 c0 = __ldg(p + 0);  // child 0: lo.x hi.x lo.y hi.y
-        const float4 c1 = __ldg(p + 1);  // child 1: lo.x hi.x lo.y hi.y
-        const float4 zz = __ldg(p + 2);  // lo.z hi.z of child 0, then child 1
-        const int2 ch = __ldg(reinterpret_cast<const int2*>(p + 3));
-        float t0, t1;
-        const bool hit0 = slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, tmin, t_hit, t0);
-        const bool hit1 = slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, tmin, t_hit, t1);
-        if (!hit0 && !hit1) {
-            node = stack[sp--];
-        } else {
-            // Near child first; on equal entry distances child 0, as traverse_bvh2 does.
-            const bool first0 = hit0 && (!hit1 || t0 <= t1);
-            node = first0 ? ch.x : ch.y;
-            if (hit0 && hit1) stack[++sp] = first0 ? ch.y : ch.x;
-        }
+        ww_detail::visit_node(v.nodes, slabs, tmin, t_hit, stack, sp, node);
         // Postpone the first leaf found and keep looking for interior nodes.
         if (node < 0 && leaf >= 0) {
             leaf = node;

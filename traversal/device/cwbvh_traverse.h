@@ -184,18 +184,51 @@ struct CwbvhState {
     int sp;
 };
 
-/// Starts `ray`: the root as the one interior child (slot 0) of a virtual parent whose
-/// children start at node 0.
-BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_start(CwbvhState& s, const Ray& ray) {
-    const Vec3 inv = safe_reciprocal(ray.dir);
-    s.d = ray.dir;
-    s.axes.o = ray.org;
+namespace cw_detail {
+
+/// `s`'s ray: origin o, direction d, and what the box tests need per axis.
+BVHLAB_HD BVHLAB_FORCEINLINE void set_ray(CwbvhState& s, Vec3 o, Vec3 d) {
+    const Vec3 inv = safe_reciprocal(d);
+    s.d = d;
+    s.axes.o = o;
     s.axes.inv[0] = inv.x, s.axes.inv[1] = inv.y, s.axes.inv[2] = inv.z;
     s.axes.octant = 0;
     for (int k = 0; k < 3; ++k) {
         s.axes.neg[k] = s.axes.inv[k] < 0.0f;
         s.axes.octant |= uint32_t(!s.axes.neg[k]) << k;
     }
+}
+
+/// The node visit of a step: the nearest interior child left in `s`'s node group (the highest
+/// bit: slots are octant-ordered, see CwbvhNode) is fetched into `w` and its eight boxes
+/// tested; what is left of the group goes to push(base, bits) first. `s`'s node group becomes
+/// the child's interior hits; returns the hit mask (leaf slots in bits 0..23).
+template <class Push>
+BVHLAB_HD BVHLAB_FORCEINLINE uint32_t visit_nearest(const accel::CwbvhNode* nodes, uint32_t one, CwbvhState& s,
+                                                    uint32_t (&w)[20], TraversalCounters* counters, Push&& push) {
+    const uint32_t bit = highest_bit(s.group_bits & 0xFF000000u);
+    s.group_bits &= ~(1u << bit);
+    const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ s.axes.octant;
+    const uint32_t node = s.group_base + popc32(s.group_bits & ((1u << slot) - 1u) & 0xFFu);
+    if (s.group_bits & 0xFF000000u) push(s.group_base, s.group_bits);
+    load_node(nodes + node, w);
+    uint32_t leaves = 0;
+    const uint32_t hits = intersect_children(w, s.axes, s.tmin, s.t_hit, one, leaves);
+    if (counters) {
+        ++counters->nodes;
+        counters->leaves += leaves;
+    }
+    s.group_base = w[kWordChildBase];
+    s.group_bits = (hits & 0xFF000000u) | (w[kWordExponents] >> 24);
+    return hits;
+}
+
+}  // namespace cw_detail
+
+/// Starts `ray`: the root as the one interior child (slot 0) of a virtual parent whose
+/// children start at node 0.
+BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_start(CwbvhState& s, const Ray& ray) {
+    cw_detail::set_ray(s, ray.org, ray.dir);
     s.tmin = ray.tmin;
     s.t_hit = ray.tmax;
     s.u_hit = s.v_hit = 0.0f;
@@ -215,24 +248,11 @@ BVHLAB_HD BVHLAB_FORCEINLINE bool cwbvh_done(const CwbvhState& s) { return !(s.g
 template <bool kAnyHit, bool kVertexTris = false>
 BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, CwbvhStack& stack,
                                              TraversalCounters* counters) {
-    const uint32_t bit = highest_bit(s.group_bits & 0xFF000000u);
-    s.group_bits &= ~(1u << bit);
-    const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ s.axes.octant;
-    const uint32_t node = s.group_base + popc32(s.group_bits & ((1u << slot) - 1u) & 0xFFu);
-    if (s.group_bits & 0xFF000000u) {
-        stack.base[s.sp] = s.group_base;
-        stack.bits[s.sp++] = s.group_bits;
-    }
     uint32_t w[20];
-    cw_detail::load_node(v.nodes + node, w);
-    uint32_t leaves = 0;
-    const uint32_t hits = cw_detail::intersect_children(w, s.axes, s.tmin, s.t_hit, v.one, leaves);
-    if (counters) {
-        ++counters->nodes;
-        counters->leaves += leaves;
-    }
-    s.group_base = w[cw_detail::kWordChildBase];
-    s.group_bits = (hits & 0xFF000000u) | (w[cw_detail::kWordExponents] >> 24);
+    const uint32_t hits = cw_detail::visit_nearest(v.nodes, v.one, s, w, counters, [&](uint32_t base, uint32_t bits) {
+        stack.base[s.sp] = base;
+        stack.bits[s.sp++] = bits;
+    });
     const uint32_t tri_base = w[cw_detail::kWordTriBase];
     uint32_t tri_bits = hits & 0x00FFFFFFu;
     while (tri_bits) {

@@ -38,19 +38,6 @@ struct TwoLevelCwbvhState {
 
 namespace tlc_detail {
 
-/// `s`'s ray axes for origin o and direction d.
-BVHLAB_HD BVHLAB_FORCEINLINE void set_axes(CwbvhState& s, Vec3 o, Vec3 d) {
-    const Vec3 inv = safe_reciprocal(d);
-    s.d = d;
-    s.axes.o = o;
-    s.axes.inv[0] = inv.x, s.axes.inv[1] = inv.y, s.axes.inv[2] = inv.z;
-    s.axes.octant = 0;
-    for (int k = 0; k < 3; ++k) {
-        s.axes.neg[k] = s.axes.inv[k] < 0.0f;
-        s.axes.octant |= uint32_t(!s.axes.neg[k]) << k;
-    }
-}
-
 /// The root of the level whose nodes are `nodes`: the one interior child (slot 0) of a virtual
 /// parent whose children start at node 0, as cwbvh_start.
 BVHLAB_HD BVHLAB_FORCEINLINE void start_level(TwoLevelCwbvhState& s, const accel::CwbvhNode* nodes) {
@@ -74,7 +61,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void enter(const TwoLevelView& v, TwoLevelCwbvhStat
     if (bits) push(s, st, base, bits);
     push(s, st, 0u, 0u);
     const accel::InstanceRecord& inst = v.instances[v.cw_tlas_ids[k]];
-    set_axes(s.cw, inst.point(s.wo), inst.vector(s.wd));
+    cw_detail::set_ray(s.cw, inst.point(s.wo), inst.vector(s.wd));
     s.blas = inst.blas;
     s.first_id = inst.first_id;
     s.in_blas = true;
@@ -94,7 +81,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void settle(const TwoLevelView& v, TwoLevelCwbvhSta
         if (bits == 0) {  // the mark: back to the world
             s.in_blas = false;
             s.nodes = v.cw_tlas;
-            set_axes(s.cw, s.wo, s.wd);
+            cw_detail::set_ray(s.cw, s.wo, s.wd);
         } else if (bits & 0xFF000000u) {
             s.cw.group_base = base;
             s.cw.group_bits = bits;
@@ -108,7 +95,7 @@ BVHLAB_HD BVHLAB_FORCEINLINE void settle(const TwoLevelView& v, TwoLevelCwbvhSta
 
 /// Starts `ray` at the TLAS root.
 BVHLAB_HD BVHLAB_FORCEINLINE void two_level_cwbvh_start(const TwoLevelView& v, TwoLevelCwbvhState& s, const Ray& ray) {
-    tlc_detail::set_axes(s.cw, ray.org, ray.dir);
+    cw_detail::set_ray(s.cw, ray.org, ray.dir);
     s.cw.tmin = ray.tmin;
     s.cw.t_hit = ray.tmax;
     s.cw.u_hit = s.cw.v_hit = 0.0f;
@@ -131,21 +118,9 @@ template <bool kAnyHit, bool kVertexTris = false>
 BVHLAB_HD BVHLAB_FORCEINLINE void two_level_cwbvh_step(const TwoLevelView& v, TwoLevelCwbvhState& s,
                                                        TwoLevelCwbvhStack& st, TraversalCounters* counters) {
     CwbvhState& c = s.cw;
-    const uint32_t bit = highest_bit(c.group_bits & 0xFF000000u);
-    c.group_bits &= ~(1u << bit);
-    const uint32_t slot = (bit - accel::CwbvhNode::kInteriorBit) ^ c.axes.octant;
-    const uint32_t node = c.group_base + popc32(c.group_bits & ((1u << slot) - 1u) & 0xFFu);
-    if (c.group_bits & 0xFF000000u) tlc_detail::push(s, st, c.group_base, c.group_bits);
     uint32_t w[20];
-    cw_detail::load_node(s.nodes + node, w);
-    uint32_t leaves = 0;
-    const uint32_t hits = cw_detail::intersect_children(w, c.axes, c.tmin, c.t_hit, v.cw_one, leaves);
-    if (counters) {
-        ++counters->nodes;
-        counters->leaves += leaves;
-    }
-    c.group_base = w[cw_detail::kWordChildBase];
-    c.group_bits = (hits & 0xFF000000u) | (w[cw_detail::kWordExponents] >> 24);
+    const uint32_t hits = cw_detail::visit_nearest(
+        s.nodes, v.cw_one, c, w, counters, [&](uint32_t base, uint32_t bits) { tlc_detail::push(s, st, base, bits); });
     const uint32_t leaf_base = w[cw_detail::kWordTriBase];
     uint32_t leaf_bits = hits & 0x00FFFFFFu;
     if (s.in_blas) {

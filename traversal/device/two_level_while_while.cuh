@@ -78,21 +78,7 @@ __device__ __forceinline__ void two_level_step(const TwoLevelView& v, TwoLevelRa
             r.node = 0;
         }
         if (uint32_t(r.node) >= uint32_t(kWhileWhileSentinel)) break;  // done, or a postponed leaf holds the mark
-        const float4* p = reinterpret_cast<const float4*>(r.cur.nodes + r.node);
-        const float4 c0 = __ldg(p + 0);
-        const float4 c1 = __ldg(p + 1);
-        const float4 zz = __ldg(p + 2);
-        const int2 ch = __ldg(reinterpret_cast<const int2*>(p + 3));
-        float t0, t1;
-        const bool hit0 = r.slabs.entry(c0.x, c0.y, c0.z, c0.w, zz.x, zz.y, r.tmin, r.t_hit, t0);
-        const bool hit1 = r.slabs.entry(c1.x, c1.y, c1.z, c1.w, zz.z, zz.w, r.tmin, r.t_hit, t1);
-        if (!hit0 && !hit1) {
-            r.node = stack[r.sp--];
-        } else {
-            const bool first0 = hit0 && (!hit1 || t0 <= t1);
-            r.node = first0 ? ch.x : ch.y;
-            if (hit0 && hit1) stack[++r.sp] = first0 ? ch.y : ch.x;
-        }
+        ww_detail::visit_node(r.cur.nodes, r.slabs, r.tmin, r.t_hit, stack, r.sp, r.node);
         if (r.cur.tris != nullptr) {
             if (r.node < 0 && r.leaf >= 0) {  // postpone the first leaf found
                 r.leaf = r.node;
