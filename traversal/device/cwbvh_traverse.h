@@ -223,6 +223,29 @@ BVHLAB_HD BVHLAB_FORCEINLINE uint32_t visit_nearest(const accel::CwbvhNode* node
     return hits;
 }
 
+/// Tests the triangles of `bits` (leaf-slot bits 0..23, numbered from `base`) against `s`'s ray
+/// within its closest t, which each hit lowers. Returns the last triangle hit, or -1; an
+/// any-hit query (kAnyHit) returns the first.
+template <bool kAnyHit, bool kVertexTris>
+BVHLAB_HD BVHLAB_FORCEINLINE int32_t test_triangles(const CwbvhView& v, uint32_t base, uint32_t bits, CwbvhState& s,
+                                                    TraversalCounters* counters) {
+    int32_t found = -1;
+    while (bits) {
+        const uint32_t k = base + lowest_bit(bits);
+        bits &= bits - 1u;
+        if (counters) ++counters->tri_tests;
+        float t, u, vv;
+        if (intersect_tri<kVertexTris>(v, k, s.axes.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
+            s.t_hit = t;
+            s.u_hit = u;
+            s.v_hit = vv;
+            found = int32_t(k);
+            if (kAnyHit) break;
+        }
+    }
+    return found;
+}
+
 }  // namespace cw_detail
 
 /// Starts `ray`: the root as the one interior child (slot 0) of a virtual parent whose
@@ -253,22 +276,13 @@ BVHLAB_HD BVHLAB_FORCEINLINE void cwbvh_step(const CwbvhView& v, CwbvhState& s, 
         stack.base[s.sp] = base;
         stack.bits[s.sp++] = bits;
     });
-    const uint32_t tri_base = w[cw_detail::kWordTriBase];
-    uint32_t tri_bits = hits & 0x00FFFFFFu;
-    while (tri_bits) {
-        const uint32_t k = tri_base + lowest_bit(tri_bits);
-        tri_bits &= tri_bits - 1u;
-        if (counters) ++counters->tri_tests;
-        float t, u, vv;
-        if (cw_detail::intersect_tri<kVertexTris>(v, k, s.axes.o, s.d, s.tmin, s.t_hit, t, u, vv)) {
-            s.t_hit = t;
-            s.u_hit = u;
-            s.v_hit = vv;
-            s.k_hit = int32_t(k);
-            if (kAnyHit) {  // any hit ends the ray
-                s.group_bits = 0;
-                return;
-            }
+    const int32_t k =
+        cw_detail::test_triangles<kAnyHit, kVertexTris>(v, w[cw_detail::kWordTriBase], hits & 0x00FFFFFFu, s, counters);
+    if (k >= 0) {
+        s.k_hit = k;
+        if (kAnyHit) {  // any hit ends the ray
+            s.group_bits = 0;
+            return;
         }
     }
     if (!(s.group_bits & 0xFF000000u) && s.sp > 0) {

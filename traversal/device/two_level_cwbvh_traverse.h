@@ -122,23 +122,15 @@ BVHLAB_HD BVHLAB_FORCEINLINE void two_level_cwbvh_step(const TwoLevelView& v, Tw
     const uint32_t hits = cw_detail::visit_nearest(
         s.nodes, v.cw_one, c, w, counters, [&](uint32_t base, uint32_t bits) { tlc_detail::push(s, st, base, bits); });
     const uint32_t leaf_base = w[cw_detail::kWordTriBase];
-    uint32_t leaf_bits = hits & 0x00FFFFFFu;
+    const uint32_t leaf_bits = hits & 0x00FFFFFFu;
     if (s.in_blas) {
         const CwbvhView& b = v.cw_blas[s.blas];
-        while (leaf_bits) {
-            const uint32_t k = leaf_base + lowest_bit(leaf_bits);
-            leaf_bits &= leaf_bits - 1u;
-            if (counters) ++counters->tri_tests;
-            float t, u, vv;
-            if (cw_detail::intersect_tri<kVertexTris>(b, k, c.axes.o, c.d, c.tmin, c.t_hit, t, u, vv)) {
-                c.t_hit = t;
-                c.u_hit = u;
-                c.v_hit = vv;
-                s.id_hit = int32_t(s.first_id + b.tri_ids[k]);
-                if (kAnyHit) {  // any hit ends the ray
-                    s.done = true;
-                    return;
-                }
+        const int32_t k = cw_detail::test_triangles<kAnyHit, kVertexTris>(b, leaf_base, leaf_bits, c, counters);
+        if (k >= 0) {
+            s.id_hit = int32_t(s.first_id + b.tri_ids[k]);
+            if (kAnyHit) {  // any hit ends the ray
+                s.done = true;
+                return;
             }
         }
     } else if (leaf_bits) {
