@@ -67,14 +67,19 @@ Vec3 unit_or_zero(Vec3 n) {
     return {float(x / len), float(y / len), float(z / len)};
 }
 
-void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit) {
-    Vec3 u[3] = {n0, n1, n2};
+void corner_normals(bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit, Vec3* out) {
+    out[0] = n0, out[1] = n1, out[2] = n2;
     if (!unit)
-        for (Vec3& v : u) v = unit_or_zero(v);
+        for (int k = 0; k < 3; ++k) out[k] = unit_or_zero(out[k]);
     bool ok = given;
-    for (const Vec3& v : u) ok = ok && (v.x != 0.0f || v.y != 0.0f || v.z != 0.0f);
-    for (Vec3& v : u)
-        if (!ok) v = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < 3; ++k) ok = ok && (out[k].x != 0.0f || out[k].y != 0.0f || out[k].z != 0.0f);
+    if (!ok)
+        for (int k = 0; k < 3; ++k) out[k] = {0.0f, 0.0f, 0.0f};
+}
+
+void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit) {
+    Vec3 u[3];
+    corner_normals(given, n0, n1, n2, unit, u);
     mesh.normals.insert(mesh.normals.end(), u, u + 3);
 }
 

@@ -76,6 +76,8 @@ Vec3 unit_or_zero(Vec3 n);
 /// vector, or all three 0 when any of them is 0, non-finite or missing (`given` false).
 /// `unit`: the three are unit_or_zero's results already (a loader that normalises per vertex).
 void append_corner_normals(TriangleMesh& mesh, bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit = false);
+/// The same three normals written to out[0..2] instead (a loader that fills arrays in parallel).
+void corner_normals(bool given, Vec3 n0, Vec3 n1, Vec3 n2, bool unit, Vec3* out);
 
 /// Appends a triangle unless it has a non-finite vertex or zero area, which it counts in
 /// mesh.dropped instead; denormal coordinates become 0 (flush_denormals). Returns true when

@@ -7,6 +7,7 @@
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <tbb/parallel_for.h>
 #include <assimp/Importer.hpp>
 #include <nlohmann/json.hpp>
 
@@ -198,47 +199,74 @@ void collect(const aiNode* node, const aiMatrix4x4& parent, std::vector<Placemen
     for (unsigned i = 0; i < node->mNumChildren; ++i) collect(node->mChildren[i], world, out);
 }
 
-/// Appends the triangles of `meshes` to `out`, through `t`, dropping bad ones.
+/// A parallel loop over [0, n) in blocks of `grain`.
+template <class F>
+void parallel_range(size_t n, size_t grain, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) f(i);
+    });
+}
+
+/// Appends the triangles of `meshes` to `out`, through `t`, dropping bad ones. In parallel: the
+/// vertices and normals, then each face's check, then (after a sequential count of where each
+/// kept face goes, in file order) the faces' indices, materials, texture coordinates and normals.
 void append(const aiScene& scene, const std::vector<unsigned>& meshes, const Transform& t, bool texcoords, bool normals,
             bool materials, TriangleMesh& out) {
+    constexpr uint8_t kNotTriangle = 255;
     for (unsigned id : meshes) {
         const aiMesh& am = *scene.mMeshes[id];
         if (!(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
         const auto base = uint32_t(out.vertices.size());
-        for (unsigned v = 0; v < am.mNumVertices; ++v) {
+        const size_t nv = am.mNumVertices, nf = am.mNumFaces;
+        out.vertices.resize(base + nv);
+        Vec3* pos = out.vertices.data() + base;
+        parallel_range(nv, 16384, [&](size_t v) {
             const aiVector3D& p = am.mVertices[v];
-            out.vertices.push_back(flush_denormals(t.point({p.x, p.y, p.z})));
-        }
-        const aiVector3D* uv = am.mTextureCoords[0];
+            pos[v] = flush_denormals(t.point({p.x, p.y, p.z}));
+        });
         // World-space unit normals per vertex, once (not per corner).
         std::vector<Vec3> vn;
         if (normals && am.mNormals) {
             const Transform normal_map = t.normal_map();
-            vn.resize(am.mNumVertices);
-            for (unsigned v = 0; v < am.mNumVertices; ++v) {
+            vn.resize(nv);
+            parallel_range(nv, 16384, [&](size_t v) {
                 const aiVector3D& n = am.mNormals[v];
                 vn[v] = unit_or_zero(normal_map.vector({n.x, n.y, n.z}));
-            }
+            });
         }
-        for (unsigned f = 0; f < am.mNumFaces; ++f) {
+        std::vector<uint8_t> check(nf);
+        parallel_range(nf, 16384, [&](size_t f) {
             const aiFace& face = am.mFaces[f];
-            if (face.mNumIndices != 3) continue;
             const unsigned* i = face.mIndices;
-            if (!count_drop(
-                    check_triangle(out.vertices[base + i[0]], out.vertices[base + i[1]], out.vertices[base + i[2]]),
-                    out.dropped))
-                continue;
-            out.indices.insert(out.indices.end(), {base + i[0], base + i[1], base + i[2]});
-            out.material_ids.push_back(materials ? int32_t(am.mMaterialIndex) : -1);
+            check[f] = face.mNumIndices != 3 ? kNotTriangle : uint8_t(check_triangle(pos[i[0]], pos[i[1]], pos[i[2]]));
+        });
+        std::vector<uint32_t> at(nf);
+        const size_t first = out.material_ids.size();
+        size_t kept = 0;
+        for (size_t f = 0; f < nf; ++f) {
+            at[f] = uint32_t(kept);
+            if (check[f] != kNotTriangle && count_drop(TriangleCheck(check[f]), out.dropped)) ++kept;
+        }
+        out.indices.resize(3 * (first + kept));
+        out.material_ids.resize(first + kept);
+        if (texcoords) out.texcoords.resize(6 * (first + kept));
+        if (normals) out.normals.resize(3 * (first + kept));
+        const aiVector3D* uv = am.mTextureCoords[0];
+        parallel_range(nf, 16384, [&](size_t f) {
+            if (check[f] != uint8_t(TriangleCheck::kOk)) return;
+            const unsigned* i = am.mFaces[f].mIndices;
+            const size_t j = first + at[f];
+            for (int k = 0; k < 3; ++k) out.indices[3 * j + k] = base + i[k];
+            out.material_ids[j] = materials ? int32_t(am.mMaterialIndex) : -1;
             if (texcoords)
                 for (int k = 0; k < 3; ++k) {
-                    out.texcoords.push_back(uv ? uv[i[k]].x : 0.0f);
-                    out.texcoords.push_back(uv ? uv[i[k]].y : 0.0f);
+                    out.texcoords[6 * j + 2 * k] = uv ? uv[i[k]].x : 0.0f;
+                    out.texcoords[6 * j + 2 * k + 1] = uv ? uv[i[k]].y : 0.0f;
                 }
             if (normals)
-                append_corner_normals(out, !vn.empty(), vn.empty() ? Vec3{} : vn[i[0]], vn.empty() ? Vec3{} : vn[i[1]],
-                                      vn.empty() ? Vec3{} : vn[i[2]], /*unit=*/true);
-        }
+                corner_normals(!vn.empty(), vn.empty() ? Vec3{} : vn[i[0]], vn.empty() ? Vec3{} : vn[i[1]],
+                               vn.empty() ? Vec3{} : vn[i[2]], /*unit=*/true, &out.normals[3 * j]);
+        });
     }
 }
 
