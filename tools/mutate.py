@@ -19,6 +19,7 @@ every survivor by file and line. docs/mutation.md tells how to read and act on i
 import argparse
 import datetime
 import fcntl
+import hashlib
 import difflib
 import json
 import os
@@ -189,18 +190,27 @@ class Restorer:
         return os.path.join(self.backup_dir, "mutated-file")
 
     def recover(self):
-        """A campaign killed mid-mutant left its original here: put it back first."""
+        """A campaign killed mid-mutant left its original here: put it back first, but only
+        while the file still holds that mutant. If the file changed since (restored by hand, a
+        checkout of another commit), the backup is stale and restoring it would undo that."""
         if os.path.exists(self.manifest()):
             with open(self.manifest()) as f:
-                rel = f.read().strip()
-            shutil.copyfile(os.path.join(self.backup_dir, "original"), os.path.join(self.root, rel))
+                lines = f.read().split("\n")
+            rel = lines[0].strip()
+            mutant_hash = lines[1].strip() if len(lines) > 1 else ""
+            path = os.path.join(self.root, rel)
+            if mutant_hash and os.path.exists(path) and file_hash(path) == mutant_hash:
+                shutil.copyfile(os.path.join(self.backup_dir, "original"), path)
+                print(f"mutate: restored {rel} from an interrupted campaign", file=sys.stderr)
+            else:
+                print(f"mutate: an interrupted campaign's backup of {rel} is stale (the file changed since); "
+                      "left as it is", file=sys.stderr)
             os.remove(self.manifest())
-            print(f"mutate: restored {rel} from an interrupted campaign", file=sys.stderr)
 
     def apply(self, rel, mutant_path):
         shutil.copyfile(os.path.join(self.root, rel), os.path.join(self.backup_dir, "original"))
         with open(self.manifest(), "w") as f:
-            f.write(rel)
+            f.write(rel + "\n" + file_hash(mutant_path))
         self.current = rel
         shutil.copyfile(mutant_path, os.path.join(self.root, rel))
 
@@ -218,6 +228,11 @@ class Restorer:
         rel = self.current
         self.restore()
         die(f"interrupted (signal {signum})" + (f"; {rel} restored" if rel else ""), 130)
+
+
+def file_hash(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
 
 
 def build(build_dir, jobs):

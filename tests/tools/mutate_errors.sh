@@ -25,5 +25,32 @@ expect "no such file: no/such.cpp" --files no/such.cpp
 expect "README.md is not a C++ source" --files README.md
 expect "--changed no-such-rev" --changed no-such-rev
 expect "--planted runs every entry" --planted --sample 3
+# An interrupted campaign's backup is restored only while the file still holds its mutant; a
+# file changed since (restored by hand, another commit checked out) is left as it is.
+if ! python3 - "$src/tools/mutate.py" <<'PY'
+import importlib.util, os, sys, tempfile
+spec = importlib.util.spec_from_file_location("mutate", sys.argv[1])
+m = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(m)
+with tempfile.TemporaryDirectory() as root:
+    backup = os.path.join(root, "backup")
+    src = os.path.join(root, "a.cpp")
+    mutant = os.path.join(root, "mutant.cpp")
+    for case in ("still mutated", "changed since"):
+        with open(src, "w") as f: f.write("int x = 1;\n")
+        with open(mutant, "w") as f: f.write("int x = 0;\n")
+        r = m.Restorer(root, backup)
+        r.apply("a.cpp", mutant)  # the campaign dies here, mutant in place
+        if case == "changed since":
+            with open(src, "w") as f: f.write("int x = 2;  // a newer commit\n")
+        m.Restorer(root, backup)  # the next campaign starts
+        want = "int x = 1;\n" if case == "still mutated" else "int x = 2;  // a newer commit\n"
+        assert open(src).read() == want, (case, open(src).read())
+        assert not os.path.exists(os.path.join(backup, "mutated-file")), case
+PY
+then
+    echo "FAIL: Restorer's recovery of an interrupted campaign"
+    fails=$((fails + 1))
+fi
 [ $fails -eq 0 ] && echo "mutate_errors.sh: all cases passed"
 exit $((fails > 0))
