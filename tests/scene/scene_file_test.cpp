@@ -201,6 +201,18 @@ TEST(SceneFile, FlattenTurnsNormalsWithTheSurface) {
     expect_near(turn.normal({0.0f, 0.0f, 0.0f}), {0.0f, 0.0f, 0.0f}, 0.0f);
 }
 
+TEST(SceneFile, UnitOrZeroNormalisesAcrossFloatRange) {
+    // Float when the squared length is in float's normal range, double outside it: tiny and huge
+    // normals (a file's unnormalised ones, a turned instance's) still become unit vectors.
+    expect_near(unit_or_zero({3.0f, 0.0f, 4.0f}), {0.6f, 0.0f, 0.8f});
+    expect_near(unit_or_zero({3e-20f, 0.0f, 4e-20f}), {0.6f, 0.0f, 0.8f});  // squared: 2.5e-39, below float's
+    expect_near(unit_or_zero({0.0f, -3e20f, 4e20f}), {0.0f, -0.6f, 0.8f});  // squared: 2.5e41, above float's
+    expect_near(unit_or_zero({1e-40f, 0.0f, 0.0f}), {1.0f, 0.0f, 0.0f});    // a denormal component
+    expect_near(unit_or_zero({0.0f, 0.0f, 0.0f}), {0.0f, 0.0f, 0.0f}, 0.0f);
+    expect_near(unit_or_zero({INFINITY, 0.0f, 0.0f}), {0.0f, 0.0f, 0.0f}, 0.0f);
+    expect_near(unit_or_zero({NAN, 1.0f, 0.0f}), {0.0f, 0.0f, 0.0f}, 0.0f);
+}
+
 // Vertex normals from glTF (NORMAL) and PLY (nx ny nz), in world space for meshes placed once;
 // meshes of the same file without them get zeros.
 TEST(SceneFile, ReadsVertexNormalsOfGltfAndPly) {
