@@ -12,6 +12,7 @@
 #include "accel/layouts/kd_convert.h"
 #include "accel/passes/collapse_wide.h"
 #include "traversal/device/kd_traverse.h"
+#include "traversal/gpu/gpu_builder.h"
 
 namespace bvhlab::trav {
 
@@ -119,9 +120,9 @@ void convert_cwbvh(const scene::TriangleMesh& mesh, const StructureSpec& spec, c
 }
 
 /// The BVH path after the binary tree exists (built, or loaded from `path`): validation,
-/// figures, layout.
+/// figures, layout (`built`: the BVH2 layout a GPU builder made already).
 AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage,
-                          AccelStructure b, const std::string& path) {
+                          AccelStructure b, const std::string& path, accel::Bvh2* built = nullptr) {
     const std::string builder = accel::builder_name(spec.kind());
     accel::ValidateOptions vo;
     vo.allow_duplicates = spec.kind() == accel::BuilderKind::kSbvh;
@@ -158,13 +159,19 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     } else {
         b.structure.name = "bvh2/" + builder;
         b.structure.layout = Layout::kBvh2;
-        b.structure.bvh2 = accel::convert_to_bvh2(b.result.tree, mesh);
+        b.structure.bvh2 = built ? std::move(*built) : accel::convert_to_bvh2(b.result.tree, mesh);
     }
     f["structure"] = b.structure.name;
     f["layout"] = layout_name(b.structure.layout);
     f["layout_bytes"] = b.structure.bytes();
     f["layout_depth"] = b.structure.depth();
-    if (builder != "sweep") f["bins"] = spec.options.num_bins;
+    f["build_device"] = spec.on_gpu() ? "gpu" : "cpu";
+    if (spec.on_gpu()) {
+        f["morton_bits"] = spec.options.morton_bits;
+        if (spec.kind() == accel::BuilderKind::kHploc) f["radius"] = spec.options.ploc_radius;
+    } else if (builder != "sweep") {
+        f["bins"] = spec.options.num_bins;
+    }
     if (builder == "sbvh") {
         f["alpha"] = spec.options.sbvh_alpha;
         f["budget"] = spec.options.sbvh_budget;
@@ -174,6 +181,44 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     f["config"] = accel::describe_config(spec.kind(), spec.options);
     if (!path.empty()) f["structure_file"] = path;
     return b;
+}
+
+/// Figures of a GPU build: device time per stage (CUDA events), Mtris/s, peak device memory.
+nlohmann::json gpu_build_figures(const GpuBuild& g, size_t triangles) {
+    const GpuBuildTimes& t = g.times;
+    return {{"upload_ms", t.upload_ms},
+            {"bounds_ms", t.bounds_ms},
+            {"morton_ms", t.morton_ms},
+            {"sort_ms", t.sort_ms},
+            {"hierarchy_ms", t.hierarchy_ms},
+            {"convert_ms", t.convert_ms},
+            {"total_ms", t.total_ms},
+            {"mtris_per_s", t.total_ms > 0.0 ? double(triangles) / (t.total_ms * 1e3) : 0.0},
+            {"peak_device_bytes", g.peak_bytes}};
+}
+
+/// A GPU builder: the BVH2 layout is made on the device and kept there; the host gets a copy
+/// and its BuildTree for the figures, a CWBVH collapse and structure files.
+std::pair<AccelStructure, std::shared_ptr<const DeviceStructure>> build_on_device(const scene::TriangleMesh& mesh,
+                                                                                  const StructureSpec& spec,
+                                                                                  const StageHook& stage,
+                                                                                  AccelStructure b) {
+    GpuBuild g;
+    {
+        auto st = begin(stage, "building " + spec.builder + " BVH on the GPU over " +
+                                   std::to_string(mesh.triangle_count()) + " triangles");
+        g = build_on_gpu(mesh, spec.kind(), spec.options);
+    }
+    b.result.tree = accel::build_tree_from_bvh2(g.host);
+    b.result.build_ms = g.times.total_ms;
+    accel::Bvh2 built = std::move(g.host);
+    b = finish_bvh(mesh, spec, stage, std::move(b), "", &built);
+    b.figures["gpu_build"] = gpu_build_figures(g, mesh.triangle_count());
+    std::shared_ptr<const DeviceStructure> device;
+    if (b.structure.layout == Layout::kBvh2)
+        device =
+            std::make_shared<DeviceStructure>(b.structure, std::move(g.nodes), std::move(g.tris), std::move(g.tri_ids));
+    return {std::move(b), std::move(device)};
 }
 
 }  // namespace
@@ -197,6 +242,13 @@ void StructureSpec::check() const {
         throw Error("kd_stack " + std::to_string(kd_stack) + " is neither 64 (full stack) nor in [1, 8] (short stack)");
     if (const std::string p = accel::options_problem(options); !p.empty()) throw Error(p);
     if (const std::string p = accel::kd_config_problem(kd); !p.empty()) throw Error(p);
+    if (build_device != "auto" && build_device != "cpu" && build_device != "gpu")
+        throw Error("build_device '" + build_device + "' is not one of auto, cpu, gpu");
+    if (build_device == "gpu" && !on_gpu())
+        throw Error("build_device gpu applies to the GPU builders (lbvh, hploc), not " + builder);
+    if (build_device == "cpu" && on_gpu()) throw Error("builder '" + builder + "' runs on the GPU only");
+    if (on_gpu() && options.reinsertion_passes > 0)
+        throw Error("reinsertion_passes applies to the CPU builders, not " + builder);
 }
 
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {
@@ -208,6 +260,11 @@ AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureS
     spec.builder = accel::builder_name(spec.kind());  // "bvh" -> "binned"
     AccelStructure b;
     b.spec = spec;
+    if (spec.on_gpu()) {
+        auto [built, device] = build_on_device(mesh, spec, stage, std::move(b));
+        built.device_ = std::move(device);
+        return std::move(built);
+    }
     {
         auto st = begin(stage, "building " + spec.builder + " SAH BVH over " + std::to_string(mesh.triangle_count()) +
                                    " triangles");
@@ -245,7 +302,9 @@ AccelStructure build_structure(const scene::InstancedScene& placed, const Struct
         b.structure.two_level = accel::build_two_level(
             placed,
             [&](const scene::TriangleMesh& m) {
-                accel::BuildTree tree = accel::run_builder(spec.kind(), m, spec.options).tree;
+                accel::BuildTree tree =
+                    spec.on_gpu() ? accel::build_tree_from_bvh2(build_on_gpu(m, spec.kind(), spec.options).host)
+                                  : accel::run_builder(spec.kind(), m, spec.options).tree;
                 const std::string err = accel::validate(tree, m, spec.options.config, vo);
                 if (!err.empty()) throw Error("builder '" + spec.builder + "' produced an invalid BLAS: " + err);
                 return tree;
@@ -289,7 +348,11 @@ AccelStructure build_structure(const scene::InstancedScene& placed, const Struct
     f["blas_bytes"] = blas_bytes;
     f["bytes_per_world_triangle"] = t.world_triangles ? double(b.structure.bytes()) / double(t.world_triangles) : 0.0;
     f["build_ms"] = b.result.build_ms;
-    if (spec.builder != "sweep") f["bins"] = spec.options.num_bins;
+    f["build_device"] = spec.on_gpu() ? "gpu" : "cpu";
+    if (spec.on_gpu())
+        f["morton_bits"] = spec.options.morton_bits;
+    else if (spec.builder != "sweep")
+        f["bins"] = spec.options.num_bins;
     f["max_leaf"] = spec.options.config.max_leaf_size;
     f["config"] = accel::describe_config(spec.kind(), spec.options);
     return b;

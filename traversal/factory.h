@@ -30,7 +30,7 @@ namespace bvhlab::trav {
 
 /// What to build. The defaults are the CLI's: a binned SAH BVH in the BVH2 layout.
 struct StructureSpec {
-    std::string builder = "binned";   ///< binned (also "bvh"), sweep, sbvh, or kdtree
+    std::string builder = "binned";   ///< binned (also "bvh"), sweep, sbvh, kdtree; lbvh or hploc on the GPU
     std::string layout = "bvh2";      ///< a BVH's traversal layout: bvh2 or cwbvh (8-wide, compressed)
     accel::BuilderOptions options;    ///< the BVH builders' options (bins, leaf sizes, SBVH, reinsertion)
     accel::KdTreeBuilder::Config kd;  ///< the kd-tree builder's constants
@@ -38,9 +38,14 @@ struct StructureSpec {
     std::string cw_tris = "woop";     ///< cwbvh leaf triangles: woop (48 B) or vertices (36 B)
     int kd_stack = kKdFullStack;      ///< kd-tree traversal: 64 = full stack, 1..8 = short stack with restart
     bool epo = true;                  ///< compute the EPO of a BVH (slow on very large scenes)
+    /// Where the builder runs: auto (its own device), cpu, or gpu; cpu with lbvh/hploc or gpu
+    /// with a CPU builder is refused.
+    std::string build_device = "auto";
 
     bool is_kdtree() const { return builder == "kdtree"; }
     bool is_cwbvh() const { return !is_kdtree() && layout == "cwbvh"; }
+    /// Whether the builder runs on the GPU (lbvh, hploc).
+    bool on_gpu() const { return !is_kdtree() && accel::runs_on_gpu(kind()); }
     /// The BVH builder (throws bvhlab::Error for kdtree or an unknown name).
     accel::BuilderKind kind() const;
     /// Refuses, with a one-line bvhlab::Error naming the value, any field out of its range or
@@ -85,11 +90,15 @@ public:
     void save(const std::string& path, const std::string& scene_hash) const;
 
 private:
+    friend AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec,
+                                          const StageHook& stage);
     std::shared_ptr<const DeviceStructure> device_;
 };
 
 /// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
-/// figures (SAH, EPO, sizes), and the traversal layout.
+/// figures (SAH, EPO, sizes), and the traversal layout. A GPU builder's BVH2 stays on the device
+/// as built (device() returns it without an upload); its figures add "gpu_build" (the device
+/// time of each stage, Mtris/s and peak device memory).
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
 
 /// Builds the two-level BVH of an instanced scene: a BLAS per placed mesh by spec's BVH builder

@@ -19,8 +19,11 @@ std::string options_problem(const BuilderOptions& o) {
           range_problem("ct", c.traversal_cost, 0.001f, 1e6f), range_problem("ci", c.intersection_cost, 0.001f, 1e6f),
           range_problem("alpha", o.sbvh_alpha, 0.0f, 1.0f), range_problem("budget", o.sbvh_budget, 1.0f, 16.0f),
           range_problem("spatial_bins", o.sbvh_spatial_bins, 2, 256),
-          range_problem("reinsertion_passes", o.reinsertion_passes, -1, 16)})
+          range_problem("reinsertion_passes", o.reinsertion_passes, -1, 16),
+          range_problem("radius", o.ploc_radius, 1, 16)})
         if (!p.empty()) return p;
+    if (o.morton_bits != 30 && o.morton_bits != 60)
+        return "morton_bits " + std::to_string(o.morton_bits) + " is neither 30 nor 60";
     if (c.min_leaf_size > c.max_leaf_size)
         return "min_leaf " + std::to_string(c.min_leaf_size) + " is larger than max_leaf " +
                std::to_string(c.max_leaf_size);
@@ -31,11 +34,25 @@ BuilderKind parse_builder_kind(const std::string& name) {
     if (name == "binned") return BuilderKind::kBinned;
     if (name == "sweep") return BuilderKind::kSweep;
     if (name == "sbvh") return BuilderKind::kSbvh;
-    throw Error("unknown builder '" + name + "' (expected binned, sweep or sbvh)");
+    if (name == "lbvh") return BuilderKind::kLbvh;
+    if (name == "hploc") return BuilderKind::kHploc;
+    throw Error("unknown builder '" + name + "' (expected binned, sweep, sbvh, lbvh or hploc)");
 }
 
 const char* builder_name(BuilderKind kind) {
-    return kind == BuilderKind::kBinned ? "binned" : (kind == BuilderKind::kSweep ? "sweep" : "sbvh");
+    switch (kind) {
+        case BuilderKind::kBinned:
+            return "binned";
+        case BuilderKind::kSweep:
+            return "sweep";
+        case BuilderKind::kSbvh:
+            return "sbvh";
+        case BuilderKind::kLbvh:
+            return "lbvh";
+        case BuilderKind::kHploc:
+            return "hploc";
+    }
+    return "unknown";
 }
 
 int reinsertion_passes(BuilderKind kind, const BuilderOptions& options) {
@@ -44,6 +61,8 @@ int reinsertion_passes(BuilderKind kind, const BuilderOptions& options) {
 }
 
 BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const BuilderOptions& options) {
+    if (runs_on_gpu(kind))
+        throw Error(std::string("builder '") + builder_name(kind) + "' runs on the GPU (trav::build_on_gpu)");
     BuildResult r;
     const auto t0 = std::chrono::steady_clock::now();
     if (kind == BuilderKind::kBinned) {

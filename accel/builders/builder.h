@@ -10,9 +10,14 @@
 
 namespace bvhlab::accel {
 
-enum class BuilderKind { kBinned, kSweep, kSbvh };
+/// The CPU builders, and the GPU builders (traversal/gpu/gpu_builder.h; their codes skip 3, the
+/// kd-tree's in structure files).
+enum class BuilderKind { kBinned = 0, kSweep = 1, kSbvh = 2, kLbvh = 4, kHploc = 6 };
 
-/// "binned", "sweep" or "sbvh"; throws bvhlab::Error otherwise.
+/// Whether `kind` runs on the GPU (lbvh, hploc).
+inline bool runs_on_gpu(BuilderKind kind) { return kind == BuilderKind::kLbvh || kind == BuilderKind::kHploc; }
+
+/// "binned", "sweep", "sbvh", "lbvh" or "hploc"; throws bvhlab::Error otherwise.
 BuilderKind parse_builder_kind(const std::string& name);
 const char* builder_name(BuilderKind kind);
 
@@ -27,6 +32,10 @@ struct BuilderOptions {
     /// Passes of subtree reinsertion after the build; -1 = the builder's default (3 for SBVH,
     /// 0 for the others). See reinsertion_passes().
     int reinsertion_passes = -1;
+    /// The GPU builders: bits of the Morton codes (30 or 60).
+    int morton_bits = 30;
+    /// H-PLOC: how many clusters to each side a cluster looks at for its nearest neighbour.
+    int ploc_radius = 8;
 };
 
 /// "" when every option is in its range, else one line naming the first that is not, by its
@@ -42,6 +51,7 @@ struct BuildResult {
     double build_ms = 0.0;  ///< wall time of the builder call alone
 };
 
+/// Runs a CPU builder; throws bvhlab::Error for a GPU builder (trav::build_on_gpu runs those).
 BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const BuilderOptions& options);
 
 }  // namespace bvhlab::accel

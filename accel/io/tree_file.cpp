@@ -34,6 +34,8 @@ struct Header {
     uint64_t index_count;   // uint32 primitive indices that follow the nodes
     uint32_t spatial_bins;  // SBVH spatial bins
     uint32_t reinsertion;   // BVH files: reinsertion passes run after the build (was reserved, 0)
+    // The GPU builders (lbvh, hploc) have no bins: num_bins holds their Morton bits and
+    // spatial_bins H-PLOC's search radius.
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
@@ -72,6 +74,11 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
     s << builder_name(kind) << " leaf=" << o.config.min_leaf_size << ".." << o.config.max_leaf_size
       << " max_depth=" << o.config.max_depth << " Ct=" << o.config.traversal_cost
       << " Ci=" << o.config.intersection_cost;
+    if (runs_on_gpu(kind)) {
+        s << " morton=" << o.morton_bits;
+        if (kind == BuilderKind::kHploc) s << " radius=" << o.ploc_radius;
+        return s.str();
+    }
     if (kind != BuilderKind::kSweep) s << " bins=" << o.num_bins;
     if (kind == BuilderKind::kSbvh)
         s << " alpha=" << o.sbvh_alpha << " budget=" << o.sbvh_budget << " spatial_bins=" << o.sbvh_spatial_bins;
@@ -93,6 +100,10 @@ void write_tree_file(const std::string& path, const BuildTree& tree, const TreeF
     h.sbvh_budget = meta.options.sbvh_budget;
     h.spatial_bins = uint32_t(meta.options.sbvh_spatial_bins);
     h.reinsertion = uint32_t(reinsertion_passes(meta.builder, meta.options));
+    if (runs_on_gpu(meta.builder)) {
+        h.num_bins = uint32_t(meta.options.morton_bits);
+        h.spatial_bins = uint32_t(meta.options.ploc_radius);
+    }
     write_file(path, h, tree.nodes, tree.prim_indices);
 }
 
@@ -122,7 +133,10 @@ TreeFile read_tree_file(const std::string& path) {
     if (h.version != kTreeFileVersion)
         throw Error("structure file '" + path + "' has version " + std::to_string(h.version) +
                     "; this build reads version " + std::to_string(kTreeFileVersion));
-    if (h.builder > uint32_t(BuilderKind::kSbvh) && h.builder != kKdTreeCode)
+    const uint32_t b = h.builder;
+    if (b != uint32_t(BuilderKind::kBinned) && b != uint32_t(BuilderKind::kSweep) &&
+        b != uint32_t(BuilderKind::kSbvh) && b != uint32_t(BuilderKind::kLbvh) && b != uint32_t(BuilderKind::kHploc) &&
+        b != kKdTreeCode)
         throw Error("structure file '" + path + "' names an unknown builder (" + std::to_string(h.builder) + ")");
     const bool kd = h.builder == kKdTreeCode;
     const uint64_t node_bytes = kd ? sizeof(KdNode) : sizeof(BuildNode);
@@ -178,6 +192,12 @@ TreeFile read_tree_file(const std::string& path) {
     o.sbvh_budget = h.sbvh_budget;
     o.sbvh_spatial_bins = int(h.spatial_bins);
     o.reinsertion_passes = int(h.reinsertion);
+    if (!kd && runs_on_gpu(f.meta.builder)) {
+        o.morton_bits = int(h.num_bins);
+        o.ploc_radius = int(h.spatial_bins);
+        o.num_bins = BuilderOptions{}.num_bins;
+        o.sbvh_spatial_bins = BuilderOptions{}.sbvh_spatial_bins;
+    }
     // The header's configuration is shown and reused as it is (a NaN Ct printed "SAH nan", a
     // max depth of 0 "depth 9 of 0"): the ranges a build accepts.
     if (const std::string bad = kd ? kd_config_problem(f.meta.kd) : options_problem(o); !bad.empty())

@@ -13,40 +13,8 @@
 namespace bvhlab::accel {
 
 WoopTriangle make_woop_triangle(Vec3 v0, Vec3 v1, Vec3 v2) {
-    double e1[3], e2[3], n[3], p[3];
-    for (int k = 0; k < 3; ++k) {
-        e1[k] = double(v1[k]) - v0[k];
-        e2[k] = double(v2[k]) - v0[k];
-        p[k] = v0[k];
-    }
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    BVHLAB_CHECK(len > 0.0, "Woop transform of a zero-area triangle");
-    for (double& x : n) x /= len;
-    // Columns of M are e1, e2, n; invert by cofactors: rows of M^-1 are (e2 x n, n x e1,
-    // e1 x e2) / det.
-    auto crs = [](const double* a, const double* b, double* out) {
-        out[0] = a[1] * b[2] - a[2] * b[1];
-        out[1] = a[2] * b[0] - a[0] * b[2];
-        out[2] = a[0] * b[1] - a[1] * b[0];
-    };
-    double ru[3], rv[3], rw[3];
-    crs(e2, n, ru);
-    crs(n, e1, rv);
-    crs(e1, e2, rw);
-    const double det = e1[0] * ru[0] + e1[1] * ru[1] + e1[2] * ru[2];
     WoopTriangle w;
-    const double* rows[3] = {rw, ru, rv};
-    for (int r = 0; r < 3; ++r) {
-        double dotp = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            w.row[r][k] = float(rows[r][k] / det);
-            dotp += rows[r][k] / det * p[k];
-        }
-        w.row[r][3] = float(r == 0 ? dotp : -dotp);
-    }
+    BVHLAB_CHECK(woop_map(v0, v1, v2, w), "Woop transform of a zero-area triangle");
     return w;
 }
 
@@ -133,6 +101,40 @@ Bvh2 convert_bvh2_nodes(const BuildTree& tree) {
             if (c >= 0) todo.push_back({c, depth + 1});
     }
     return out;
+}
+
+BuildTree build_tree_from_bvh2(const Bvh2& bvh) {
+    BVHLAB_CHECK(!bvh.nodes.empty(), "cannot convert an empty BVH2");
+    BuildTree tree;
+    tree.prim_indices = bvh.tri_ids;
+    auto set = [&](size_t at, const Bvh2Node& n, int slot) {
+        BuildNode& b = tree.nodes[at];
+        b.bounds = n.child_box(slot);
+        const int32_t c = n.child[slot];
+        b.first_index = c < 0 ? Bvh2Node::leaf_first(c) : 0;
+        b.prim_count = c < 0 ? Bvh2Node::leaf_count(c) : 0;
+    };
+    const Bvh2Node& root = bvh.nodes[0];
+    tree.nodes.resize(1);
+    if (root.child[0] < 0 && root.child[1] == root.child[0]) {  // a root leaf (its second slot is empty)
+        set(0, root, 0);
+        return tree;
+    }
+    tree.nodes[0] = {merge(root.child_box(0), root.child_box(1)), 0, 0};
+    std::vector<std::pair<int32_t, size_t>> todo{{0, 0}};  // layout node, its BuildTree node
+    while (!todo.empty()) {
+        const auto [k, at] = todo.back();
+        todo.pop_back();
+        const Bvh2Node& n = bvh.nodes[size_t(k)];
+        const size_t first = tree.nodes.size();
+        tree.nodes[at].first_index = uint32_t(first);
+        tree.nodes.resize(first + 2);
+        for (int slot = 1; slot >= 0; --slot) {
+            set(first + size_t(slot), n, slot);
+            if (n.child[slot] >= 0) todo.push_back({n.child[slot], first + size_t(slot)});
+        }
+    }
+    return tree;
 }
 
 }  // namespace bvhlab::accel

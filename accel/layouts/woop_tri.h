@@ -3,6 +3,7 @@
 // stores the affine map from world space to the space where it is the unit triangle.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "accel/core/hd.h"
@@ -51,8 +52,49 @@ struct alignas(16) WoopTriangle {
 };
 static_assert(sizeof(WoopTriangle) == 48 && alignof(WoopTriangle) == 16, "WoopTriangle layout");
 
-/// Computes the map for triangle (v0, v1, v2) in double precision, then rounds to float.
-/// The triangle must have non-zero area.
+/// The map of triangle (v0, v1, v2), computed in double precision and rounded to float, into
+/// `w`; false (and `w` untouched) for a triangle of zero area. Host and device share it: the
+/// GPU builders' file is compiled without FMA contraction, so both give the same bits.
+BVHLAB_HD inline bool woop_map(Vec3 v0, Vec3 v1, Vec3 v2, WoopTriangle& w) {
+    double e1[3], e2[3], n[3], p[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = double(v1[k]) - double(v0[k]);
+        e2[k] = double(v2[k]) - double(v0[k]);
+        p[k] = v0[k];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0.0)) return false;
+    for (double& x : n) x /= len;
+    // Columns of M are e1, e2, n; invert by cofactors: rows of M^-1 are (e2 x n, n x e1,
+    // e1 x e2) / det.
+    double rw[3], ru[3], rv[3];
+    ru[0] = e2[1] * n[2] - e2[2] * n[1];
+    ru[1] = e2[2] * n[0] - e2[0] * n[2];
+    ru[2] = e2[0] * n[1] - e2[1] * n[0];
+    rv[0] = n[1] * e1[2] - n[2] * e1[1];
+    rv[1] = n[2] * e1[0] - n[0] * e1[2];
+    rv[2] = n[0] * e1[1] - n[1] * e1[0];
+    rw[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    rw[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    rw[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double det = e1[0] * ru[0] + e1[1] * ru[1] + e1[2] * ru[2];
+    const double* rows[3] = {rw, ru, rv};
+    for (int r = 0; r < 3; ++r) {
+        double dotp = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            w.row[r][k] = float(rows[r][k] / det);
+            dotp += rows[r][k] / det * p[k];
+        }
+        w.row[r][3] = float(r == 0 ? dotp : -dotp);
+    }
+    return true;
+}
+
+/// Computes the map for triangle (v0, v1, v2) (woop_map). The triangle must have non-zero
+/// area.
 WoopTriangle make_woop_triangle(Vec3 v0, Vec3 v1, Vec3 v2);
 
 }  // namespace bvhlab::accel

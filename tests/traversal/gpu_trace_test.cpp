@@ -3,7 +3,8 @@
 // tested without new test code. Every kernel x {closest, any} x {binned, SBVH, or the
 // kd-tree for kd kernels} on generated scenes and the Cornell box must agree with Embree
 // (0 real mismatches) and write every hit (the tracer poisons the hit buffer before each
-// launch). Each test skips with the reason when there is no device.
+// launch); the first also over the GPU builders' trees (lbvh, hploc). Each test skips with the
+// reason when there is no device.
 #include <gtest/gtest.h>
 
 #include <functional>
@@ -140,6 +141,10 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
         if (kernel.layout == Layout::kKd) variants = {variants[0]};  // one kd-tree
         // A CWBVH's vertex-triple leaves (--cw-tris vertices) are a second kernel instance.
         if (has_cw_tris(kernel.layout)) variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
+        // The GPU builders' trees, in every BVH layout.
+        if (kernel.layout != Layout::kKd)
+            for (auto b : {accel::BuilderKind::kLbvh, accel::BuilderKind::kHploc})
+                variants.push_back({b, accel::CwTris::kWoop});
         expect_kernel_agrees(
             kernel, scene.mesh, cfg, variants, [](const CompareReport& rep) { return double(rep.ties); }, 0.001, 1.0);
     }

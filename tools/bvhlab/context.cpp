@@ -336,9 +336,15 @@ Scene load_scene(const std::string& spec, const Globals& g) {
 
 void BuildOptions::add_to(CLI::App& app) {
     builder_flag = app.add_option("--builder", builder,
-                                  "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits)")
-                       ->check(CLI::IsMember({"binned", "sweep", "sbvh"}))
+                                  "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits) "
+                                  "on the CPU; lbvh (Karras 2012) or hploc (H-PLOC, Benthin et al. 2024) on the GPU")
+                       ->check(CLI::IsMember({"binned", "sweep", "sbvh", "lbvh", "hploc"}))
                        ->capture_default_str();
+    build_device_flag = app.add_option("--build-device", build_device,
+                                       "where the builder runs: cpu (binned, sweep, sbvh), gpu (lbvh, hploc), or auto "
+                                       "(the builder's own)")
+                            ->check(CLI::IsMember({"auto", "cpu", "gpu"}))
+                            ->capture_default_str();
     auto* st = structure_flag = app.add_option(
         "--structure", structure,
         "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building "
@@ -374,6 +380,13 @@ void BuildOptions::add_to(CLI::App& app) {
                "at most this many passes of SAH-lowering subtree reinsertion after the BVH build (it stops "
                "after a pass that gains under 1%); -1 = the builder's default (3 for sbvh, 0 for binned and sweep)")
             ->check(CLI::Range(-1, 16))
+            ->capture_default_str(),
+        app.add_option("--morton-bits", opts.morton_bits, "GPU builders: bits of the Morton codes (30 or 60)")
+            ->check(CLI::IsMember({30, 60}))
+            ->capture_default_str(),
+        app.add_option("--radius", opts.ploc_radius,
+                       "hploc: clusters to each side that a cluster searches for its nearest neighbour")
+            ->check(CLI::Range(1, 16))
             ->capture_default_str(),
     };
     // --structure NAME picks the builder; a path is checked when the command runs.
@@ -437,13 +450,19 @@ trav::StructureSpec BuildOptions::spec() const {
     s.cw_tris = cw_tris;
     s.kd_stack = kd_stack;
     s.epo = epo;
+    s.build_device = build_device;
     return s;
 }
 
 void BuildOptions::check_applicable() const {
     if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
     if (cw_tris_flag->count() && !is_cwbvh()) throw Error("--cw-tris applies to --layout cwbvh");
-    if (!structure_file().empty()) return;
+    if (!structure_file().empty()) {
+        if (build_device_flag->count())
+            throw Error("--build-device applies when a structure is built, not to structure file '" + structure_file() +
+                        "'");
+        return;
+    }
     // config_flags: --bins, --max-leaf, --min-leaf, --alpha, --budget, --spatial-bins, --reinsert.
     auto refuse = [](const CLI::Option* f, const std::string& why) {
         if (f->count()) throw Error(f->get_name() + " " + why);
@@ -451,6 +470,8 @@ void BuildOptions::check_applicable() const {
     if (is_kdtree()) {
         for (const CLI::Option* f : config_flags) refuse(f, "applies to BVH builders, not --structure kdtree");
         refuse(layout_flag, "applies to BVHs; a kd-tree has its own layout");
+        if (build_device == "gpu")
+            throw Error("--build-device gpu applies to the GPU builders (lbvh, hploc), not kdtree");
         return;
     }
     for (const CLI::Option* f : kd_flags) refuse(f, "applies to --structure kdtree, not a BVH");
@@ -463,6 +484,18 @@ void BuildOptions::check_applicable() const {
         for (size_t i : {3, 4, 5}) refuse(config_flags[i], "applies to --builder sbvh, not " + builder);
     if (k == accel::BuilderKind::kSweep)
         refuse(config_flags[0], "does not apply to the sweep builder (it has no bins)");
+    const bool gpu = accel::runs_on_gpu(k);
+    if (gpu) {
+        refuse(config_flags[0], "does not apply to the GPU builders (they have no bins)");
+        refuse(config_flags[6], "applies to the CPU builders, not " + builder);
+        if (build_device == "cpu")
+            throw Error("--build-device cpu does not apply: builder " + builder + " runs on the GPU");
+    } else {
+        refuse(config_flags[7], "applies to the GPU builders (lbvh, hploc), not " + builder);
+        if (build_device == "gpu")
+            throw Error("--build-device gpu applies to the GPU builders (lbvh, hploc), not " + builder);
+    }
+    if (k != accel::BuilderKind::kHploc) refuse(config_flags[8], "applies to --builder hploc, not " + builder);
 }
 
 void RayOptions::add_to(CLI::App& app) {

@@ -139,13 +139,17 @@ struct BuildOptions {
     /// --structure all (every structure): set by `verify`, the one command that takes it,
     /// before add_to(); elsewhere the option refuses it.
     bool accepts_all = false;
-    int kd_stack = 64;                       ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
-    accel::KdTreeBuilder::Config kd;         ///< kd-tree build constants (--kd-*)
-    std::vector<CLI::Option*> kd_flags;      ///< kd flags whose explicit values a cache must match
-    std::vector<CLI::Option*> config_flags;  ///< flags whose explicit values a cache must match
-    std::string layout = "bvh2";             ///< --layout of a BVH: bvh2, or cwbvh (collapsed, compressed 8-wide)
-    std::string collapse = "sah";            ///< --collapse to 8-wide: sah (Ylitie et al.'s optimum) or greedy
-    std::string cw_tris = "woop";            ///< --cw-tris: a CWBVH's leaf triangles, woop (48 B) or vertices (36 B)
+    int kd_stack = 64;                   ///< kd-tree traversal stack: 64 = full, 1..8 = short stack with restart
+    accel::KdTreeBuilder::Config kd;     ///< kd-tree build constants (--kd-*)
+    std::vector<CLI::Option*> kd_flags;  ///< kd flags whose explicit values a cache must match
+    /// flags whose explicit values a cache must match: --bins, --max-leaf, --min-leaf, --alpha,
+    /// --budget, --spatial-bins, --reinsert, --morton-bits, --radius
+    std::vector<CLI::Option*> config_flags;
+    std::string layout = "bvh2";        ///< --layout of a BVH: bvh2, or cwbvh (collapsed, compressed 8-wide)
+    std::string collapse = "sah";       ///< --collapse to 8-wide: sah (Ylitie et al.'s optimum) or greedy
+    std::string cw_tris = "woop";       ///< --cw-tris: a CWBVH's leaf triangles, woop (48 B) or vertices (36 B)
+    std::string build_device = "auto";  ///< --build-device: cpu, gpu, or auto (the builder's own)
+    CLI::Option* build_device_flag = nullptr;
     CLI::Option* builder_flag = nullptr;
     CLI::Option* structure_flag = nullptr;
     CLI::Option* kd_stack_flag = nullptr;

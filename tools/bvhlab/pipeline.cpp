@@ -50,6 +50,8 @@ static void check_explicit_options(const BuildOptions& opts, const accel::TreeFi
     if (flags[4]->count()) asked.sbvh_budget = given.sbvh_budget;
     if (flags[5]->count()) asked.sbvh_spatial_bins = given.sbvh_spatial_bins;
     if (flags[6]->count()) asked.reinsertion_passes = given.reinsertion_passes;
+    if (flags[7]->count()) asked.morton_bits = given.morton_bits;
+    if (flags[8]->count()) asked.ploc_radius = given.ploc_radius;
     const std::string have = accel::describe_config(f.meta.builder, f.meta.options);
     const std::string want = accel::describe_config(f.meta.builder, asked);
     if (have != want)
@@ -157,8 +159,9 @@ void TraceOptions::validate(BuildOptions& build) const {
 }
 
 const CLI::Option* given_structure_flag(const BuildOptions& build) {
-    std::vector<const CLI::Option*> flags{build.structure_flag, build.builder_flag,  build.kd_stack_flag,
-                                          build.layout_flag,    build.collapse_flag, build.cw_tris_flag};
+    std::vector<const CLI::Option*> flags{build.structure_flag,   build.builder_flag,  build.kd_stack_flag,
+                                          build.layout_flag,      build.collapse_flag, build.cw_tris_flag,
+                                          build.build_device_flag};
     flags.insert(flags.end(), build.config_flags.begin(), build.config_flags.end());
     flags.insert(flags.end(), build.kd_flags.begin(), build.kd_flags.end());
     for (const CLI::Option* f : flags)

@@ -5,6 +5,18 @@
 
 namespace bvhlab::trav {
 
+DeviceStructure::DeviceStructure(const Structure& s, DeviceBuffer<accel::Bvh2Node>&& nodes,
+                                 DeviceBuffer<accel::WoopTriangle>&& tris, DeviceBuffer<uint32_t>&& tri_ids)
+    : layout_(s.layout),
+      depth_(s.depth()),
+      bvh_nodes_(std::move(nodes)),
+      bvh_tris_(std::move(tris)),
+      bvh_ids_(std::move(tri_ids)) {
+    BVHLAB_CHECK(s.layout == Layout::kBvh2 && bvh_nodes_.size() == s.bvh2.nodes.size() &&
+                     bvh_tris_.size() == s.bvh2.tris.size() && bvh_ids_.size() == s.bvh2.tri_ids.size(),
+                 "a device BVH2 is adopted only with its own host copy");
+}
+
 DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_(s.depth()) {
     std::string why;
     if (!gpu_available(&why)) throw Error(why);

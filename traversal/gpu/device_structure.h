@@ -17,6 +17,10 @@ class DeviceStructure {
 public:
     /// Uploads the structure's layout. Throws bvhlab::Error (CudaError) on failure.
     explicit DeviceStructure(const Structure& s);
+    /// Adopts a BVH2 layout that is on the device already (a GPU builder's); `s` holds the same
+    /// structure on the host. Nothing is uploaded.
+    DeviceStructure(const Structure& s, DeviceBuffer<accel::Bvh2Node>&& nodes, DeviceBuffer<accel::WoopTriangle>&& tris,
+                    DeviceBuffer<uint32_t>&& tri_ids);
 
     Layout layout() const { return layout_; }
     uint32_t depth() const { return depth_; }

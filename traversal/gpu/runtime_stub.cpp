@@ -2,6 +2,7 @@
 // The GPU runtime of a build without CUDA: every entry point says so.
 #include "accel/core/check.h"
 #include "traversal/gpu/device_buffer.h"
+#include "traversal/gpu/gpu_builder.h"
 
 namespace bvhlab::trav {
 
@@ -28,6 +29,9 @@ void device_free(void*, size_t) noexcept {}
 void copy_to_device(void*, const void*, size_t) { throw Error(kNoCuda); }
 void copy_to_host(void*, const void*, size_t) { throw Error(kNoCuda); }
 void fill_device_bytes(void*, uint8_t, size_t, void*) { throw Error(kNoCuda); }
+GpuBuild gpu_build(const scene::TriangleMesh&, accel::BuilderKind, const accel::BuilderOptions&, bool) {
+    throw Error(kNoCuda);
+}
 }  // namespace detail
 
 DeviceTimer::DeviceTimer() { throw Error(kNoCuda); }

@@ -1,0 +1,243 @@
+// SPDX-License-Identifier: MIT
+// The GPU builders' host side: Morton codes, Karras's hierarchy and its CPU reference, the
+// BuildTree of a BVH2 layout, and the options, specs and files of lbvh and hploc. The GPU
+// pipeline itself is tested in tests/traversal/gpu_builder_test.cpp.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "accel/builders/builder.h"
+#include "accel/builders/lbvh_reference.h"
+#include "accel/core/check.h"
+#include "accel/core/morton.h"
+#include "accel/core/stats.h"
+#include "accel/core/validate.h"
+#include "accel/io/tree_file.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "scene/io/procedural.h"
+#include "tests/support/test_support.h"
+#include "traversal/factory.h"
+#include "traversal/gpu/gpu_builder.h"
+
+namespace bvhlab::accel {
+namespace {
+
+TEST(Morton, CodesSpreadAndOrderTheAxes) {
+    EXPECT_EQ(morton::spread10(0x3ff), 0x09249249u);
+    EXPECT_EQ(morton::spread10(1), 1u);
+    EXPECT_EQ(morton::spread20(0xfffff), 0x0249249249249249ull);
+    const Vec3 lo{0, 0, 0};
+    EXPECT_EQ(morton::code30({0, 0, 0}, lo, {1, 1, 1}), 0u);
+    EXPECT_EQ(morton::code30({1023.5f, 1023.5f, 1023.5f}, lo, {1, 1, 1}), 0x3fffffffu);
+    EXPECT_EQ(morton::code30({5000, 0, 0}, lo, {1, 1, 1}), morton::spread10(1023) << 2);  // clamped
+    EXPECT_EQ(morton::code30({1, 0, 0}, lo, {1, 1, 1}), 4u);  // x is the highest of each triple
+    EXPECT_EQ(morton::code30({0, 1, 0}, lo, {1, 1, 1}), 2u);
+    EXPECT_EQ(morton::code30({0, 0, 1}, lo, {1, 1, 1}), 1u);
+    EXPECT_EQ(morton::code60({1, 0, 0}, lo, {1, 1, 1}), 4u);
+    EXPECT_EQ(morton::code30({-3, 0, 0}, lo, {1, 1, 1}), 0u);  // below the box: cell 0
+    EXPECT_EQ(morton::axis_scale(2.0f, 2.0f, 1024), 0.0f);      // a flat axis
+    EXPECT_EQ(morton::axis_scale(0.0f, 2.0f, 1024), 512.0f);
+}
+
+TEST(Morton, KarrasHierarchyOfThePapersExample) {
+    // Karras 2012, figure 3: eight 5-bit keys. Interior node i's range starts or ends at key i;
+    // the root splits between keys 3 and 4.
+    const uint32_t keys[8] = {0b00001, 0b00010, 0b00100, 0b00101, 0b10011, 0b11000, 0b11001, 0b11110};
+    const int64_t n = 8;
+    uint32_t l[7], r[7];
+    for (int64_t i = 0; i < 7; ++i) morton::karras_children(keys, n, i, l[i], r[i]);
+    // Interior node i is id n + i; leaves are 0..7.
+    EXPECT_EQ(l[0], n + 3);  // root: keys 0..3 (internal node 3) and 4..7 (internal node 4)
+    EXPECT_EQ(r[0], n + 4);
+    EXPECT_EQ(l[3], n + 1);  // node 3 covers 0..3, splits 0..1 | 2..3
+    EXPECT_EQ(r[3], n + 2);
+    EXPECT_EQ(l[1], 0u);  // node 1 covers 0..1
+    EXPECT_EQ(r[1], 1u);
+    EXPECT_EQ(l[2], 2u);  // node 2 covers 2..3
+    EXPECT_EQ(r[2], 3u);
+    EXPECT_EQ(l[4], 4u);  // node 4 covers 4..7: 4 | 5..7
+    EXPECT_EQ(r[4], n + 5);
+    EXPECT_EQ(l[5], n + 6);  // node 5 covers 5..7: 5..6 | 7
+    EXPECT_EQ(r[5], 7u);
+    EXPECT_EQ(l[6], 5u);
+    EXPECT_EQ(r[6], 6u);
+}
+
+TEST(Morton, EqualKeysSplitByIndex) {
+    // Eight equal keys: the index decides, so the tree is the balanced one over 0..7.
+    const uint64_t keys[8] = {7, 7, 7, 7, 7, 7, 7, 7};
+    uint32_t l, r;
+    morton::karras_children(keys, 8, 0, l, r);
+    EXPECT_EQ(l, 8u + 3);
+    EXPECT_EQ(r, 8u + 4);
+    // Apetrei's distance puts every equal pair below every differing one.
+    const uint64_t k2[3] = {5, 5, 6};
+    EXPECT_LT(morton::apetrei_delta(k2, 0), morton::apetrei_delta(k2, 1));
+}
+
+/// Every node reached once from the root, every leaf 0..n-1 once, every box the union of its
+/// children's, keys sorted.
+void expect_sound(const RawHierarchy& h, const scene::TriangleMesh& mesh) {
+    const size_t n = mesh.triangle_count();
+    ASSERT_EQ(h.sorted_ids.size(), n);
+    ASSERT_EQ(h.interior_count(), n - 1);
+    EXPECT_TRUE(std::is_sorted(h.keys.begin(), h.keys.end()));
+    std::vector<uint32_t> ids = h.sorted_ids;
+    std::sort(ids.begin(), ids.end());
+    for (size_t k = 0; k < n; ++k) ASSERT_EQ(ids[k], k);
+    std::vector<int> seen(2 * n - 1, 0);
+    std::vector<uint32_t> todo{h.root};
+    while (!todo.empty()) {
+        const uint32_t x = todo.back();
+        todo.pop_back();
+        ++seen[x];
+        if (x < n) {
+            const AABB b = mesh.triangle_bounds(h.sorted_ids[x]);
+            EXPECT_EQ(std::memcmp(&b, &h.boxes[x], sizeof b), 0);
+            continue;
+        }
+        const uint32_t a = h.left[x - n], c = h.right[x - n];
+        const AABB u = merge(h.boxes[a], h.boxes[c]);
+        EXPECT_EQ(std::memcmp(&u, &h.boxes[x], sizeof u), 0) << "node " << x;
+        todo.push_back(a);
+        todo.push_back(c);
+    }
+    EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int s) { return s == 1; }));
+}
+
+TEST(LbvhReference, HierarchyIsSoundForBothCodeLengths) {
+    for (auto kind : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured}) {
+        const scene::TriangleMesh mesh = scene::make_procedural(kind, 3000, 5);
+        for (int bits : {30, 60}) {
+            SCOPED_TRACE(bits);
+            expect_sound(lbvh_reference(mesh, bits), mesh);
+        }
+    }
+    // Many triangles with one centre: equal keys, split by index.
+    scene::TriangleMesh same;
+    for (int k = 0; k < 40; ++k) {
+        const float s = 1.0f + float(k);
+        scene::add_triangle_checked(same, {-s, -s, 0}, {s, -s, 0}, {0, s, 0}, -1);
+    }
+    const RawHierarchy h = lbvh_reference(same, 30);
+    expect_sound(h, same);
+    EXPECT_EQ(h.keys.front(), h.keys.back());
+    EXPECT_THROW(lbvh_reference(same, 32), Error);
+}
+
+TEST(Bvh2Convert, BuildTreeOfTheLayoutKeepsTreeAndFigures) {
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 4000, 2);
+    BuilderOptions o;
+    const BuildTree tree = run_builder(BuilderKind::kBinned, mesh, o).tree;
+    const Bvh2 bvh = convert_to_bvh2(tree, mesh);
+    const BuildTree back = build_tree_from_bvh2(bvh);
+    EXPECT_EQ(validate(back, mesh, o.config), "");
+    const TreeStats a = compute_stats(tree, mesh, o.config, false), b = compute_stats(back, mesh, o.config, false);
+    EXPECT_EQ(a.nodes, b.nodes);
+    EXPECT_EQ(a.leaves, b.leaves);
+    EXPECT_EQ(a.depth, b.depth);
+    EXPECT_NEAR(a.sah, b.sah, 1e-9 * a.sah);
+    // The layout of the BuildTree is the same layout again.
+    const Bvh2 again = convert_to_bvh2(back, mesh);
+    EXPECT_EQ(again.nodes.size(), bvh.nodes.size());
+    EXPECT_EQ(again.depth, bvh.depth);
+    // A root leaf.
+    const scene::TriangleMesh two = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 1, 1, 0, 1, 0, 1, 1}});
+    BuilderOptions big;
+    big.config.min_leaf_size = 4;
+    const BuildTree leaf = run_builder(BuilderKind::kBinned, two, big).tree;
+    ASSERT_EQ(leaf.nodes.size(), 1u);
+    const BuildTree leaf_back = build_tree_from_bvh2(convert_to_bvh2(leaf, two));
+    ASSERT_EQ(leaf_back.nodes.size(), 1u);
+    EXPECT_EQ(leaf_back.nodes[0].prim_count, 2u);
+    EXPECT_EQ(validate(leaf_back, two, big.config), "");
+}
+
+TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
+    EXPECT_EQ(parse_builder_kind("lbvh"), BuilderKind::kLbvh);
+    EXPECT_EQ(parse_builder_kind("hploc"), BuilderKind::kHploc);
+    EXPECT_STREQ(builder_name(BuilderKind::kHploc), "hploc");
+    EXPECT_TRUE(runs_on_gpu(BuilderKind::kLbvh));
+    EXPECT_FALSE(runs_on_gpu(BuilderKind::kSbvh));
+    BuilderOptions o;
+    o.morton_bits = 31;
+    EXPECT_NE(options_problem(o).find("morton_bits 31"), std::string::npos);
+    o.morton_bits = 60;
+    o.ploc_radius = 17;
+    EXPECT_NE(options_problem(o).find("radius 17"), std::string::npos);
+    o.ploc_radius = 16;
+    EXPECT_EQ(options_problem(o), "");
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 100, 1);
+    try {
+        run_builder(BuilderKind::kHploc, mesh, o);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("runs on the GPU"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(describe_config(BuilderKind::kHploc, o),
+              "hploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
+}
+
+TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
+    trav::StructureSpec s;
+    s.builder = "hploc";
+    EXPECT_TRUE(s.on_gpu());
+    s.check();
+    s.build_device = "cpu";
+    EXPECT_THROW(s.check(), Error);
+    s.build_device = "tpu";
+    EXPECT_THROW(s.check(), Error);
+    s.build_device = "gpu";
+    s.check();
+    s.options.reinsertion_passes = 2;
+    EXPECT_THROW(s.check(), Error);
+    trav::StructureSpec c;
+    c.build_device = "gpu";
+    EXPECT_THROW(c.check(), Error);  // binned runs on the CPU
+    c.builder = "kdtree";
+    EXPECT_FALSE(c.on_gpu());
+}
+
+TEST(GpuBuilderOptions, WithoutADeviceTheBuildSaysWhy) {
+    std::string why;
+    if (trav::gpu_available(&why)) GTEST_SKIP() << "a GPU is present: the GPU tests build on it";
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 100, 1);
+    trav::StructureSpec s;
+    s.builder = "lbvh";
+    try {
+        trav::build_structure(mesh, s);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("builder 'lbvh' runs on the GPU, and there is none"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 500, 3);
+    TreeFileMeta meta;
+    meta.builder = BuilderKind::kHploc;
+    meta.options.morton_bits = 60;
+    meta.options.ploc_radius = 5;
+    meta.triangles = mesh.triangle_count();
+    meta.scene_hash = scene::scene_hash(mesh);
+    // Any valid tree over the mesh stands in for the GPU's.
+    const BuildTree tree = run_builder(BuilderKind::kBinned, mesh, BuilderOptions{}).tree;
+    test::TempFile f("hploc.tree");
+    write_tree_file(f.path(), tree, meta);
+    const TreeFile r = read_tree_file(f.path());
+    EXPECT_EQ(r.meta.builder, BuilderKind::kHploc);
+    EXPECT_EQ(r.meta.options.morton_bits, 60);
+    EXPECT_EQ(r.meta.options.ploc_radius, 5);
+    EXPECT_EQ(r.meta.options.num_bins, BuilderOptions{}.num_bins);
+    EXPECT_EQ(describe_config(r.meta), describe_config(meta.builder, meta.options));
+    // Loaded without a GPU: the tree is in the file.
+    const trav::AccelStructure a = trav::load_structure(mesh, meta.scene_hash, f.path());
+    EXPECT_EQ(a.figures["builder"], "hploc");
+    EXPECT_EQ(a.figures["build_device"], "gpu");
+    EXPECT_EQ(a.figures["radius"], 5);
+}
+
+}  // namespace
+}  // namespace bvhlab::accel
