@@ -36,7 +36,7 @@ TEST(Morton, CodesSpreadAndOrderTheAxes) {
     EXPECT_EQ(morton::code30({0, 0, 1}, lo, {1, 1, 1}), 1u);
     EXPECT_EQ(morton::code60({1, 0, 0}, lo, {1, 1, 1}), 4u);
     EXPECT_EQ(morton::code30({-3, 0, 0}, lo, {1, 1, 1}), 0u);  // below the box: cell 0
-    EXPECT_EQ(morton::axis_scale(2.0f, 2.0f, 1024), 0.0f);      // a flat axis
+    EXPECT_EQ(morton::axis_scale(2.0f, 2.0f, 1024), 0.0f);     // a flat axis
     EXPECT_EQ(morton::axis_scale(0.0f, 2.0f, 1024), 512.0f);
 }
 
@@ -175,8 +175,7 @@ TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("runs on the GPU"), std::string::npos) << e.what();
     }
-    EXPECT_EQ(describe_config(BuilderKind::kHploc, o),
-              "hploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
+    EXPECT_EQ(describe_config(BuilderKind::kHploc, o), "hploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
 }
 
 TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {

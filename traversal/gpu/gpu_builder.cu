@@ -4,9 +4,9 @@
 // (traversal/CMakeLists.txt): the Woop maps then equal the host's bit for bit.
 #include "traversal/gpu/gpu_builder.h"
 
-#include <cuda/atomic>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
+#include <cuda/atomic>
 
 #include <algorithm>
 #include <string>
@@ -15,7 +15,6 @@
 #include "traversal/cuda_check.h"
 
 namespace bvhlab::trav {
-
 
 using accel::Bvh2Node;
 
@@ -29,14 +28,19 @@ constexpr uint32_t kWarp = 32;
 constexpr uint32_t kHplocThreshold = kWarp / 2;
 constexpr int kBlock = 256;
 
-/// What the leaf choice needs of a node: the triangles below it, the BVH2 interior nodes its
-/// subtree becomes (0 for a leaf), its SAH cost (times its own half area), and whether it
-/// becomes a leaf.
+/// Subtrees of at most this many interior layout nodes are written by one thread, start to end;
+/// larger ones node by node, a level per launch.
+constexpr uint32_t kSubtreeInterior = 2;
+
+/// What the leaf choice and the layout need of a node: the triangles below it, the BVH2 interior
+/// nodes its subtree becomes (0: it becomes a leaf), and its SAH cost (times its own half area).
 struct alignas(16) NodeMeta {
     uint32_t count;
     uint32_t interior;
     float cost;
-    uint32_t leaf;
+    uint32_t reserved;  // 0: 16 bytes, one load
+
+    __host__ __device__ bool leaf() const { return interior == 0; }
 };
 
 struct LeafRule {
@@ -72,12 +76,12 @@ __device__ void make_node(uint32_t id, uint32_t a, uint32_t b, const AABB& box, 
     const float area = box.half_area();
     const float inner = rule.ct * area + ma.cost + mb.cost;
     const float as_leaf = rule.ci * float(m.count) * area;
-    m.leaf = m.count <= rule.min_leaf || (m.count <= rule.max_leaf && as_leaf <= inner);
-    m.cost = m.leaf ? as_leaf : inner;
-    m.interior = m.leaf ? 0 : 1 + ma.interior + mb.interior;
+    const bool leaf = m.count <= rule.min_leaf || (m.count <= rule.max_leaf && as_leaf <= inner);
+    m.cost = leaf ? as_leaf : inner;
+    m.interior = leaf ? 0 : 1 + ma.interior + mb.interior;
     boxes[id] = box;
     children[id] = make_uint2(a, b);
-    *reinterpret_cast<uint4*>(meta + id) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), m.leaf);
+    *reinterpret_cast<uint4*>(meta + id) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), 0u);
 }
 
 __global__ void triangle_boxes(uint32_t n, const Vec3* __restrict__ verts, const uint32_t* __restrict__ idx,
@@ -97,8 +101,7 @@ __global__ void morton_codes(uint32_t n, int bits, const AABB* __restrict__ boxe
     if (t >= n) return;
     const AABB c = *bounds;
     const uint32_t cells = accel::morton::cells_per_axis(bits);
-    const Vec3 scale{accel::morton::axis_scale(c.lo.x, c.hi.x, cells),
-                     accel::morton::axis_scale(c.lo.y, c.hi.y, cells),
+    const Vec3 scale{accel::morton::axis_scale(c.lo.x, c.hi.x, cells), accel::morton::axis_scale(c.lo.y, c.hi.y, cells),
                      accel::morton::axis_scale(c.lo.z, c.hi.z, cells)};
     const Vec3 p = boxes[t].center();
     if constexpr (sizeof(Key) == 8)
@@ -116,7 +119,7 @@ __global__ void make_leaves(uint32_t n, const uint32_t* __restrict__ sorted_ids,
     if (s >= n) return;
     const AABB b = tri_boxes[sorted_ids[s]];
     boxes[s] = b;
-    meta[s] = {1, 0, rule.ci * b.half_area(), 1};
+    meta[s] = {1, 0, rule.ci * b.half_area(), 0};
     if (clusters) clusters[s] = s;
 }
 
@@ -135,8 +138,8 @@ __global__ void karras_hierarchy(uint32_t n, const Key* __restrict__ keys, uint2
 }
 
 /// From each leaf upwards; the second child to arrive at a node boxes it and goes on.
-__global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes,
-                          NodeMeta* meta, uint32_t* __restrict__ visits, LeafRule rule) {
+__global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
+                          uint32_t* __restrict__ visits, LeafRule rule) {
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= n) return;
     uint32_t p = parent[k];
@@ -220,9 +223,9 @@ __device__ __forceinline__ uint32_t ploc_merge(uint32_t& id, AABB& box, uint32_t
 }
 
 template <typename Key>
-__global__ void __launch_bounds__(kBlock) hploc(uint32_t n, const Key* __restrict__ keys, int32_t* parent_ids,
-                                                uint32_t* clusters, AABB* boxes, uint2* children, NodeMeta* meta,
-                                                uint32_t* node_counter, uint32_t* root, int radius, LeafRule rule) {
+__global__ void __launch_bounds__(kBlock)
+    hploc(uint32_t n, const Key* __restrict__ keys, int32_t* parent_ids, uint32_t* clusters, AABB* boxes,
+          uint2* children, NodeMeta* meta, uint32_t* node_counter, uint32_t* root, int radius, LeafRule rule) {
     __shared__ WarpScratch scratch[kBlock / kWarp];
     WarpScratch& mine = scratch[threadIdx.x / kWarp];
     const uint32_t lane = threadIdx.x % kWarp;
@@ -234,9 +237,8 @@ __global__ void __launch_bounds__(kBlock) hploc(uint32_t n, const Key* __restric
             int32_t previous;
             // Join the neighbour whose boundary keys differ less (Apetrei 2014); the first of
             // two siblings to arrive stops, the second takes the parent.
-            if (left == 0 ||
-                (right != n - 1 &&
-                 accel::morton::apetrei_delta(keys, right) < accel::morton::apetrei_delta(keys, left - 1))) {
+            if (left == 0 || (right != n - 1 && accel::morton::apetrei_delta(keys, right) <
+                                                    accel::morton::apetrei_delta(keys, left - 1))) {
                 split = right + 1;
                 __threadfence();
                 previous = atomicExch(&parent_ids[right], int32_t(left));
@@ -270,8 +272,8 @@ __global__ void __launch_bounds__(kBlock) hploc(uint32_t n, const Key* __restric
             const uint32_t b_shifted = __shfl_sync(~0u, b, int(lane - nl) & 31);
             uint32_t id = lane < nl ? a : (lane < nl + nr ? b_shifted : kInvalid);
             AABB box = id != kInvalid ? load_box(boxes + id) : AABB::empty();
-            const uint32_t count = ploc_merge(id, box, nl + nr, last ? 1 : kHplocThreshold, radius, mine,
-                                              node_counter, boxes, children, meta, rule);
+            const uint32_t count = ploc_merge(id, box, nl + nr, last ? 1 : kHplocThreshold, radius, mine, node_counter,
+                                              boxes, children, meta, rule);
             const uint32_t store_span = min(r - l + 1, kHplocThreshold);
             if (lane < store_span) clusters[l + lane] = lane < count ? id : kInvalid;
             if (last && lane == 0) *root = id;
@@ -282,35 +284,41 @@ __global__ void __launch_bounds__(kBlock) hploc(uint32_t n, const Key* __restric
     }
 }
 
-// --- The BVH2 layout: one persistent kernel, tasks in depth-first order.
+// --- The BVH2 layout, top down, one level per launch.
 
 struct Mesh {
     const Vec3* verts;
     const uint32_t* idx;
 };
 
-/// The triangles of leaf subtree `node` to [first, ...), left to right.
-__device__ void emit_leaf(uint32_t node, uint32_t first, uint32_t n, const uint2* children,
-                          const uint32_t* sorted_ids, Mesh mesh, WoopTriangle* tris, uint32_t* tri_ids) {
+/// The triangle ids of leaf subtree `node` to tri_ids[first, ...), left to right (their Woop maps
+/// come after, from a flat kernel: the maps' double-precision math stays out of the tree walks).
+__device__ void emit_leaf(uint32_t node, uint32_t first, uint32_t n, const uint2* children, const uint32_t* sorted_ids,
+                          uint32_t* tri_ids) {
     uint32_t stack[Bvh2Node::kMaxLeafCount];
     int sp = 0;
     stack[sp++] = node;
     while (sp) {
         const uint32_t x = stack[--sp];
         if (x < n) {
-            const uint32_t t = sorted_ids[x];
-            WoopTriangle w;
-            accel::woop_map(mesh.verts[mesh.idx[3 * t]], mesh.verts[mesh.idx[3 * t + 1]],
-                            mesh.verts[mesh.idx[3 * t + 2]], w);
-            tris[first] = w;
-            tri_ids[first] = t;
-            ++first;
+            tri_ids[first++] = sorted_ids[x];
         } else {
             const uint2 c = children[x];
             stack[sp++] = c.y;
             stack[sp++] = c.x;
         }
     }
+}
+
+/// The Woop map of every triangle in leaf order.
+__global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, const Vec3* __restrict__ verts,
+                          const uint32_t* __restrict__ idx, WoopTriangle* __restrict__ tris) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= n) return;
+    const uint32_t t = tri_ids[k];
+    WoopTriangle w;
+    accel::woop_map(verts[idx[3 * t]], verts[idx[3 * t + 1]], verts[idx[3 * t + 2]], w);
+    tris[k] = w;
 }
 
 __device__ void set_child(Bvh2Node& o, int slot, const AABB& b) {
@@ -328,85 +336,104 @@ struct Layout {
     Bvh2Node* nodes;
     WoopTriangle* tris;
     uint32_t* tri_ids;
-    uint4* tasks;  // node, first triangle, depth
-    uint32_t* ready;
-    uint32_t* next;
-    uint32_t* depth;
+    uint32_t* depth;  // the deepest layout node (interior nodes on its path)
 };
 
-__device__ void push_task(const Layout& out, uint32_t slot, uint32_t node, uint32_t first, uint32_t depth) {
-    __stcg(out.tasks + slot, make_uint4(node, first, depth, 0));
-    cuda::atomic_ref<uint32_t, cuda::thread_scope_device> flag(out.ready[slot]);
-    flag.store(1, cuda::memory_order_release);
-}
+struct LayoutInput {
+    uint32_t n;
+    const uint2* children;
+    const AABB* boxes;
+    const NodeMeta* meta;
+    const uint32_t* sorted_ids;
+    Mesh mesh;
+};
 
-/// Writes layout node t once its parent has pushed it: the left child takes slot t + 1, the
-/// right one t + 1 + the left's interior count. Returns the node's depth.
-__device__ uint32_t write_task(uint32_t t, uint32_t n, const uint2* __restrict__ children,
-                               const AABB* __restrict__ boxes, const NodeMeta* __restrict__ meta,
-                               const uint32_t* __restrict__ sorted_ids, Mesh mesh, const Layout& out) {
-    cuda::atomic_ref<uint32_t, cuda::thread_scope_device> flag(out.ready[t]);
-    while (flag.load(cuda::memory_order_acquire) == 0) __nanosleep(32);
-    const uint4 task = __ldcg(out.tasks + t);
-    const uint2 c = children[task.x];
-    const NodeMeta m[2] = {meta[c.x], meta[c.y]};
+/// Writes layout node `slot` for hierarchy node `node` (interior, not a leaf): its children's
+/// boxes and references, their leaves' triangles. The left child's subtree takes the slots
+/// after `slot`, the right one's those after the left's. Calls next(child, first, slot) for
+/// each interior child.
+template <typename Next>
+__device__ void write_node(const LayoutInput& in, const Layout& out, uint32_t node, uint32_t first, uint32_t slot,
+                           Next&& next) {
+    const uint2 c = in.children[node];
+    const NodeMeta m[2] = {in.meta[c.x], in.meta[c.y]};
     const uint32_t child[2] = {c.x, c.y};
-    const uint32_t first[2] = {task.y, task.y + m[0].count};
-    const uint32_t slot[2] = {t + 1, t + 1 + m[0].interior};
+    const uint32_t firsts[2] = {first, first + m[0].count};
+    const uint32_t slots[2] = {slot + 1, slot + 1 + m[0].interior};
     Bvh2Node o{};
     for (int k = 0; k < 2; ++k) {
-        set_child(o, k, boxes[child[k]]);
-        if (m[k].leaf) {
-            o.child[k] = Bvh2Node::leaf_ref(first[k], m[k].count);
-        } else {
-            o.child[k] = int32_t(slot[k]);
-            push_task(out, slot[k], child[k], first[k], task.z + 1);
-        }
+        set_child(o, k, in.boxes[child[k]]);
+        o.child[k] = m[k].leaf() ? Bvh2Node::leaf_ref(firsts[k], m[k].count) : int32_t(slots[k]);
     }
-    out.nodes[t] = o;
-    for (int k = 0; k < 2; ++k)
-        if (m[k].leaf) emit_leaf(child[k], first[k], n, children, sorted_ids, mesh, out.tris, out.tri_ids);
-    return task.z;
+    out.nodes[slot] = o;
+    for (int k = 0; k < 2; ++k) {
+        if (m[k].leaf())
+            emit_leaf(child[k], firsts[k], in.n, in.children, in.sorted_ids, out.tri_ids);
+        else
+            next(child[k], firsts[k], slots[k]);
+    }
 }
 
-/// Interior node t of the layout is written by whichever thread takes task t, once its parent has
-/// pushed it: the left child takes slot t + 1, the right one t + 1 + the left's interior count.
-__global__ void write_layout(uint32_t n, const uint32_t* root_ptr, const uint2* __restrict__ children,
-                             const AABB* __restrict__ boxes, const NodeMeta* __restrict__ meta,
-                             const uint32_t* __restrict__ sorted_ids, Mesh mesh, Layout out) {
+/// Writes the whole subtree below `node` (at most kSubtreeInterior interior nodes) in this
+/// thread, depth first. Returns the deepest depth reached.
+__device__ uint32_t write_subtree(const LayoutInput& in, const Layout& out, uint32_t node, uint32_t first,
+                                  uint32_t slot, uint32_t depth) {
+    uint4 stack[kSubtreeInterior];
+    int sp = 0;
+    stack[sp++] = make_uint4(node, first, slot, depth);
+    uint32_t deepest = depth;
+    while (sp) {
+        const uint4 t = stack[--sp];
+        deepest = max(deepest, t.w);
+        write_node(in, out, t.x, t.y, t.z,
+                   [&](uint32_t c, uint32_t f, uint32_t sl) { stack[sp++] = make_uint4(c, f, sl, t.w + 1); });
+    }
+    return deepest;
+}
+
+/// Starts the layout: a root that is a leaf is written at once (both slots name it, the second
+/// behind an empty box); otherwise the root is the first level's one entry.
+__global__ void seed_layout(LayoutInput in, const uint32_t* root_ptr, Layout out, uint4* level0, uint32_t* counts) {
     const uint32_t root = *root_ptr;
-    const NodeMeta rm = meta[root];
-    if (rm.leaf) {  // the whole mesh is one leaf: both slots name it, the second behind an empty box
-        if (blockIdx.x == 0 && threadIdx.x == 0) {
-            Bvh2Node o{};
-            set_child(o, 0, boxes[root]);
-            set_child(o, 1, AABB::empty());
-            o.child[0] = o.child[1] = Bvh2Node::leaf_ref(0, rm.count);
-            out.nodes[0] = o;
-            *out.depth = 1;
-            emit_leaf(root, 0, n, children, sorted_ids, mesh, out.tris, out.tri_ids);
-        }
+    const NodeMeta rm = in.meta[root];
+    if (!rm.leaf()) {
+        level0[0] = make_uint4(root, 0, 0, 1);
+        counts[0] = 1;
         return;
     }
-    if (blockIdx.x == 0 && threadIdx.x == 0) push_task(out, 0, root, 0, 1);
-    const uint32_t total = rm.interior;
-    __shared__ uint32_t warp_base[kBlock / kWarp];
-    const uint32_t lane = threadIdx.x % kWarp, warp = threadIdx.x / kWarp;
-    for (;;) {
-        // A warp takes 32 tasks at a time: one atomic on the task counter per warp, not per task.
-        if (lane == 0) warp_base[warp] = atomicAdd(out.next, kWarp);
-        __syncwarp();
-        const uint32_t base = warp_base[warp];
-        __syncwarp();
-        if (base >= total) return;
-        const uint32_t t = base + lane;
-        uint32_t depth = 0;
-        if (t < total) depth = write_task(t, n, children, boxes, meta, sorted_ids, mesh, out);
-        depth = __reduce_max_sync(~0u, depth);
-        if (lane == 0) atomicMax(out.depth, depth);
-    }
+    Bvh2Node o{};
+    set_child(o, 0, in.boxes[root]);
+    set_child(o, 1, AABB::empty());
+    o.child[0] = o.child[1] = Bvh2Node::leaf_ref(0, rm.count);
+    out.nodes[0] = o;
+    *out.depth = 1;
+    emit_leaf(root, 0, in.n, in.children, in.sorted_ids, out.tri_ids);
 }
 
+/// One level of the layout, top down: each entry (node, first triangle, layout slot, depth) is
+/// written whole by its thread when its subtree is small, else its node is written and its
+/// interior children become the next level's entries. Slots are depth first (a node's left
+/// child in the next slot), whatever order the entries come in.
+__global__ void __launch_bounds__(kBlock)
+    write_level(LayoutInput in, Layout out, const uint4* __restrict__ level, uint4* __restrict__ next,
+                const uint32_t* counts, uint32_t* next_count) {
+    const uint32_t count = counts[0];
+    if (count == 0) return;
+    uint32_t deepest = 0;
+    for (uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < count; k += gridDim.x * blockDim.x) {
+        const uint4 t = level[k];
+        if (in.meta[t.x].interior <= kSubtreeInterior) {
+            deepest = max(deepest, write_subtree(in, out, t.x, t.y, t.z, t.w));
+        } else {
+            deepest = max(deepest, t.w);
+            write_node(in, out, t.x, t.y, t.z, [&](uint32_t c, uint32_t f, uint32_t sl) {
+                next[atomicAdd(next_count, 1u)] = make_uint4(c, f, sl, t.w + 1);
+            });
+        }
+    }
+    deepest = __reduce_max_sync(~0u, deepest);
+    if (threadIdx.x % kWarp == 0 && deepest) atomicMax(out.depth, deepest);
+}
 
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
 
@@ -443,8 +470,8 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     const uint32_t n = uint32_t(mesh.triangle_count());
     const int bits = options.morton_bits;
     const bool lbvh = kind == accel::BuilderKind::kLbvh;
-    const LeafRule rule{options.config.traversal_cost, options.config.intersection_cost,
-                        options.config.min_leaf_size, options.config.max_leaf_size};
+    const LeafRule rule{options.config.traversal_cost, options.config.intersection_cost, options.config.min_leaf_size,
+                        options.config.max_leaf_size};
     const size_t base = gpu_memory_use().current;
     GpuBuild g;
     Events ev(8);
@@ -462,10 +489,10 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     DeviceBuffer<NodeMeta> meta(nodes);
     DeviceBuffer<uint32_t> parent(lbvh ? nodes : 0), visits(lbvh ? inner : 0), clusters(lbvh ? 0 : n);
     DeviceBuffer<int32_t> parent_ids(lbvh ? 0 : inner);
-    DeviceBuffer<uint32_t> words(4);  // root, H-PLOC's node counter, the layout's next task, depth
+    DeviceBuffer<uint32_t> words(3);  // root, H-PLOC's node counter, the layout's depth
     DeviceBuffer<Bvh2Node> out_nodes(inner);
-    DeviceBuffer<uint4> tasks(inner);
-    DeviceBuffer<uint32_t> ready(inner);
+    DeviceBuffer<uint4> levels(2 * inner);  // the layout's entries of two levels
+    DeviceBuffer<uint32_t> level_counts(accel::kMaxTreeDepth + 1);
     g.tris.resize(n);
     g.tri_ids.resize(n);
     size_t reduce_bytes = 0, sort_bytes = 0;
@@ -485,7 +512,7 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
-    detail::fill_device_bytes(ready.data(), 0, ready.bytes());
+    detail::fill_device_bytes(level_counts.data(), 0, level_counts.bytes());
 
     ev.record(2);
     triangle_boxes<<<grid_for(n), kBlock>>>(n, verts.data(), idx.data(), tri_boxes.data(), centres.data());
@@ -509,8 +536,8 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
         set_word<<<1, 1>>>(root, n);
         karras_hierarchy<Key><<<grid_for(n - 1), kBlock>>>(n, sorted_keys, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
-        fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(),
-                                            visits.data(), rule);
+        fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(), visits.data(),
+                                           rule);
         BVHLAB_CHECK_LAUNCH();
     } else {
         set_word<<<1, 1>>>(node_counter, n);
@@ -520,15 +547,21 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(6);
-    // The layout: a persistent grid, as many blocks as fit at once.
-    int per_sm = 0;
-    BVHLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, write_layout, kBlock, 0));
-    const unsigned layout_grid =
-        std::min<unsigned>(unsigned(std::max(per_sm, 1) * gpu_sm_count()), grid_for(inner));
-    const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data(), tasks.data(),
-                     ready.data(),     words.data() + 2, words.data() + 3};
-    write_layout<<<layout_grid, kBlock>>>(n, root, children.data(), boxes.data(), meta.data(), sorted_ids,
-                                         Mesh{verts.data(), idx.data()}, out);
+    // The layout, one level per launch: no host round trip, a launch past the last level returns
+    // at once, and entries left after kMaxTreeDepth levels mean a tree too deep for the kernels.
+    const unsigned level_grid = std::min<unsigned>(unsigned(gpu_sm_count()) * 8, grid_for(inner));
+    const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data(), words.data() + 2};
+    const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids, Mesh{verts.data(), idx.data()}};
+    seed_layout<<<1, 1>>>(in, root, out, levels.data(), level_counts.data());
+    BVHLAB_CHECK_LAUNCH();
+    for (uint32_t level = 0; level < accel::kMaxTreeDepth; ++level) {
+        const uint4* cur = levels.data() + (level % 2) * inner;
+        uint4* nxt = levels.data() + ((level + 1) % 2) * inner;
+        write_level<<<level_grid, kBlock>>>(in, out, cur, nxt, level_counts.data() + level,
+                                            level_counts.data() + level + 1);
+    }
+    BVHLAB_CHECK_LAUNCH();
+    woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(7);
     ev.sync(7);
@@ -543,12 +576,17 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     t.total_ms = ev.ms(2, 7);
 
     // The host copy, and the nodes moved to a buffer of their exact size.
-    uint32_t w[4];
+    uint32_t w[3];
     detail::copy_to_host(w, words.data(), sizeof w);
     NodeMeta root_meta;
     detail::copy_to_host(&root_meta, meta.data() + w[0], sizeof root_meta);
-    const size_t node_count = root_meta.leaf ? 1 : root_meta.interior;
-    g.host.depth = w[3];
+    const size_t node_count = root_meta.leaf() ? 1 : root_meta.interior;
+    g.host.depth = w[2];
+    uint32_t too_deep = 0;
+    detail::copy_to_host(&too_deep, level_counts.data() + accel::kMaxTreeDepth, sizeof too_deep);
+    if (too_deep)
+        throw Error("builder '" + std::string(accel::builder_name(kind)) + "' made a tree deeper than " +
+                    std::to_string(accel::kMaxTreeDepth) + " levels, which the traversal stacks do not hold");
     download(g.host.nodes, out_nodes.data(), node_count);
     g.nodes.upload(g.host.nodes);
     download(g.host.tris, g.tris.data(), n);

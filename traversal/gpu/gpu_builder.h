@@ -7,8 +7,8 @@
 //    merges them by PLOC's nearest-neighbour rule (Meister & Bittner 2018) within a search
 //    radius, down to 16 (to 1 at the root).
 // Both end the same way on the device: each node's SAH cost decides, bottom-up, where leaves of
-// up to max_leaf triangles replace subtrees, and one persistent kernel writes the BVH2 layout
-// (depth-first, left child next to its parent) with Woop triangles in leaf order. The result
+// up to max_leaf triangles replace subtrees, and the BVH2 layout is written top down, a level
+// per launch (slots depth first, left child next to its parent) with Woop triangles in leaf order. The result
 // stays on the device for the kernels; a host copy is downloaded for the CPU tracers, the
 // figures and structure files.
 #pragma once
