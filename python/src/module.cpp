@@ -215,10 +215,17 @@ trav::StructureSpec make_spec(const std::string& builder, const std::string& lay
             spec.kd.max_depth = v.cast<int>();
         else if (k == "epo")
             spec.epo = v.cast<bool>();
+        else if (k == "build_device")
+            spec.build_device = v.cast<std::string>();
+        else if (k == "morton_bits")
+            spec.options.morton_bits = v.cast<int>();
+        else if (k == "radius")
+            spec.options.ploc_radius = v.cast<int>();
         else
             throw Error("build() has no option '" + k +
                         "' (bins, max_leaf, min_leaf, alpha, budget, spatial_bins, reinsertion_passes, collapse, "
-                        "cw_tris, kd_stack, kd_ct, kd_ci, kd_bonus, kd_max_depth, epo)");
+                        "cw_tris, kd_stack, kd_ct, kd_ci, kd_bonus, kd_max_depth, epo, build_device, morton_bits, "
+                        "radius)");
     }
     return spec;
 }
@@ -358,8 +365,10 @@ PYBIND11_MODULE(_bvhlab, m) {
             return st;
         },
         py::arg("scene"), py::arg("builder") = "binned", py::arg("layout") = "bvh2",
-        "Builds a structure: builder binned|sweep|sbvh|kdtree, layout bvh2|cwbvh, options as keywords "
+        "Builds a structure: builder binned|sweep|sbvh|kdtree on the CPU or lbvh|hploc on the GPU, layout "
+        "bvh2|cwbvh, options as keywords "
         "(bins, max_leaf, min_leaf, alpha, budget, spatial_bins, reinsertion_passes, collapse, cw_tris, kd_stack, "
+        "build_device, morton_bits, radius, "
         "kd_ct, kd_ci, kd_bonus, kd_max_depth, epo)");
     m.def(
         "load_structure",

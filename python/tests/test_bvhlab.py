@@ -118,6 +118,20 @@ def test_build_options_and_their_errors(cornell):
         bvhlab.build(cornell, builder="octree")
     with pytest.raises(bvhlab.Error, match="cwbvh"):
         bvhlab.build(cornell, builder="kdtree", layout="cwbvh")
+    with pytest.raises(bvhlab.Error, match="runs on the GPU only"):
+        bvhlab.build(cornell, builder="hploc", build_device="cpu")
+    with pytest.raises(bvhlab.Error, match="morton_bits 31"):
+        bvhlab.build(cornell, builder="lbvh", morton_bits=31)
+
+
+@needs_gpu
+def test_gpu_builders(cornell):
+    for builder in ("lbvh", "hploc"):
+        s = bvhlab.build(cornell, builder, radius=4) if builder == "hploc" else bvhlab.build(cornell, builder)
+        assert s.stats["build_device"] == "gpu" and s.stats["gpu_build"]["total_ms"] > 0
+        rays, query = bvhlab.rays(cornell, "primary", width=40, height=30)
+        hits, _ = bvhlab.trace(s, rays, query, device="gpu")
+        assert bvhlab.verify(cornell, rays, hits, query)["mismatches"] == 0
 
 
 def test_files_round_trip_and_stale_structures_are_refused(cornell, tmp_path):

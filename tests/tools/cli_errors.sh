@@ -150,6 +150,25 @@ expect_error tree-header-depth-0 "header value out of range: max_depth 0 is not 
 expect_error cache-other-config "stale structure file.*asked for" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --max-leaf 2
 expect_error cache-other-reinsertion "stale structure file.*reinsert=3.*reinsert=0" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --reinsert 0
 expect_error bad-reinsert "reinsert" build "$data/cornell_box.obj" --builder sbvh --reinsert 99
+# The GPU builders: options that apply to them only, and the device they run on.
+cb=$data/cornell_box.obj
+expect_error gpu-builder-on-cpu "--build-device cpu does not apply: builder hploc runs on the GPU" build "$cb" \
+    --builder hploc --build-device cpu
+expect_error cpu-builder-on-gpu "--build-device gpu applies to the GPU builders [(]lbvh, hploc[)], not binned" build "$cb" \
+    --build-device gpu
+expect_error kdtree-on-gpu "--build-device gpu applies to the GPU builders" build "$cb" --structure kdtree \
+    --build-device gpu
+expect_error morton-cpu-builder "--morton-bits applies to the GPU builders [(]lbvh, hploc[)], not sbvh" build "$cb" \
+    --builder sbvh --morton-bits 60
+expect_error radius-lbvh "--radius applies to --builder hploc, not lbvh" build "$cb" --builder lbvh --radius 4
+expect_error bins-gpu "--bins does not apply to the GPU builders" build "$cb" --builder hploc --bins 8
+expect_error reinsert-gpu "--reinsert applies to the CPU builders, not lbvh" build "$cb" --builder lbvh --reinsert 2
+expect_error morton-bits-31 "--morton-bits" build "$cb" --builder lbvh --morton-bits 31
+expect_error radius-0 "--radius" build "$cb" --builder hploc --radius 0
+expect_error runs-cpu-builder "--runs applies to building one mesh with a GPU builder" build "$cb" --runs 3
+if ! nvidia-smi >/dev/null 2>&1; then  # without a GPU the GPU builders say why
+    expect_error gpu-builder-no-gpu "builder 'hploc' runs on the GPU, and there is none" build "$cb" --builder hploc
+fi
 head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
 expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"
 expect_error cache-not-a-tree "not a bvhlab structure file" verify "$data/cornell_box.obj" --structure "$data/cornell_box.obj"

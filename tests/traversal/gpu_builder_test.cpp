@@ -93,6 +93,9 @@ TEST(GpuBuilder, TreesAreValidAndStayOnTheDeviceAsBuilt) {
             EXPECT_GT(a.figures["gpu_build"]["total_ms"].get<double>(), 0.0);
             EXPECT_GT(a.figures["gpu_build"]["peak_device_bytes"].get<size_t>(), 0u);
             EXPECT_LE(a.stats.max_leaf_size, a.spec.options.config.max_leaf_size);
+            // The depth the device measured (the kernels' stacks are checked against it) is the
+            // layout's own, walked on the host.
+            EXPECT_EQ(a.structure.bvh2.depth, accel::convert_bvh2_nodes(a.result.tree).depth);
             ASSERT_NE(a.uploaded(), nullptr) << "the device layout is the builder's own, not an upload";
             EXPECT_EQ(a.uploaded()->bytes(), a.structure.bytes());
             // The host copy is the device layout, and its Woop maps are the host's own.

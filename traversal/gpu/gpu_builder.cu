@@ -33,12 +33,13 @@ constexpr int kBlock = 256;
 constexpr uint32_t kSubtreeInterior = 2;
 
 /// What the leaf choice and the layout need of a node: the triangles below it, the BVH2 interior
-/// nodes its subtree becomes (0: it becomes a leaf), and its SAH cost (times its own half area).
+/// nodes its subtree becomes (0: it becomes a leaf), its SAH cost (times its own half area), and
+/// the height of its subtree in the layout (interior nodes on its longest path).
 struct alignas(16) NodeMeta {
     uint32_t count;
     uint32_t interior;
     float cost;
-    uint32_t reserved;  // 0: 16 bytes, one load
+    uint32_t height;
 
     __host__ __device__ bool leaf() const { return interior == 0; }
 };
@@ -79,9 +80,10 @@ __device__ void make_node(uint32_t id, uint32_t a, uint32_t b, const AABB& box, 
     const bool leaf = m.count <= rule.min_leaf || (m.count <= rule.max_leaf && as_leaf <= inner);
     m.cost = leaf ? as_leaf : inner;
     m.interior = leaf ? 0 : 1 + ma.interior + mb.interior;
+    m.height = leaf ? 0 : 1 + max(ma.height, mb.height);
     boxes[id] = box;
     children[id] = make_uint2(a, b);
-    *reinterpret_cast<uint4*>(meta + id) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), 0u);
+    *reinterpret_cast<uint4*>(meta + id) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), m.height);
 }
 
 __global__ void triangle_boxes(uint32_t n, const Vec3* __restrict__ verts, const uint32_t* __restrict__ idx,
@@ -336,7 +338,6 @@ struct Layout {
     Bvh2Node* nodes;
     WoopTriangle* tris;
     uint32_t* tri_ids;
-    uint32_t* depth;  // the deepest layout node (interior nodes on its path)
 };
 
 struct LayoutInput {
@@ -375,29 +376,27 @@ __device__ void write_node(const LayoutInput& in, const Layout& out, uint32_t no
 }
 
 /// Writes the whole subtree below `node` (at most kSubtreeInterior interior nodes) in this
-/// thread, depth first. Returns the deepest depth reached.
-__device__ uint32_t write_subtree(const LayoutInput& in, const Layout& out, uint32_t node, uint32_t first,
-                                  uint32_t slot, uint32_t depth) {
+/// thread, depth first.
+__device__ void write_subtree(const LayoutInput& in, const Layout& out, uint32_t node, uint32_t first, uint32_t slot) {
     uint4 stack[kSubtreeInterior];
     int sp = 0;
-    stack[sp++] = make_uint4(node, first, slot, depth);
-    uint32_t deepest = depth;
+    stack[sp++] = make_uint4(node, first, slot, 0);
     while (sp) {
         const uint4 t = stack[--sp];
-        deepest = max(deepest, t.w);
         write_node(in, out, t.x, t.y, t.z,
-                   [&](uint32_t c, uint32_t f, uint32_t sl) { stack[sp++] = make_uint4(c, f, sl, t.w + 1); });
+                   [&](uint32_t c, uint32_t f, uint32_t sl) { stack[sp++] = make_uint4(c, f, sl, 0); });
     }
-    return deepest;
 }
 
-/// Starts the layout: a root that is a leaf is written at once (both slots name it, the second
-/// behind an empty box); otherwise the root is the first level's one entry.
-__global__ void seed_layout(LayoutInput in, const uint32_t* root_ptr, Layout out, uint4* level0, uint32_t* counts) {
-    const uint32_t root = *root_ptr;
+/// After the hierarchy: the root and the layout's height, for the host to launch one level each;
+/// a root that is a leaf is written at once (both slots name it, the second behind an empty
+/// box), otherwise the root is the first level's one entry.
+__global__ void seed_layout(LayoutInput in, uint32_t* words, Layout out, uint4* level0, uint32_t* counts) {
+    const uint32_t root = words[0];
     const NodeMeta rm = in.meta[root];
+    words[2] = max(rm.height, 1u);
     if (!rm.leaf()) {
-        level0[0] = make_uint4(root, 0, 0, 1);
+        level0[0] = make_uint4(root, 0, 0, 0);
         counts[0] = 1;
         return;
     }
@@ -406,11 +405,10 @@ __global__ void seed_layout(LayoutInput in, const uint32_t* root_ptr, Layout out
     set_child(o, 1, AABB::empty());
     o.child[0] = o.child[1] = Bvh2Node::leaf_ref(0, rm.count);
     out.nodes[0] = o;
-    *out.depth = 1;
     emit_leaf(root, 0, in.n, in.children, in.sorted_ids, out.tri_ids);
 }
 
-/// One level of the layout, top down: each entry (node, first triangle, layout slot, depth) is
+/// One level of the layout, top down: each entry (node, first triangle, layout slot) is
 /// written whole by its thread when its subtree is small, else its node is written and its
 /// interior children become the next level's entries. Slots are depth first (a node's left
 /// child in the next slot), whatever order the entries come in.
@@ -418,21 +416,16 @@ __global__ void __launch_bounds__(kBlock)
     write_level(LayoutInput in, Layout out, const uint4* __restrict__ level, uint4* __restrict__ next,
                 const uint32_t* counts, uint32_t* next_count) {
     const uint32_t count = counts[0];
-    if (count == 0) return;
-    uint32_t deepest = 0;
     for (uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < count; k += gridDim.x * blockDim.x) {
         const uint4 t = level[k];
         if (in.meta[t.x].interior <= kSubtreeInterior) {
-            deepest = max(deepest, write_subtree(in, out, t.x, t.y, t.z, t.w));
+            write_subtree(in, out, t.x, t.y, t.z);
         } else {
-            deepest = max(deepest, t.w);
             write_node(in, out, t.x, t.y, t.z, [&](uint32_t c, uint32_t f, uint32_t sl) {
-                next[atomicAdd(next_count, 1u)] = make_uint4(c, f, sl, t.w + 1);
+                next[atomicAdd(next_count, 1u)] = make_uint4(c, f, sl, 0);
             });
         }
     }
-    deepest = __reduce_max_sync(~0u, deepest);
-    if (threadIdx.x % kWarp == 0 && deepest) atomicMax(out.depth, deepest);
 }
 
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
@@ -489,7 +482,7 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     DeviceBuffer<NodeMeta> meta(nodes);
     DeviceBuffer<uint32_t> parent(lbvh ? nodes : 0), visits(lbvh ? inner : 0), clusters(lbvh ? 0 : n);
     DeviceBuffer<int32_t> parent_ids(lbvh ? 0 : inner);
-    DeviceBuffer<uint32_t> words(3);  // root, H-PLOC's node counter, the layout's depth
+    DeviceBuffer<uint32_t> words(3);  // root, H-PLOC's node counter, the layout's height
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     DeviceBuffer<uint4> levels(2 * inner);  // the layout's entries of two levels
     DeviceBuffer<uint32_t> level_counts(accel::kMaxTreeDepth + 1);
@@ -547,14 +540,19 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(6);
-    // The layout, one level per launch: no host round trip, a launch past the last level returns
-    // at once, and entries left after kMaxTreeDepth levels mean a tree too deep for the kernels.
+    // The layout, one level per launch: the host reads the layout's height (one small copy, the
+    // pipeline's only round trip) and launches that many levels.
     const unsigned level_grid = std::min<unsigned>(unsigned(gpu_sm_count()) * 8, grid_for(inner));
-    const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data(), words.data() + 2};
+    const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
     const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids, Mesh{verts.data(), idx.data()}};
-    seed_layout<<<1, 1>>>(in, root, out, levels.data(), level_counts.data());
+    seed_layout<<<1, 1>>>(in, words.data(), out, levels.data(), level_counts.data());
     BVHLAB_CHECK_LAUNCH();
-    for (uint32_t level = 0; level < accel::kMaxTreeDepth; ++level) {
+    uint32_t height = 0;
+    detail::copy_to_host(&height, words.data() + 2, sizeof height);
+    if (height > accel::kMaxTreeDepth)
+        throw Error("builder '" + std::string(accel::builder_name(kind)) + "' made a tree " + std::to_string(height) +
+                    " levels deep; the traversal stacks hold " + std::to_string(accel::kMaxTreeDepth));
+    for (uint32_t level = 0; level < height; ++level) {
         const uint4* cur = levels.data() + (level % 2) * inner;
         uint4* nxt = levels.data() + ((level + 1) % 2) * inner;
         write_level<<<level_grid, kBlock>>>(in, out, cur, nxt, level_counts.data() + level,
@@ -576,17 +574,12 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     t.total_ms = ev.ms(2, 7);
 
     // The host copy, and the nodes moved to a buffer of their exact size.
-    uint32_t w[3];
+    uint32_t w[3];  // root, node counter, height
     detail::copy_to_host(w, words.data(), sizeof w);
     NodeMeta root_meta;
     detail::copy_to_host(&root_meta, meta.data() + w[0], sizeof root_meta);
     const size_t node_count = root_meta.leaf() ? 1 : root_meta.interior;
-    g.host.depth = w[2];
-    uint32_t too_deep = 0;
-    detail::copy_to_host(&too_deep, level_counts.data() + accel::kMaxTreeDepth, sizeof too_deep);
-    if (too_deep)
-        throw Error("builder '" + std::string(accel::builder_name(kind)) + "' made a tree deeper than " +
-                    std::to_string(accel::kMaxTreeDepth) + " levels, which the traversal stacks do not hold");
+    g.host.depth = height;
     download(g.host.nodes, out_nodes.data(), node_count);
     g.nodes.upload(g.host.nodes);
     download(g.host.tris, g.tris.data(), n);
