@@ -18,21 +18,6 @@ WoopTriangle make_woop_triangle(Vec3 v0, Vec3 v1, Vec3 v2) {
     return w;
 }
 
-namespace {
-
-void set_child_box(Bvh2Node& n, int slot, const AABB& b) {
-    float* xy = slot == 0 ? &n.c0_lo_x : &n.c1_lo_x;
-    xy[0] = b.lo.x;
-    xy[1] = b.hi.x;
-    xy[2] = b.lo.y;
-    xy[3] = b.hi.y;
-    float* z = slot == 0 ? &n.c0_lo_z : &n.c1_lo_z;
-    z[0] = b.lo.z;
-    z[1] = b.hi.z;
-}
-
-}  // namespace
-
 Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh) {
     Bvh2 out = convert_bvh2_nodes(tree);
     out.tris.resize(tree.prim_indices.size());
@@ -57,7 +42,7 @@ Bvh2 convert_bvh2_nodes(const BuildTree& tree) {
     out.nodes.resize(root_leaf ? 1 : size_t(next));
     out.tri_ids = tree.prim_indices;
     auto fill_child = [&](Bvh2Node& n, int slot, const BuildNode& c, size_t ci) {
-        set_child_box(n, slot, c.bounds);
+        n.set_child_box(slot, c.bounds);
         if (c.is_leaf()) {
             if (c.prim_count > Bvh2Node::kMaxLeafCount)
                 throw Error("a leaf of " + std::to_string(c.prim_count) +
@@ -79,7 +64,7 @@ Bvh2 convert_bvh2_nodes(const BuildTree& tree) {
         Bvh2Node& n = out.nodes[0];
         fill_child(n, 0, tree.nodes[0], 0);
         fill_child(n, 1, tree.nodes[0], 0);
-        set_child_box(n, 1, AABB::empty());
+        n.set_child_box(1, AABB::empty());
         out.depth = 1;
         return out;
     }

@@ -34,6 +34,17 @@ struct alignas(16) Bvh2Node {
     }
     BVHLAB_HD static uint32_t leaf_first(int32_t ref) { return uint32_t(~ref) >> kLeafCountBits; }
     BVHLAB_HD static uint32_t leaf_count(int32_t ref) { return (uint32_t(~ref) & (kMaxLeafCount - 1)) + 1; }
+    /// Sets the box of child `slot` (0 or 1). Host and device (the GPU builders).
+    BVHLAB_HD void set_child_box(int slot, const AABB& b) {
+        float* xy = slot == 0 ? &c0_lo_x : &c1_lo_x;
+        xy[0] = b.lo.x;
+        xy[1] = b.hi.x;
+        xy[2] = b.lo.y;
+        xy[3] = b.hi.y;
+        float* z = slot == 0 ? &c0_lo_z : &c1_lo_z;
+        z[0] = b.lo.z;
+        z[1] = b.hi.z;
+    }
     /// The box of child `slot` (0 or 1); empty (inverted) in a root leaf's second slot.
     AABB child_box(int slot) const {
         return slot == 0 ? AABB{{c0_lo_x, c0_lo_y, c0_lo_z}, {c0_hi_x, c0_hi_y, c0_hi_z}}

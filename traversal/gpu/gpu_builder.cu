@@ -323,17 +323,6 @@ __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, cons
     tris[k] = w;
 }
 
-__device__ void set_child(Bvh2Node& o, int slot, const AABB& b) {
-    float* xy = slot == 0 ? &o.c0_lo_x : &o.c1_lo_x;
-    xy[0] = b.lo.x;
-    xy[1] = b.hi.x;
-    xy[2] = b.lo.y;
-    xy[3] = b.hi.y;
-    float* z = slot == 0 ? &o.c0_lo_z : &o.c1_lo_z;
-    z[0] = b.lo.z;
-    z[1] = b.hi.z;
-}
-
 struct Layout {
     Bvh2Node* nodes;
     WoopTriangle* tris;
@@ -363,7 +352,7 @@ __device__ void write_node(const LayoutInput& in, const Layout& out, uint32_t no
     const uint32_t slots[2] = {slot + 1, slot + 1 + m[0].interior};
     Bvh2Node o{};
     for (int k = 0; k < 2; ++k) {
-        set_child(o, k, in.boxes[child[k]]);
+        o.set_child_box(k, in.boxes[child[k]]);
         o.child[k] = m[k].leaf() ? Bvh2Node::leaf_ref(firsts[k], m[k].count) : int32_t(slots[k]);
     }
     out.nodes[slot] = o;
@@ -401,8 +390,8 @@ __global__ void seed_layout(LayoutInput in, uint32_t* words, Layout out, uint4* 
         return;
     }
     Bvh2Node o{};
-    set_child(o, 0, in.boxes[root]);
-    set_child(o, 1, AABB::empty());
+    o.set_child_box(0, in.boxes[root]);
+    o.set_child_box(1, AABB::empty());
     o.child[0] = o.child[1] = Bvh2Node::leaf_ref(0, rm.count);
     out.nodes[0] = o;
     emit_leaf(root, 0, in.n, in.children, in.sorted_ids, out.tri_ids);
