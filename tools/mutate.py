@@ -108,6 +108,26 @@ def load_equivalents(path):
     return eq
 
 
+def device_only_lines(lines):
+    """0-based indices of the lines that only the device compiles: the branch of an
+    `#if defined(__CUDA_ARCH__)` (or `#ifdef __CUDA_ARCH__`) up to its `#else` or `#endif`. A CPU
+    campaign's build never sees them, so their mutants are left to the GPU tests."""
+    out, stack = set(), []  # stack: for each open #if, whether it is the device-only branch
+    for i, raw in enumerate(lines):
+        t = raw.strip()
+        if t.startswith("#if"):
+            stack.append("__CUDA_ARCH__" in t and "!" not in t)
+        elif t.startswith("#el"):
+            if stack:
+                stack[-1] = False
+        elif t.startswith("#endif"):
+            if stack:
+                stack.pop()
+        elif any(stack):
+            out.add(i)
+    return out
+
+
 def make_mutants(root, rel, out_dir):
     """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped)."""
     src = os.path.join(root, rel)
@@ -119,6 +139,7 @@ def make_mutants(root, rel, out_dir):
         die(f"universalmutator failed on {rel}: {out.strip()[-300:]}")
     with open(src) as f:
         original = f.read().splitlines()
+    device_only = device_only_lines(original)
     mutants = []
     for name in sorted(os.listdir(d), key=lambda n: int(n.split(".mutant.")[1].split(".")[0])):
         with open(os.path.join(d, name)) as f:
@@ -131,6 +152,8 @@ def make_mutants(root, rel, out_dir):
         text = " ".join(x.strip() for x in original[i1:i2])
         if text.startswith(("//", "/*", "*", "#")):
             continue  # comments and preprocessor lines: nothing a test could see
+        if any(k in device_only for k in range(i1, max(i2, i1 + 1))):
+            continue  # device-only code: the CPU build does not compile it
         mutants.append({
             "file": rel,
             "path": os.path.join(d, name),

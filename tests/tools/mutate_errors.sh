@@ -52,5 +52,21 @@ then
     echo "FAIL: Restorer's recovery of an interrupted campaign"
     fails=$((fails + 1))
 fi
+# Device-only lines (an `#if defined(__CUDA_ARCH__)` branch) get no mutants in a CPU campaign;
+# the #else branch, nested #ifs and code outside do.
+if ! python3 - "$src/tools/mutate.py" <<'PY'
+import importlib.util, sys
+spec = importlib.util.spec_from_file_location("mutate", sys.argv[1])
+m = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(m)
+lines = ["int a;", "#if defined(__CUDA_ARCH__)", "dev();", "#if X", "nested();", "#endif", "#else", "host();",
+         "#endif", "#ifdef __CUDA_ARCH__", "dev2();", "#endif", "#if !defined(__CUDA_ARCH__)", "host2();", "#endif"]
+got = sorted(m.device_only_lines(lines))
+assert got == [2, 4, 10], got  # preprocessor lines get no mutants anyway
+PY
+then
+    echo "FAIL: device-only lines"
+    fails=$((fails + 1))
+fi
 [ $fails -eq 0 ] && echo "mutate_errors.sh: all cases passed"
 exit $((fails > 0))
