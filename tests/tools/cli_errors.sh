@@ -481,6 +481,13 @@ expect_error structure-all-bench "--structure: all applies to .bvhlab verify. on
 expect_error structure-all-render "--structure: all applies to .bvhlab verify. only" render "$tmp/cb_in.obj" --structure all -o "$tmp/x.pfm"
 expect_error structure-all-build "--structure: all applies to .bvhlab verify. only" build "$tmp/cb_in.obj" --structure all
 
+# bench and verify lines name the structure's whole configuration, options included.
+"$bin" -q bench "$cb" --builder sbvh --max-leaf 4 --runs 1 --json >"$tmp/cfg.json" 2>/dev/null
+if grep -q '"config":"sbvh leaf=1..4 ' "$tmp/cfg.json"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL bench-config: $(head -c 300 "$tmp/cfg.json")"
+fi
 # Every command's --json lines carry the identifying fields of the schema (README, "JSON lines").
 check_schema() {
     local name=$1

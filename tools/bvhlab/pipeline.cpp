@@ -223,16 +223,21 @@ CheckedSet check_set(const trav::EmbreeOracle& oracle, const trav::RaySet& set, 
 nlohmann::json tracer_fields(const Built& built, const trav::Tracer& tracer) {
     const std::string device = tracer.device();
     const bool gpu = device == "gpu", embree = device == "embree";
-    return {{"device", device},
-            {"structure", embree ? std::string("embree/robust-high") : built.structure.name},
-            {"layout", embree ? "embree" : trav::layout_name(built.structure.layout)},
-            {"kernel", tracer.name()},
-            {"block_size", gpu ? nlohmann::json(tracer.block_size()) : nlohmann::json(nullptr)},
-            {"short_stack", tracer.short_stack() ? nlohmann::json(tracer.short_stack()) : nlohmann::json(nullptr)},
-            {"fetch_threshold",
-             tracer.fetch_threshold() ? nlohmann::json(tracer.fetch_threshold()) : nlohmann::json(nullptr)},
-            {"gpu", gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr)},
-            {"driver", gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr)}};
+    return {
+        {"device", device},
+        {"structure", embree ? std::string("embree/robust-high") : built.structure.name},
+        {"layout", embree ? "embree" : trav::layout_name(built.structure.layout)},
+        {"kernel", tracer.name()},
+        {"block_size", gpu ? nlohmann::json(tracer.block_size()) : nlohmann::json(nullptr)},
+        {"short_stack", tracer.short_stack() ? nlohmann::json(tracer.short_stack()) : nlohmann::json(nullptr)},
+        {"fetch_threshold",
+         tracer.fetch_threshold() ? nlohmann::json(tracer.fetch_threshold()) : nlohmann::json(nullptr)},
+        {"gpu", gpu ? nlohmann::json(trav::gpu_description()) : nlohmann::json(nullptr)},
+        {"driver", gpu ? nlohmann::json(trav::gpu_driver()) : nlohmann::json(nullptr)},
+        // The structure's whole configuration (builder, leaf sizes, costs, bins or Morton bits, ...)
+        // and, for a GPU builder, its build times: a bench or verify line names what it traced.
+        {"config", embree ? nlohmann::json(nullptr) : built.figures.value("config", nlohmann::json(nullptr))},
+        {"gpu_build", embree ? nlohmann::json(nullptr) : built.figures.value("gpu_build", nlohmann::json(nullptr))}};
 }
 
 nlohmann::json verify_hits(const Scene& scene, const trav::EmbreeOracle& oracle, const CheckedSet& cs,
