@@ -13,7 +13,7 @@ secs=${1:-60}
 jobs=${2:-$(nproc)}
 shift $(( $# > 2 ? 2 : $# ))
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(obj ray_file hit_file tree_file scenes_json mtl pfm scene_cache)
+[ ${#targets[@]} -gt 0 ] || targets=(obj ray_file hit_file tree_file scenes_json mtl pfm scene_cache scene_file)
 flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g"
 mkdir -p build-fuzz
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \

@@ -168,7 +168,7 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     f["build_device"] = spec.on_gpu() ? "gpu" : "cpu";
     if (spec.on_gpu()) {
         f["morton_bits"] = spec.options.morton_bits;
-        if (spec.kind() == accel::BuilderKind::kHploc) f["radius"] = spec.options.ploc_radius;
+        if (accel::uses_radius(spec.kind())) f["radius"] = spec.options.ploc_radius;
     } else if (builder != "sweep") {
         f["bins"] = spec.options.num_bins;
     }
@@ -245,7 +245,7 @@ void StructureSpec::check() const {
     if (build_device != "auto" && build_device != "cpu" && build_device != "gpu")
         throw Error("build_device '" + build_device + "' is not one of auto, cpu, gpu");
     if (build_device == "gpu" && !on_gpu())
-        throw Error("build_device gpu applies to the GPU builders (lbvh, hploc), not " + builder);
+        throw Error("build_device gpu applies to the GPU builders (lbvh, ploc, hploc), not " + builder);
     if (build_device == "cpu" && on_gpu()) throw Error("builder '" + builder + "' runs on the GPU only");
     if (on_gpu() && options.reinsertion_passes > 0)
         throw Error("reinsertion_passes applies to the CPU builders, not " + builder);

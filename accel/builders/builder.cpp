@@ -35,8 +35,9 @@ BuilderKind parse_builder_kind(const std::string& name) {
     if (name == "sweep") return BuilderKind::kSweep;
     if (name == "sbvh") return BuilderKind::kSbvh;
     if (name == "lbvh") return BuilderKind::kLbvh;
+    if (name == "ploc") return BuilderKind::kPloc;
     if (name == "hploc") return BuilderKind::kHploc;
-    throw Error("unknown builder '" + name + "' (expected binned, sweep, sbvh, lbvh or hploc)");
+    throw Error("unknown builder '" + name + "' (expected binned, sweep, sbvh, lbvh, ploc or hploc)");
 }
 
 const char* builder_name(BuilderKind kind) {
@@ -49,6 +50,8 @@ const char* builder_name(BuilderKind kind) {
             return "sbvh";
         case BuilderKind::kLbvh:
             return "lbvh";
+        case BuilderKind::kPloc:
+            return "ploc";
         case BuilderKind::kHploc:
             return "hploc";
     }

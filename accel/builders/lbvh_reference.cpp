@@ -2,7 +2,10 @@
 #include "accel/builders/lbvh_reference.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
+#include <string>
+#include <utility>
 
 #include "accel/core/check.h"
 #include "accel/core/morton.h"
@@ -37,9 +40,9 @@ void emit_hierarchy(RawHierarchy& h, const std::vector<Key>& keys) {
     h.root = uint32_t(n);
 }
 
-}  // namespace
-
-RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits) {
+/// The leaves in Morton order: keys, sorted ids and the leaves' boxes (boxes sized for 2n - 1
+/// nodes). The first step of every GPU builder.
+RawHierarchy morton_order(const scene::TriangleMesh& mesh, int morton_bits) {
     if (morton_bits != 30 && morton_bits != 60)
         throw Error("morton_bits " + std::to_string(morton_bits) + " is neither 30 nor 60");
     const size_t n = mesh.triangle_count();
@@ -70,7 +73,14 @@ RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits) {
         h.keys[k] = codes[h.sorted_ids[k]];
         h.boxes[k] = tri[h.sorted_ids[k]];
     }
-    if (n == 1) return h;  // the root is leaf 0
+    return h;
+}
+
+}  // namespace
+
+RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits) {
+    RawHierarchy h = morton_order(mesh, morton_bits);
+    if (h.keys.size() == 1) return h;  // the root is leaf 0
     if (morton_bits == 60) {
         emit_hierarchy(h, h.keys);
     } else {
@@ -78,6 +88,113 @@ RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits) {
         emit_hierarchy(h, k32);
     }
     return h;
+}
+
+RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, int radius) {
+    if (radius < 1 || radius > 16) throw Error("PLOC's radius " + std::to_string(radius) + " is outside [1, 16]");
+    RawHierarchy h = morton_order(mesh, morton_bits);
+    const uint32_t n = uint32_t(h.keys.size());
+    h.left.reserve(n - 1);
+    h.right.reserve(n - 1);
+    std::vector<uint32_t> clusters(n), next, nn;
+    std::iota(clusters.begin(), clusters.end(), 0u);
+    uint32_t node = n;
+    while (clusters.size() > 1) {
+        const size_t m = clusters.size(), r = size_t(radius);
+        nn.assign(m, 0);
+        for (size_t i = 0; i < m; ++i) {
+            float best = std::numeric_limits<float>::infinity();
+            const AABB& b = h.boxes[clusters[i]];
+            for (size_t j = i > r ? i - r : 0; j <= std::min(i + r, m - 1); ++j) {
+                if (j == i) continue;
+                const float a = merge(b, h.boxes[clusters[j]]).half_area();
+                if (a < best) {  // on equal areas the lower place
+                    best = a;
+                    nn[i] = uint32_t(j);
+                }
+            }
+        }
+        next.clear();
+        for (size_t i = 0; i < m; ++i) {
+            const size_t j = nn[i];
+            if (nn[j] != i) {
+                next.push_back(clusters[i]);
+            } else if (i < j) {
+                h.left.push_back(clusters[i]);
+                h.right.push_back(clusters[j]);
+                h.boxes[node] = merge(h.boxes[clusters[i]], h.boxes[clusters[j]]);
+                next.push_back(node++);
+            }
+        }
+        clusters.swap(next);
+    }
+    h.root = clusters[0];
+    return h;
+}
+
+BuildTree tree_from_hierarchy(const RawHierarchy& h, const BuildConfig& config) {
+    const uint32_t n = uint32_t(h.sorted_ids.size());
+    BVHLAB_CHECK(n > 0 && h.boxes.size() == 2 * size_t(n) - 1 && h.left.size() + 1 == n,
+                 "a hierarchy of n leaves has n - 1 nodes");
+    // Bottom-up (children before parents, by a depth-first walk): triangles and SAH cost of
+    // every node, and whether its subtree becomes one leaf.
+    const size_t total = h.boxes.size();
+    std::vector<uint32_t> count(total, 1);
+    std::vector<float> cost(total);
+    std::vector<uint8_t> leaf(total, 1);
+    std::vector<std::pair<uint32_t, bool>> stack{{h.root, false}};
+    while (!stack.empty()) {
+        const auto [x, expanded] = stack.back();
+        stack.pop_back();
+        const float area = h.boxes[x].half_area();
+        if (x < n) {
+            cost[x] = config.intersection_cost * area;
+        } else if (!expanded) {
+            stack.push_back({x, true});
+            stack.push_back({h.right[x - n], false});
+            stack.push_back({h.left[x - n], false});
+        } else {
+            const uint32_t a = h.left[x - n], b = h.right[x - n];
+            count[x] = count[a] + count[b];
+            const float inner = config.traversal_cost * area + cost[a] + cost[b];
+            const float as_leaf = config.intersection_cost * float(count[x]) * area;
+            leaf[x] = count[x] <= config.min_leaf_size || (count[x] <= config.max_leaf_size && as_leaf <= inner);
+            cost[x] = leaf[x] ? as_leaf : inner;
+        }
+    }
+    // Top-down: a node's children at two adjacent slots; a leaf's triangles left to right.
+    BuildTree tree;
+    tree.nodes.push_back({h.boxes[h.root], 0, 0});
+    std::vector<std::pair<uint32_t, uint32_t>> todo{{h.root, 0}};  // hierarchy node, slot
+    std::vector<uint32_t> below;
+    while (!todo.empty()) {
+        const auto [x, slot] = todo.back();
+        todo.pop_back();
+        if (leaf[x]) {
+            tree.nodes[slot].first_index = uint32_t(tree.prim_indices.size());
+            tree.nodes[slot].prim_count = count[x];
+            below.assign(1, x);
+            while (!below.empty()) {
+                const uint32_t y = below.back();
+                below.pop_back();
+                if (y < n) {
+                    tree.prim_indices.push_back(h.sorted_ids[y]);
+                } else {
+                    below.push_back(h.right[y - n]);
+                    below.push_back(h.left[y - n]);
+                }
+            }
+            continue;
+        }
+        const uint32_t first = uint32_t(tree.nodes.size());
+        tree.nodes[slot].first_index = first;
+        const uint32_t a = h.left[x - n], b = h.right[x - n];
+        tree.nodes.push_back({h.boxes[a], 0, 0});
+        tree.nodes.push_back({h.boxes[b], 0, 0});
+        todo.push_back({b, first + 1});
+        todo.push_back({a, first});
+    }
+    return tree;
 }
 
 }  // namespace bvhlab::accel

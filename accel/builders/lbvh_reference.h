@@ -1,13 +1,20 @@
 // SPDX-License-Identifier: MIT
-// The linear BVH on the CPU, step by step as the GPU builder makes it (Morton codes, a stable
-// sort, Karras's hierarchy, bottom-up boxes): the reference that the GPU's LBVH is compared
-// with bit for bit. Not a builder of its own: one thread, single-triangle leaves.
+// The GPU builders' hierarchies on the CPU, step by step as the GPU makes them: the references
+// that the GPU's LBVH and PLOC are compared with bit for bit, and the leaf choice that turns any
+// such hierarchy into a BuildTree. Not builders of their own: one thread, single-triangle leaves.
+//  - LBVH: Morton codes, a stable sort, Karras's hierarchy, bottom-up boxes.
+//  - PLOC (Meister & Bittner, "Parallel Locally-Ordered Clustering for Bounding Volume
+//    Hierarchy Construction", TVCG 2018): from the sorted leaves, rounds in which every cluster
+//    finds its nearest neighbour within `radius` places (the smallest merged box; on equal
+//    areas the lower place), mutual pairs merge into a node at the lower place of the two,
+//    and the list is compacted, until one cluster is left.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "accel/core/aabb.h"
+#include "accel/core/build_tree.h"
 #include "scene/mesh.h"
 
 namespace bvhlab::accel {
@@ -28,5 +35,18 @@ struct RawHierarchy {
 /// The LBVH of `mesh` with `morton_bits` (30 or 60) bit codes of the triangle boxes' centres in
 /// the centres' bounding box. Throws bvhlab::Error for an empty mesh or other bit counts.
 RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits);
+
+/// PLOC's hierarchy of `mesh` over the same sorted leaves, with search radius `radius` (1 to 16).
+/// Interior nodes are numbered from n in the order they are made: round by round, and within a
+/// round by the place of the pair's lower cluster. Throws bvhlab::Error as lbvh_reference does,
+/// and for a radius outside [1, 16].
+RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, int radius);
+
+/// The BuildTree of a hierarchy with the GPU builders' leaf choice: bottom-up, a node's subtree
+/// becomes one leaf when it holds at most min_leaf triangles, or at most max_leaf and its SAH
+/// cost as a leaf (Ci x count x half area) is no more than as a node (Ct x half area + the
+/// children's costs). Children are adjacent as every BuildTree has them; a leaf lists its
+/// triangles left to right.
+BuildTree tree_from_hierarchy(const RawHierarchy& h, const BuildConfig& config);
 
 }  // namespace bvhlab::accel

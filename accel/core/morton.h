@@ -16,7 +16,8 @@
 
 namespace bvhlab::accel::morton {
 
-BVHLAB_HD inline int clz32(uint32_t x) {
+/// Leading zero bits of a 32- or 64-bit key (its width for 0).
+BVHLAB_HD inline int clz(uint32_t x) {
 #if defined(__CUDA_ARCH__)
     return __clz(x);
 #else
@@ -24,7 +25,7 @@ BVHLAB_HD inline int clz32(uint32_t x) {
 #endif
 }
 
-BVHLAB_HD inline int clz64(uint64_t x) {
+BVHLAB_HD inline int clz(uint64_t x) {
 #if defined(__CUDA_ARCH__)
     return __clzll(x);
 #else
@@ -85,17 +86,14 @@ BVHLAB_HD inline uint64_t code60(Vec3 c, Vec3 lo, Vec3 scale) {
            spread20(cell(c.z, lo.z, scale.z, n));
 }
 
-BVHLAB_HD inline int clz_key(uint32_t x) { return clz32(x); }
-BVHLAB_HD inline int clz_key(uint64_t x) { return clz64(x); }
-
 /// Karras's delta: the length of the common prefix of sorted keys i and j, with the index
 /// appended to equal keys so that every key is distinct; -1 for j outside [0, n).
 template <typename Key>
 BVHLAB_HD inline int karras_delta(const Key* keys, int64_t n, int64_t i, int64_t j) {
     if (j < 0 || j >= n) return -1;
     const Key x = keys[i] ^ keys[j];
-    if (x) return clz_key(x);
-    return int(8 * sizeof(Key)) + clz32(uint32_t(i) ^ uint32_t(j));
+    if (x) return clz(x);
+    return int(8 * sizeof(Key)) + clz(uint32_t(i) ^ uint32_t(j));
 }
 
 /// The children of Karras's interior node i (0 <= i < n - 1) over n >= 2 sorted keys, as node

@@ -34,7 +34,7 @@ struct Header {
     uint64_t index_count;   // uint32 primitive indices that follow the nodes
     uint32_t spatial_bins;  // SBVH spatial bins
     uint32_t reinsertion;   // BVH files: reinsertion passes run after the build (was reserved, 0)
-    // The GPU builders (lbvh, hploc) have no bins: num_bins holds their Morton bits and
+    // The GPU builders (lbvh, ploc, hploc) have no bins: num_bins holds their Morton bits and
     // spatial_bins H-PLOC's search radius.
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
@@ -76,7 +76,7 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
       << " Ci=" << o.config.intersection_cost;
     if (runs_on_gpu(kind)) {
         s << " morton=" << o.morton_bits;
-        if (kind == BuilderKind::kHploc) s << " radius=" << o.ploc_radius;
+        if (uses_radius(kind)) s << " radius=" << o.ploc_radius;
         return s.str();
     }
     if (kind != BuilderKind::kSweep) s << " bins=" << o.num_bins;
@@ -135,8 +135,8 @@ TreeFile read_tree_file(const std::string& path) {
                     "; this build reads version " + std::to_string(kTreeFileVersion));
     const uint32_t b = h.builder;
     if (b != uint32_t(BuilderKind::kBinned) && b != uint32_t(BuilderKind::kSweep) &&
-        b != uint32_t(BuilderKind::kSbvh) && b != uint32_t(BuilderKind::kLbvh) && b != uint32_t(BuilderKind::kHploc) &&
-        b != kKdTreeCode)
+        b != uint32_t(BuilderKind::kSbvh) && b != uint32_t(BuilderKind::kLbvh) && b != uint32_t(BuilderKind::kPloc) &&
+        b != uint32_t(BuilderKind::kHploc) && b != kKdTreeCode)
         throw Error("structure file '" + path + "' names an unknown builder (" + std::to_string(h.builder) + ")");
     const bool kd = h.builder == kKdTreeCode;
     const uint64_t node_bytes = kd ? sizeof(KdNode) : sizeof(BuildNode);

@@ -18,9 +18,6 @@ namespace bvhlab::accel {
 
 namespace {
 
-/// BLAS levels whose boxes bound an instance in the world (up to 2^levels boxes, 8 corners each).
-constexpr int kFrontierLevels = 4;
-
 /// The boxes of a binary tree's nodes `levels` below the root (fewer where leaves end sooner):
 /// their transformed corners bound an instance far tighter than the root box's when it is turned.
 std::vector<AABB> frontier_boxes(const BuildTree& tree, int levels) {
@@ -51,6 +48,26 @@ AABB world_box(const std::vector<AABB>& boxes, const scene::Transform& t) {
 }
 
 }  // namespace
+
+std::vector<AABB> frontier_boxes(const Bvh2& bvh, int levels) {
+    BVHLAB_CHECK(!bvh.nodes.empty(), "the frontier of an empty BVH");
+    const Bvh2Node& root = bvh.nodes[0];
+    if (root.child[0] < 0 && root.child[1] == root.child[0]) return {root.child_box(0)};  // a root leaf
+    std::vector<AABB> out;
+    std::vector<std::pair<uint32_t, int>> todo{{0u, 0}};
+    while (!todo.empty()) {
+        const auto [node, level] = todo.back();
+        todo.pop_back();
+        const Bvh2Node& n = bvh.nodes[node];
+        for (int k = 0; k < 2; ++k) {
+            if (n.child[k] >= 0 && level + 1 < levels)
+                todo.push_back({uint32_t(n.child[k]), level + 1});
+            else
+                out.push_back(n.child_box(k));
+        }
+    }
+    return out;
+}
 
 uint32_t TwoLevelBvh::blas_depth() const {
     uint32_t d = 0;

@@ -78,6 +78,14 @@ struct BlasLayout {
     CwTris tris = CwTris::kWoop;
 };
 
+/// BLAS levels whose boxes bound an instance in the world (up to 2^levels boxes, 8 corners each).
+constexpr int kFrontierLevels = 4;
+
+/// The child boxes of a BVH2 layout's nodes `levels` below the root (fewer where leaves end
+/// sooner): the boxes whose transformed corners bound an instance of it, as build_two_level takes
+/// them from the binary tree (the same boxes). One box for a root leaf.
+std::vector<AABB> frontier_boxes(const Bvh2& bvh, int levels = kFrontierLevels);
+
 /// Builds the BLAS of every placed mesh with `build` (in `layout`) and a binned-SAH TLAS over the
 /// instances' world boxes: the transformed corners of the binary BLAS's boxes four levels below
 /// its root (up to 16 boxes), far tighter than the root box's corners for a turned instance.

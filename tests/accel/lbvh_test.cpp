@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The GPU builders' host side: Morton codes, Karras's hierarchy and its CPU reference, the
-// BuildTree of a BVH2 layout, and the options, specs and files of lbvh and hploc. The GPU
+// BuildTree of a BVH2 layout, PLOC's CPU reference and the GPU builders' leaf choice, and the
+// options, specs and files of lbvh, ploc and hploc. The GPU
 // pipeline itself is tested in tests/traversal/gpu_builder_test.cpp.
 #include <gtest/gtest.h>
 
@@ -126,6 +127,99 @@ TEST(LbvhReference, HierarchyIsSoundForBothCodeLengths) {
     EXPECT_THROW(lbvh_reference(same, 32), Error);
 }
 
+TEST(PlocReference, HierarchyIsSoundForEveryRadius) {
+    for (auto kind : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured}) {
+        const scene::TriangleMesh mesh = scene::make_procedural(kind, 3000, 5);
+        for (int radius : {1, 4, 16}) {
+            SCOPED_TRACE(radius);
+            const RawHierarchy h = ploc_reference(mesh, 30, radius);
+            expect_sound(h, mesh);
+            // Nodes are numbered as they are made: children before their parent, the root last.
+            for (size_t i = 0; i < h.interior_count(); ++i) {
+                EXPECT_LT(h.left[i], mesh.triangle_count() + i);
+                EXPECT_LT(h.right[i], mesh.triangle_count() + i);
+            }
+            EXPECT_EQ(h.root, 2 * mesh.triangle_count() - 2);
+        }
+    }
+    // Equal boxes everywhere: every area ties, and the rounds still end.
+    scene::TriangleMesh same;
+    for (int k = 0; k < 37; ++k) scene::add_triangle_checked(same, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, -1);
+    expect_sound(ploc_reference(same, 60, 3), same);
+    const scene::TriangleMesh one = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}});
+    EXPECT_EQ(ploc_reference(one, 30, 8).root, 0u);
+    EXPECT_THROW(ploc_reference(one, 30, 0), Error);
+    EXPECT_THROW(ploc_reference(one, 30, 17), Error);
+}
+
+/// Small flat triangles along x at `xs`, in that (Morton) order.
+scene::TriangleMesh row_of(std::initializer_list<float> xs) {
+    scene::TriangleMesh m;
+    for (float x : xs) scene::add_triangle_checked(m, {x, 0, 0}, {x + 0.1f, 0, 0}, {x, 0.1f, 0}, -1);
+    return m;
+}
+
+TEST(PlocReference, MutualNeighboursMergeAndTiesGoToTheLowerPlace) {
+    // 0, 1 | 10, 11: two pairs, then the root.
+    RawHierarchy h = ploc_reference(row_of({0, 1, 10, 11}), 30, 1);
+    ASSERT_EQ(h.interior_count(), 3u);
+    EXPECT_EQ(h.left[0], 0u);
+    EXPECT_EQ(h.right[0], 1u);
+    EXPECT_EQ(h.left[1], 2u);
+    EXPECT_EQ(h.right[1], 3u);
+    EXPECT_EQ(h.left[2], 4u);
+    EXPECT_EQ(h.right[2], 5u);
+    // 0, 5, 6, 7 with radius 1: 6 is as near to 5 as to 7 and takes the lower place, 5; so
+    // (5, 6) is made first, then (56, 7), then the root (0, 567).
+    h = ploc_reference(row_of({0, 5, 6, 7}), 30, 1);
+    ASSERT_EQ(h.interior_count(), 3u);
+    EXPECT_EQ(h.left[0], 1u);
+    EXPECT_EQ(h.right[0], 2u);
+    EXPECT_EQ(h.left[1], 4u);
+    EXPECT_EQ(h.right[1], 3u);
+    EXPECT_EQ(h.left[2], 0u);
+    EXPECT_EQ(h.right[2], 5u);
+    // With radius 3, 0 sees every cluster, but its nearest, 5, prefers 6: the same first node.
+    h = ploc_reference(row_of({0, 5, 6, 7}), 30, 3);
+    EXPECT_EQ(h.left[0], 1u);
+    EXPECT_EQ(h.right[0], 2u);
+}
+
+TEST(PlocReference, LeavesBySahFollowTheRule) {
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 4000, 2);
+    const RawHierarchy h = ploc_reference(mesh, 30, 8);
+    BuildConfig c;
+    const BuildTree tree = tree_from_hierarchy(h, c);
+    EXPECT_EQ(validate(tree, mesh, c), "");
+    const TreeStats s = compute_stats(tree, mesh, c, false);
+    EXPECT_GT(s.leaves, mesh.triangle_count() / 8);
+    EXPECT_LT(s.leaves, mesh.triangle_count());  // some subtrees became leaves
+    // Single-triangle leaves: the whole hierarchy, 2n - 1 nodes, and its SAH is the hierarchy's.
+    BuildConfig single = c;
+    single.max_leaf_size = 1;
+    const BuildTree full = tree_from_hierarchy(h, single);
+    EXPECT_EQ(full.nodes.size(), 2 * mesh.triangle_count() - 1);
+    double sah = 0;
+    const double root = h.boxes[h.root].half_area();
+    for (size_t x = 0; x < h.boxes.size(); ++x) sah += h.boxes[x].half_area() / root;
+    EXPECT_NEAR(compute_stats(full, mesh, single, false).sah, sah, 1e-6 * sah);
+    // The leaves' SAH choice never costs more than the full hierarchy.
+    EXPECT_LE(s.sah, compute_stats(full, mesh, c, false).sah);
+    // Every leaf holds at most max_leaf triangles, every interior node more than min_leaf.
+    BuildConfig four = c;
+    four.min_leaf_size = 4;
+    const BuildTree t4 = tree_from_hierarchy(h, four);
+    std::vector<uint32_t> below(t4.nodes.size(), 0);
+    for (size_t i = t4.nodes.size(); i-- > 0;) {  // children come after their parents
+        const BuildNode& n = t4.nodes[i];
+        EXPECT_LE(n.prim_count, four.max_leaf_size);
+        below[i] = n.is_leaf() ? n.prim_count : below[n.first_index] + below[n.first_index + 1];
+        if (!n.is_leaf()) EXPECT_GT(below[i], four.min_leaf_size) << "node " << i;
+    }
+    EXPECT_EQ(below[0], mesh.triangle_count());
+    EXPECT_LT(compute_stats(t4, mesh, c, false).leaves, s.leaves);
+}
+
 TEST(Bvh2Convert, BuildTreeOfTheLayoutKeepsTreeAndFigures) {
     const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 4000, 2);
     BuilderOptions o;
@@ -156,10 +250,15 @@ TEST(Bvh2Convert, BuildTreeOfTheLayoutKeepsTreeAndFigures) {
 
 TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
     EXPECT_EQ(parse_builder_kind("lbvh"), BuilderKind::kLbvh);
+    EXPECT_EQ(parse_builder_kind("ploc"), BuilderKind::kPloc);
     EXPECT_EQ(parse_builder_kind("hploc"), BuilderKind::kHploc);
     EXPECT_STREQ(builder_name(BuilderKind::kHploc), "hploc");
+    EXPECT_STREQ(builder_name(BuilderKind::kPloc), "ploc");
     EXPECT_TRUE(runs_on_gpu(BuilderKind::kLbvh));
+    EXPECT_TRUE(runs_on_gpu(BuilderKind::kPloc));
     EXPECT_FALSE(runs_on_gpu(BuilderKind::kSbvh));
+    EXPECT_TRUE(uses_radius(BuilderKind::kPloc));
+    EXPECT_FALSE(uses_radius(BuilderKind::kLbvh));
     BuilderOptions o;
     o.morton_bits = 31;
     EXPECT_NE(options_problem(o).find("morton_bits 31"), std::string::npos);
@@ -176,6 +275,8 @@ TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
         EXPECT_NE(std::string(e.what()).find("runs on the GPU"), std::string::npos) << e.what();
     }
     EXPECT_EQ(describe_config(BuilderKind::kHploc, o), "hploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
+    EXPECT_EQ(describe_config(BuilderKind::kPloc, o), "ploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
+    EXPECT_EQ(describe_config(BuilderKind::kLbvh, o), "lbvh leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60");
 }
 
 TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
@@ -216,7 +317,7 @@ TEST(GpuBuilderOptions, WithoutADeviceTheBuildSaysWhy) {
 TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 500, 3);
     TreeFileMeta meta;
-    meta.builder = BuilderKind::kHploc;
+    meta.builder = BuilderKind::kPloc;
     meta.options.morton_bits = 60;
     meta.options.ploc_radius = 5;
     meta.triangles = mesh.triangle_count();
@@ -226,14 +327,14 @@ TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     test::TempFile f("hploc.tree");
     write_tree_file(f.path(), tree, meta);
     const TreeFile r = read_tree_file(f.path());
-    EXPECT_EQ(r.meta.builder, BuilderKind::kHploc);
+    EXPECT_EQ(r.meta.builder, BuilderKind::kPloc);
     EXPECT_EQ(r.meta.options.morton_bits, 60);
     EXPECT_EQ(r.meta.options.ploc_radius, 5);
     EXPECT_EQ(r.meta.options.num_bins, BuilderOptions{}.num_bins);
     EXPECT_EQ(describe_config(r.meta), describe_config(meta.builder, meta.options));
     // Loaded without a GPU: the tree is in the file.
     const trav::AccelStructure a = trav::load_structure(mesh, meta.scene_hash, f.path());
-    EXPECT_EQ(a.figures["builder"], "hploc");
+    EXPECT_EQ(a.figures["builder"], "ploc");
     EXPECT_EQ(a.figures["build_device"], "gpu");
     EXPECT_EQ(a.figures["radius"], 5);
 }

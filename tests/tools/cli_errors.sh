@@ -154,20 +154,26 @@ expect_error bad-reinsert "reinsert" build "$data/cornell_box.obj" --builder sbv
 cb=$data/cornell_box.obj
 expect_error gpu-builder-on-cpu "--build-device cpu does not apply: builder hploc runs on the GPU" build "$cb" \
     --builder hploc --build-device cpu
-expect_error cpu-builder-on-gpu "--build-device gpu applies to the GPU builders [(]lbvh, hploc[)], not binned" build "$cb" \
+expect_error cpu-builder-on-gpu "--build-device gpu applies to the GPU builders [(]lbvh, ploc, hploc[)], not binned" build "$cb" \
     --build-device gpu
 expect_error kdtree-on-gpu "--build-device gpu applies to the GPU builders" build "$cb" --structure kdtree \
     --build-device gpu
-expect_error morton-cpu-builder "--morton-bits applies to the GPU builders [(]lbvh, hploc[)], not sbvh" build "$cb" \
+expect_error morton-cpu-builder "--morton-bits applies to the GPU builders [(]lbvh, ploc, hploc[)], not sbvh" build "$cb" \
     --builder sbvh --morton-bits 60
-expect_error radius-lbvh "--radius applies to --builder hploc, not lbvh" build "$cb" --builder lbvh --radius 4
+expect_error radius-lbvh "--radius applies to --builder ploc or hploc, not lbvh" build "$cb" --builder lbvh --radius 4
 expect_error bins-gpu "--bins does not apply to the GPU builders" build "$cb" --builder hploc --bins 8
 expect_error reinsert-gpu "--reinsert applies to the CPU builders, not lbvh" build "$cb" --builder lbvh --reinsert 2
 expect_error morton-bits-31 "--morton-bits" build "$cb" --builder lbvh --morton-bits 31
 expect_error radius-0 "--radius" build "$cb" --builder hploc --radius 0
-expect_error runs-cpu-builder "--runs applies to building one mesh with a GPU builder" build "$cb" --runs 3
+expect_error radius-17-ploc "--radius" build "$cb" --builder ploc --radius 17
+expect_error ploc-on-cpu "--build-device cpu does not apply: builder ploc runs on the GPU" build "$cb" \
+    --builder ploc --build-device cpu
+expect_error runs-cpu-builder "--runs applies to a GPU builder" build "$cb" --runs 3
+expect_error runs-tlas-cwbvh "--runs on an instanced scene rebuilds its TLAS on the GPU, which the two-level BVH2 layout has" \
+    build "gen:instances:$data/cornell_box.obj:3:1" --builder lbvh --layout cwbvh --runs 3
 if ! nvidia-smi >/dev/null 2>&1; then  # without a GPU the GPU builders say why
     expect_error gpu-builder-no-gpu "builder 'hploc' runs on the GPU, and there is none" build "$cb" --builder hploc
+    expect_error ploc-no-gpu "builder 'ploc' runs on the GPU, and there is none" build "$cb" --builder ploc --radius 4
 fi
 head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
 expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"

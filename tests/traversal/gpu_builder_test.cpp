@@ -1,14 +1,18 @@
 // SPDX-License-Identifier: MIT
-// The GPU builders (ctest label "gpu"): the LBVH equals its CPU reference bit for bit; every
-// tree of lbvh and hploc is valid, kept on the device as built, and agrees with Embree (0 real
-// mismatches) through the CPU traversal of its host copy and the default GPU kernel, on
-// generated soups, the adversarial and edge scenes and the benchmark scenes; H-PLOC's trees are
-// better than the LBVH's. Each test skips with the reason when there is no device.
+// The GPU builders (ctest label "gpu"): the LBVH and PLOC equal their CPU references bit for
+// bit, and so do the leaves chosen by SAH; every tree of lbvh, ploc and hploc is valid, kept on the device as built,
+// and agrees with Embree (0 real mismatches) through the CPU traversal of its host copy and the default GPU kernel, on
+// generated soups, the adversarial and edge scenes and the benchmark scenes; PLOC's and
+// H-PLOC's trees are better than the LBVH's. Each test skips with the reason when there is no device.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "accel/builders/lbvh_reference.h"
+#include "accel/core/check.h"
+#include "accel/core/stats.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "scene/io/obj_loader.h"
 #include "scene/io/procedural.h"
@@ -18,6 +22,10 @@
 #include "tests/support/gpu_support.h"
 #include "tests/support/test_support.h"
 #include "traversal/gpu/gpu_builder.h"
+#include "traversal/gpu/gpu_tracer.h"
+#include "traversal/gpu/registry.h"
+#include "traversal/oracle/embree_oracle.h"
+#include "traversal/rays/protocol.h"
 #include "traversal/rays/scene_catalogue.h"
 
 namespace bvhlab::trav {
@@ -81,9 +89,56 @@ TEST(GpuBuilder, LbvhEqualsTheCpuReferenceBitForBit) {
     }
 }
 
+TEST(GpuBuilder, PlocEqualsTheCpuReferenceBitForBit) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    for (const NamedMesh& m : builder_meshes()) {
+        for (int radius : {1, 8, 16}) {
+            SCOPED_TRACE(m.name + ", radius " + std::to_string(radius));
+            accel::BuilderOptions o;
+            o.ploc_radius = radius;
+            o.morton_bits = radius == 8 ? 60 : 30;
+            const GpuBuild g = build_on_gpu(m.mesh, accel::BuilderKind::kPloc, o, true);
+            const accel::RawHierarchy r = accel::ploc_reference(m.mesh, o.morton_bits, radius);
+            EXPECT_EQ(g.raw.root, r.root);
+            EXPECT_EQ(g.raw.sorted_ids, r.sorted_ids);
+            EXPECT_EQ(g.raw.left, r.left);
+            EXPECT_EQ(g.raw.right, r.right);
+            EXPECT_TRUE(same_bytes(g.raw.boxes, r.boxes));
+        }
+    }
+}
+
+TEST(GpuBuilder, LeavesEqualTheCpuLeafChoice) {
+    // The device decides leaves by SAH as accel::tree_from_hierarchy does, in the same float
+    // operations: the same nodes, leaves, depth and SAH, for both references' hierarchies.
+    BVHLAB_SKIP_WITHOUT_GPU();
+    for (const NamedMesh& m : builder_meshes()) {
+        for (auto kind : {accel::BuilderKind::kLbvh, accel::BuilderKind::kPloc}) {
+            for (uint32_t max_leaf : {1u, 4u, 8u}) {
+                SCOPED_TRACE(m.name + ", " + accel::builder_name(kind) + ", max leaf " + std::to_string(max_leaf));
+                accel::BuilderOptions o;
+                o.config.max_leaf_size = max_leaf;
+                o.config.min_leaf_size = max_leaf == 4 ? 2 : 1;
+                const GpuBuild g = build_on_gpu(m.mesh, kind, o);
+                const accel::RawHierarchy r = kind == accel::BuilderKind::kLbvh
+                                                  ? accel::lbvh_reference(m.mesh, o.morton_bits)
+                                                  : accel::ploc_reference(m.mesh, o.morton_bits, o.ploc_radius);
+                const accel::BuildTree cpu = accel::tree_from_hierarchy(r, o.config);
+                const accel::BuildTree gpu = accel::build_tree_from_bvh2(g.host);
+                const accel::TreeStats a = accel::compute_stats(cpu, m.mesh, o.config, false),
+                                       b = accel::compute_stats(gpu, m.mesh, o.config, false);
+                EXPECT_EQ(a.nodes, b.nodes);
+                EXPECT_EQ(a.leaves, b.leaves);
+                EXPECT_EQ(a.depth, b.depth);
+                EXPECT_NEAR(a.sah, b.sah, 1e-9 * a.sah);
+            }
+        }
+    }
+}
+
 TEST(GpuBuilder, TreesAreValidAndStayOnTheDeviceAsBuilt) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    for (const char* builder : {"lbvh", "hploc"}) {
+    for (const char* builder : {"lbvh", "ploc", "hploc"}) {
         for (const NamedMesh& m : builder_meshes()) {
             SCOPED_TRACE(std::string(builder) + " on " + m.name);
             // The factory validates the tree (every triangle once, boxes, leaf sizes, depth).
@@ -122,7 +177,7 @@ TEST(GpuBuilder, TreesAreValidAndStayOnTheDeviceAsBuilt) {
 
 TEST(GpuBuilder, AgreesWithEmbreeThroughCpuAndGpuTraversal) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    for (const char* builder : {"lbvh", "hploc"}) {
+    for (const char* builder : {"lbvh", "ploc", "hploc"}) {
         for (const char* layout : {"bvh2", "cwbvh"}) {
             for (const NamedMesh& m : builder_meshes()) {
                 if (m.mesh.triangle_count() < 1000 && m.name.rfind("soup", 0) == 0) continue;  // hardly any hits
@@ -151,7 +206,7 @@ TEST(GpuBuilder, AgreesWithEmbreeOnAdversarialScenes) {
         cfg.primary = {64, 48, 1, 0};
         cfg.ao_length = scene.ao_length;
         RayProtocol proto(scene.mesh, oracle, cfg);
-        for (const char* builder : {"lbvh", "hploc"}) {
+        for (const char* builder : {"lbvh", "ploc", "hploc"}) {
             SCOPED_TRACE(std::string(builder) + " on " + scene.name);
             AccelStructure a = build_structure(scene.mesh, gpu_spec(builder));
             auto gpu = a.gpu_tracer();
@@ -183,7 +238,7 @@ TEST(GpuBuilder, AgreesWithEmbreeOnBenchmarkScenes) {
         const scene::TriangleMesh mesh = scene::load_obj(e.file);
         ASSERT_TRUE(e.camera.has_value());
         const EmbreeOracle oracle(mesh);
-        for (const char* builder : {"lbvh", "hploc"}) {
+        for (const char* builder : {"lbvh", "ploc", "hploc"}) {
             SCOPED_TRACE(std::string(builder) + " on " + e.name);
             AccelStructure a = build_structure(mesh, gpu_spec(builder));
             auto gpu = a.gpu_tracer();
@@ -193,7 +248,7 @@ TEST(GpuBuilder, AgreesWithEmbreeOnBenchmarkScenes) {
     }
 }
 
-TEST(GpuBuilder, HplocBuildsBetterTreesThanLbvh) {
+TEST(GpuBuilder, PlocAndHplocBuildBetterTreesThanLbvh) {
     // PLOC's merging of nearest neighbours lowers the SAH well below the LBVH's (the paper: by
     // about a fifth); a merge that paired clusters at random, or never, would not.
     BVHLAB_SKIP_WITHOUT_GPU();
@@ -209,6 +264,9 @@ TEST(GpuBuilder, HplocBuildsBetterTreesThanLbvh) {
         // much) and 0.82-0.93 on the benchmark scenes.
         EXPECT_LT(hploc, (kind == scene::ProceduralKind::kSoup ? 0.99 : 0.95) * lbvh);
         EXPECT_LT(hploc, 1.25 * cpu);
+        const double ploc = build_structure(mesh, gpu_spec("ploc")).stats.sah;
+        EXPECT_LT(ploc, (kind == scene::ProceduralKind::kSoup ? 0.99 : 0.95) * lbvh);
+        EXPECT_LT(ploc, 1.25 * cpu);
         StructureSpec narrow = gpu_spec("hploc");
         narrow.options.ploc_radius = 1;
         EXPECT_NE(build_structure(mesh, narrow).stats.sah, hploc) << "the radius changes nothing";
@@ -234,6 +292,114 @@ TEST(GpuBuilder, StructureFileOfAGpuTreeLoadsAgain) {
     EXPECT_EQ(loaded.stats.sah, built.stats.sah);
     EXPECT_EQ(loaded.structure.bvh2.nodes.size(), built.structure.bvh2.nodes.size());
     EXPECT_EQ(loaded.figures["config"], built.figures["config"]);
+}
+
+namespace {
+
+/// The instances of `placed` moved: each turned about z by an angle of its own and shifted.
+std::vector<scene::Transform> moved_transforms(const scene::InstancedScene& placed, float amount) {
+    std::vector<scene::Transform> out;
+    for (size_t i = 0; i < placed.instances.size(); ++i) {
+        const float a = amount * float(i % 7), c = std::cos(a), s = std::sin(a);
+        scene::Transform move;
+        move.m[0] = c;
+        move.m[1] = -s;
+        move.m[4] = s;
+        move.m[5] = c;
+        move.m[3] = amount * float(i % 5);
+        move.m[7] = -amount * float(i % 3);
+        out.push_back(move * placed.instances[i].transform);
+    }
+    return out;
+}
+
+/// Every instance in exactly one TLAS leaf of one instance, each leaf box holding the world box
+/// of its instance's BLAS under `transforms` (the host's own computation), every node's box the
+/// union of its children's.
+void expect_tlas_sound(const accel::Bvh2& tlas, const accel::TwoLevelBvh& t,
+                       const std::vector<scene::Transform>& transforms) {
+    std::vector<int> seen(t.instances.size(), 0);
+    for (const accel::Bvh2Node& n : tlas.nodes) {
+        for (int k = 0; k < 2; ++k) {
+            if (n.child[k] >= 0) continue;
+            if (k == 1 && n.child[1] == n.child[0]) continue;  // a root leaf's second slot
+            ASSERT_EQ(accel::Bvh2Node::leaf_count(n.child[k]), 1u);
+            const uint32_t inst = tlas.tri_ids[accel::Bvh2Node::leaf_first(n.child[k])];
+            ASSERT_LT(inst, t.instances.size());
+            ++seen[inst];
+            AABB world = AABB::empty();
+            for (const AABB& b : accel::frontier_boxes(t.blas[t.instances[inst].blas]))
+                for (int c = 0; c < 8; ++c)
+                    world.extend(transforms[inst].point(
+                        {(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
+            const AABB box = n.child_box(k);
+            EXPECT_TRUE(box.contains(world)) << "instance " << inst;
+            EXPECT_TRUE(world.contains(box)) << "instance " << inst << ": a leaf box larger than its instance";
+        }
+    }
+    for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << "instance " << i;
+}
+
+}  // namespace
+
+TEST(GpuTlas, RebuiltEachFrameAgreesWithEmbreeWhereverTheInstancesMove) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    scene::InstancedScene placed =
+        scene::make_instances(scene::make_procedural(scene::ProceduralKind::kStructured, 2000, 3), 200, 9);
+    StructureSpec spec;
+    spec.epo = false;
+    const AccelStructure as = build_structure(placed, spec);
+    GpuTlasBuilder tb(as.structure);
+    EXPECT_EQ(tb.instance_count(), 200u);
+    const KernelInfo& kernel = default_kernel(Layout::kTwoLevel);
+    for (auto kind : {accel::BuilderKind::kLbvh, accel::BuilderKind::kPloc, accel::BuilderKind::kHploc}) {
+        for (float amount : {0.0f, 0.3f, 1.1f}) {
+            SCOPED_TRACE(std::string(accel::builder_name(kind)) + ", moved by " + std::to_string(amount));
+            const std::vector<scene::Transform> transforms = moved_transforms(placed, amount);
+            scene::InstancedScene moved = placed;
+            for (size_t i = 0; i < transforms.size(); ++i) moved.instances[i].transform = transforms[i];
+            const GpuBuildTimes times = tb.rebuild(transforms, kind);
+            EXPECT_GT(times.total_ms, 0.0);
+            const accel::Bvh2 tlas = tb.download_tlas();
+            expect_tlas_sound(tlas, as.structure.two_level, transforms);
+            EXPECT_LE(tlas.depth, accel::kMaxTreeDepth);
+            // The records are the host's: the same inverse, BLAS and first ids.
+            const std::vector<accel::InstanceRecord> records = tb.download_instances();
+            for (size_t i = 0; i < records.size(); ++i) {
+                const scene::Transform inv = transforms[i].inverse();
+                ASSERT_EQ(std::memcmp(records[i].world_to_object, inv.m, sizeof inv.m), 0) << "instance " << i;
+                ASSERT_EQ(records[i].blas, as.structure.two_level.instances[i].blas);
+                ASSERT_EQ(records[i].first_id, as.structure.two_level.instances[i].first_id);
+            }
+            // Traced through the rebuilt TLAS: Embree's hits of the moved scene.
+            const scene::TriangleMesh world = scene::flatten(moved, true);
+            const EmbreeOracle oracle(moved);
+            auto gpu = make_gpu_tracer(tb.device(), kernel);
+            test::expect_protocol_agreement(world, oracle, framing_camera(world), 0.05f * world.diagonal(), 96, 72,
+                                            [&](const RaySet& set, std::vector<Hit>& hits) { gpu->trace(set, hits); });
+        }
+    }
+    // Bad frames are refused, and the structure keeps its last TLAS.
+    const accel::Bvh2 before = tb.download_tlas();
+    std::vector<scene::Transform> bad = moved_transforms(placed, 1.1f);
+    bad[17].m[0] = bad[17].m[1] = bad[17].m[2] = 0.0f;
+    bad[17].m[4] = bad[17].m[5] = bad[17].m[6] = 0.0f;
+    try {
+        tb.rebuild(bad, accel::BuilderKind::kHploc);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("instance 17 has a singular or non-finite transform"), std::string::npos)
+            << e.what();
+    }
+    bad[17] = placed.instances[17].transform;
+    bad[40].m[3] = std::numeric_limits<float>::infinity();
+    EXPECT_THROW(tb.rebuild(bad, accel::BuilderKind::kLbvh), Error);
+    EXPECT_EQ(tb.download_tlas().nodes.size(), before.nodes.size());
+    EXPECT_THROW(tb.rebuild(std::vector<scene::Transform>(3), accel::BuilderKind::kLbvh), Error);
+    EXPECT_THROW(tb.rebuild(moved_transforms(placed, 0.0f), accel::BuilderKind::kBinned), Error);
+    StructureSpec wide = spec;
+    wide.layout = "cwbvh";
+    EXPECT_THROW(GpuTlasBuilder(build_structure(placed, wide).structure), Error);
 }
 
 }  // namespace bvhlab::trav

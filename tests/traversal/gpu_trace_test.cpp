@@ -3,7 +3,7 @@
 // tested without new test code. Every kernel x {closest, any} x {binned, SBVH, or the
 // kd-tree for kd kernels} on generated scenes and the Cornell box must agree with Embree
 // (0 real mismatches) and write every hit (the tracer poisons the hit buffer before each
-// launch); the first also over the GPU builders' trees (lbvh, hploc). Each test skips with the
+// launch); the first also over the GPU builders' trees (lbvh, ploc, hploc). Each test skips with the
 // reason when there is no device.
 #include <gtest/gtest.h>
 
@@ -143,7 +143,7 @@ TEST_P(GpuKernel, AgreesWithEmbreeOnEveryRayTypeAndStructure) {
         if (has_cw_tris(kernel.layout)) variants.push_back({accel::BuilderKind::kBinned, accel::CwTris::kVertices});
         // The GPU builders' trees, in every BVH layout.
         if (kernel.layout != Layout::kKd)
-            for (auto b : {accel::BuilderKind::kLbvh, accel::BuilderKind::kHploc})
+            for (auto b : {accel::BuilderKind::kLbvh, accel::BuilderKind::kPloc, accel::BuilderKind::kHploc})
                 variants.push_back({b, accel::CwTris::kWoop});
         expect_kernel_agrees(
             kernel, scene.mesh, cfg, variants, [](const CompareReport& rep) { return double(rep.ties); }, 0.001, 1.0);

@@ -337,14 +337,16 @@ Scene load_scene(const std::string& spec, const Globals& g) {
 void BuildOptions::add_to(CLI::App& app) {
     builder_flag = app.add_option("--builder", builder,
                                   "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits) "
-                                  "on the CPU; lbvh (Karras 2012) or hploc (H-PLOC, Benthin et al. 2024) on the GPU")
-                       ->check(CLI::IsMember({"binned", "sweep", "sbvh", "lbvh", "hploc"}))
+                                  "on the CPU; lbvh (Karras 2012), ploc (Meister & Bittner 2018) or hploc (H-PLOC, "
+                                  "Benthin et al. 2024) on the GPU")
+                       ->check(CLI::IsMember({"binned", "sweep", "sbvh", "lbvh", "ploc", "hploc"}))
                        ->capture_default_str();
-    build_device_flag = app.add_option("--build-device", build_device,
-                                       "where the builder runs: cpu (binned, sweep, sbvh), gpu (lbvh, hploc), or auto "
-                                       "(the builder's own)")
-                            ->check(CLI::IsMember({"auto", "cpu", "gpu"}))
-                            ->capture_default_str();
+    build_device_flag =
+        app.add_option("--build-device", build_device,
+                       "where the builder runs: cpu (binned, sweep, sbvh), gpu (lbvh, ploc, hploc), or auto "
+                       "(the builder's own)")
+            ->check(CLI::IsMember({"auto", "cpu", "gpu"}))
+            ->capture_default_str();
     auto* st = structure_flag = app.add_option(
         "--structure", structure,
         "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building "
@@ -385,7 +387,7 @@ void BuildOptions::add_to(CLI::App& app) {
             ->check(CLI::IsMember({30, 60}))
             ->capture_default_str(),
         app.add_option("--radius", opts.ploc_radius,
-                       "hploc: clusters to each side that a cluster searches for its nearest neighbour")
+                       "ploc, hploc: clusters to each side that a cluster searches for its nearest neighbour")
             ->check(CLI::Range(1, 16))
             ->capture_default_str(),
     };
@@ -471,7 +473,7 @@ void BuildOptions::check_applicable() const {
         for (const CLI::Option* f : config_flags) refuse(f, "applies to BVH builders, not --structure kdtree");
         refuse(layout_flag, "applies to BVHs; a kd-tree has its own layout");
         if (build_device == "gpu")
-            throw Error("--build-device gpu applies to the GPU builders (lbvh, hploc), not kdtree");
+            throw Error("--build-device gpu applies to the GPU builders (lbvh, ploc, hploc), not kdtree");
         return;
     }
     for (const CLI::Option* f : kd_flags) refuse(f, "applies to --structure kdtree, not a BVH");
@@ -491,11 +493,11 @@ void BuildOptions::check_applicable() const {
         if (build_device == "cpu")
             throw Error("--build-device cpu does not apply: builder " + builder + " runs on the GPU");
     } else {
-        refuse(config_flags[7], "applies to the GPU builders (lbvh, hploc), not " + builder);
+        refuse(config_flags[7], "applies to the GPU builders (lbvh, ploc, hploc), not " + builder);
         if (build_device == "gpu")
-            throw Error("--build-device gpu applies to the GPU builders (lbvh, hploc), not " + builder);
+            throw Error("--build-device gpu applies to the GPU builders (lbvh, ploc, hploc), not " + builder);
     }
-    if (k != accel::BuilderKind::kHploc) refuse(config_flags[8], "applies to --builder hploc, not " + builder);
+    if (!accel::uses_radius(k)) refuse(config_flags[8], "applies to --builder ploc or hploc, not " + builder);
 }
 
 void RayOptions::add_to(CLI::App& app) {

@@ -67,6 +67,7 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         cw_views_.upload(views);
     } else if (s.layout == Layout::kTwoLevel) {
         const accel::TwoLevelBvh& t = s.two_level;
+        blas_depth_ = t.blas_depth();
         bvh_nodes_.upload(t.tlas.nodes);
         bvh_ids_.upload(t.tlas.tri_ids);
         instances_.upload(t.instances);
@@ -96,6 +97,15 @@ DeviceStructure::DeviceStructure(const Structure& s) : layout_(s.layout), depth_
         kd_tris_.upload(s.kd.tris);
         kd_bounds_ = s.kd.tree.bounds;
     }
+}
+
+void DeviceStructure::replace_tlas(DeviceBuffer<accel::Bvh2Node>&& nodes, DeviceBuffer<uint32_t>&& instance_ids,
+                                   DeviceBuffer<accel::InstanceRecord>&& records, uint32_t depth) {
+    if (layout_ != Layout::kTwoLevel) throw Error("only a two-level BVH2 structure has a TLAS to replace");
+    bvh_nodes_ = std::move(nodes);
+    bvh_ids_ = std::move(instance_ids);
+    instances_ = std::move(records);
+    depth_ = std::max(depth, blas_depth_);
 }
 
 size_t DeviceStructure::bytes() const {

@@ -45,6 +45,12 @@ public:
     /// Device memory of every buffer the structure uploaded.
     size_t bytes() const;
 
+    /// A two-level BVH2 structure's TLAS replaced by one built on the device (GpuTlasBuilder):
+    /// its nodes, instance ids, instance records and depth. Throws bvhlab::Error for another
+    /// layout.
+    void replace_tlas(DeviceBuffer<accel::Bvh2Node>&& nodes, DeviceBuffer<uint32_t>&& instance_ids,
+                      DeviceBuffer<accel::InstanceRecord>&& records, uint32_t depth);
+
 private:
     Layout layout_;
     uint32_t depth_;
@@ -58,6 +64,7 @@ private:
     DeviceBuffer<accel::WoopTriangle> kd_tris_;
     AABB kd_bounds_ = AABB::empty();
     DeviceBuffer<accel::InstanceRecord> instances_;
+    uint32_t blas_depth_ = 0;  // two-level layouts: the deepest BLAS
     DeviceBuffer<accel::Bvh2Node> blas_nodes_;
     DeviceBuffer<accel::WoopTriangle> blas_tris_;
     DeviceBuffer<uint32_t> blas_ids_;

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "traversal/gpu/gpu_builder.h"
 
+#include <algorithm>
 #include <string>
 
 #include "accel/core/check.h"
+#include "accel/layouts/two_level.h"
 
 namespace bvhlab::trav {
 
@@ -30,6 +32,86 @@ std::vector<GpuBuildTimes> time_gpu_builds(const scene::TriangleMesh& mesh, acce
         if (k >= warmup) out.push_back(t);
     }
     return out;
+}
+
+GpuTlasBuilder::GpuTlasBuilder(const Structure& s) {
+    if (s.layout != Layout::kTwoLevel)
+        throw Error("a TLAS is rebuilt on the GPU for two-level BVH2 structures only, not " + s.name);
+    std::string why;
+    if (!gpu_available(&why)) throw Error("a TLAS rebuild runs on the GPU, and there is none: " + why);
+    const accel::TwoLevelBvh& t = s.two_level;
+    instances_ = t.instances.size();
+    std::vector<uint32_t> blas_of(instances_), first_id(instances_), first{0};
+    std::vector<AABB> frontier;
+    for (size_t i = 0; i < instances_; ++i) {
+        blas_of[i] = t.instances[i].blas;
+        first_id[i] = t.instances[i].first_id;
+    }
+    for (const accel::Bvh2& b : t.blas) {
+        if (!b.nodes.empty()) {
+            const std::vector<AABB> f = accel::frontier_boxes(b);
+            frontier.insert(frontier.end(), f.begin(), f.end());
+        }
+        first.push_back(uint32_t(frontier.size()));
+    }
+    blas_of_.upload(blas_of);
+    first_id_.upload(first_id);
+    frontier_first_.upload(first);
+    frontier_.upload(frontier);
+    device_ = std::make_shared<DeviceStructure>(s);
+    tlas_nodes_ = t.tlas.nodes.size();
+    tlas_depth_ = t.tlas.depth;
+}
+
+GpuBuildTimes GpuTlasBuilder::rebuild(const std::vector<scene::Transform>& object_to_world, accel::BuilderKind kind,
+                                      const accel::BuilderOptions& options) {
+    if (object_to_world.size() != instances_)
+        throw Error("a TLAS rebuild needs one transform per instance: " + std::to_string(object_to_world.size()) +
+                    " for " + std::to_string(instances_));
+    if (!accel::runs_on_gpu(kind))
+        throw Error("builder '" + std::string(accel::builder_name(kind)) + "' runs on the CPU, not the GPU");
+    accel::BuilderOptions o = options;
+    o.config.min_leaf_size = o.config.max_leaf_size = 1;  // one instance per leaf
+    if (const std::string p = accel::options_problem(o); !p.empty()) throw Error(p);
+    DeviceTimer upload;
+    upload.start();
+    DeviceBuffer<scene::Transform> transforms(object_to_world);
+    const double upload_ms = upload.stop();
+    // New records in a buffer of their own: the structure keeps its last TLAS and records if a
+    // transform is bad.
+    DeviceBuffer<accel::InstanceRecord> records(instances_);
+    DeviceBuffer<uint32_t> bad(1);
+    detail::fill_device_bytes(bad.data(), 0xff, bad.bytes());
+    const detail::TlasInput in{transforms.data(), blas_of_.data(), first_id_.data(), frontier_first_.data(),
+                               frontier_.data(),  records.data(),  bad.data()};
+    GpuBuild g = detail::gpu_build_tlas(uint32_t(instances_), in, kind, o);
+    uint32_t first_bad = 0;
+    detail::copy_to_host(&first_bad, bad.data(), sizeof first_bad);
+    if (first_bad != ~0u)
+        throw Error("instance " + std::to_string(first_bad) +
+                    " has a singular or non-finite transform, or a non-finite world box");
+    tlas_nodes_ = g.node_count;
+    tlas_depth_ = g.host.depth;
+    device_->replace_tlas(std::move(g.nodes), std::move(g.tri_ids), std::move(records), tlas_depth_);
+    g.times.upload_ms = upload_ms;
+    return g.times;
+}
+
+accel::Bvh2 GpuTlasBuilder::download_tlas() const {
+    accel::Bvh2 t;
+    const Bvh2View v = device_->bvh2();  // a two-level structure's TLAS
+    t.nodes.resize(tlas_nodes_);
+    t.tri_ids.resize(instances_);
+    detail::copy_to_host(t.nodes.data(), v.nodes, tlas_nodes_ * sizeof(accel::Bvh2Node));
+    detail::copy_to_host(t.tri_ids.data(), v.tri_ids, instances_ * sizeof(uint32_t));
+    t.depth = tlas_depth_;
+    return t;
+}
+
+std::vector<accel::InstanceRecord> GpuTlasBuilder::download_instances() const {
+    std::vector<accel::InstanceRecord> r(instances_);
+    detail::copy_to_host(r.data(), device_->two_level().instances, instances_ * sizeof(accel::InstanceRecord));
+    return r;
 }
 
 }  // namespace bvhlab::trav

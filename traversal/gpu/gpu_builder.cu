@@ -6,6 +6,7 @@
 
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
+#include <cub/device/device_scan.cuh>
 #include <cuda/atomic>
 
 #include <algorithm>
@@ -96,6 +97,53 @@ __global__ void triangle_boxes(uint32_t n, const Vec3* __restrict__ verts, const
     centres[t] = AABB::of_point(b.center());
 }
 
+/// Instance i's world box (its BLAS's frontier boxes' corners under its transform) and record's
+/// inverse transform (in double, as scene::Transform::inverse). A singular or non-finite
+/// transform or box marks `bad` with the lowest such instance.
+__global__ void instance_boxes(uint32_t n, detail::TlasInput in, AABB* __restrict__ boxes, AABB* __restrict__ centres) {
+    const uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
+    if (t >= n) return;
+    const float* m = in.object_to_world[t].m;
+    const double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
+    const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    AABB w = AABB::empty();
+    const uint32_t blas = in.blas[t];
+    for (uint32_t k = in.frontier_first[blas]; k < in.frontier_first[blas + 1]; ++k) {
+        const AABB fb = in.frontier[k];
+        for (int corner = 0; corner < 8; ++corner) {
+            const Vec3 p{(corner & 1) ? fb.hi.x : fb.lo.x, (corner & 2) ? fb.hi.y : fb.lo.y,
+                         (corner & 4) ? fb.hi.z : fb.lo.z};
+            w.extend(Vec3{m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                          m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]});
+        }
+    }
+    const bool finite = isfinite(w.lo.x) && isfinite(w.lo.y) && isfinite(w.lo.z) && isfinite(w.hi.x) &&
+                        isfinite(w.hi.y) && isfinite(w.hi.z);
+    accel::InstanceRecord& rec = in.records[t];
+    rec.blas = blas;
+    rec.first_id = in.first_id[t];
+    rec.reserved[0] = rec.reserved[1] = 0;
+    if (!(isfinite(det) && det != 0.0) || !finite) {
+        atomicMin(in.bad, t);
+        w = AABB::of_point({0, 0, 0});
+    } else {
+        const double r[9] = {(e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det,
+                             (f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det,
+                             (d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det};
+        float* inv = rec.world_to_object;
+        for (int row = 0; row < 3; ++row) {
+            double s = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                inv[4 * row + k] = float(r[3 * row + k]);
+                s -= r[3 * row + k] * m[4 * k + 3];
+            }
+            inv[4 * row + 3] = float(s);
+        }
+    }
+    boxes[t] = w;
+    centres[t] = AABB::of_point(w.center());
+}
+
 template <typename Key>
 __global__ void morton_codes(uint32_t n, int bits, const AABB* __restrict__ boxes, const AABB* __restrict__ bounds,
                              Key* __restrict__ keys, uint32_t* __restrict__ ids) {
@@ -152,6 +200,78 @@ __global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2
         const uint2 c = children[p];
         make_node(p, c.x, c.y, merge(load_box(boxes + c.x), load_box(boxes + c.y)), boxes, children, meta, rule);
         p = parent[p];
+    }
+}
+
+// --- PLOC (Meister & Bittner 2018): rounds over the whole cluster list, as
+// accel::ploc_reference makes them (bit for bit: the same areas, ties and node numbers).
+
+/// Nearest neighbour of each of the m clusters within `radius` places: the smallest merged
+/// box's half area, on equal areas the lower place. The block's clusters and the radius to each
+/// side are read once into shared memory.
+constexpr int kPlocMaxRadius = 16;
+__global__ void __launch_bounds__(kBlock) ploc_neighbours(uint32_t m, int radius, const uint32_t* __restrict__ clusters,
+                                                          const AABB* __restrict__ boxes, uint32_t* __restrict__ nn) {
+    __shared__ AABB tile[kBlock + 2 * kPlocMaxRadius];
+    const int64_t first = int64_t(blockIdx.x) * kBlock - radius;
+    for (int k = threadIdx.x; k < kBlock + 2 * radius; k += kBlock) {
+        const int64_t at = first + k;
+        if (at >= 0 && at < int64_t(m)) tile[k] = boxes[clusters[at]];
+    }
+    __syncthreads();
+    const uint32_t i = blockIdx.x * kBlock + threadIdx.x;
+    if (i >= m) return;
+    const AABB b = tile[threadIdx.x + radius];
+    const uint32_t lo = i > uint32_t(radius) ? i - uint32_t(radius) : 0;
+    const uint32_t hi = min(i + uint32_t(radius), m - 1);
+    float best = __int_as_float(0x7f800000);  // +inf
+    uint32_t best_j = i;
+    for (uint32_t j = lo; j <= hi; ++j) {
+        if (j == i) continue;
+        const float a = merge(b, tile[int64_t(j) - first]).half_area();
+        if (a < best) {
+            best = a;
+            best_j = j;
+        }
+    }
+    nn[i] = best_j;
+}
+
+/// Per cluster, packed for one scan: the low word 1 if it stays in the list (not merged, or the
+/// lower of a mutual pair, which makes the node), the high word 1 if it makes a node.
+__global__ void ploc_flags(uint32_t m, const uint32_t* __restrict__ nn, unsigned long long* __restrict__ flags) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= m) return;
+    const uint32_t j = nn[i];
+    const bool mutual = nn[j] == i;
+    const unsigned long long makes = mutual && i < j, stays = !mutual || i < j;
+    flags[i] = makes << 32 | stays;
+}
+
+/// Makes the round's nodes (numbered from `base` by the scan of the makers) and compacts the
+/// list into `out`; the last thread stores the next round's base and list length in
+/// `words[1]` and `words[3]`.
+__global__ void ploc_merge_round(uint32_t m, uint32_t base, const uint32_t* __restrict__ clusters,
+                                 const uint32_t* __restrict__ nn, const unsigned long long* __restrict__ flags,
+                                 const unsigned long long* __restrict__ scan, uint32_t* __restrict__ out, AABB* boxes,
+                                 uint2* children, NodeMeta* meta, uint32_t* words, LeafRule rule) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= m) return;
+    const unsigned long long f = flags[i], before = scan[i];
+    if (f & 0xffffffffull) {
+        uint32_t id = clusters[i];
+        if (f >> 32) {
+            const uint32_t other = clusters[nn[i]];
+            const uint32_t node = base + uint32_t(before >> 32);
+            make_node(node, id, other, merge(boxes[id], boxes[other]), boxes, children, meta, rule);
+            id = node;
+        }
+        out[uint32_t(before)] = id;
+    }
+    if (i == m - 1) {
+        const unsigned long long total = before + f;
+        words[3] = uint32_t(total);
+        words[1] = base + uint32_t(total >> 32);
     }
 }
 
@@ -418,6 +538,7 @@ __global__ void __launch_bounds__(kBlock)
 }
 
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
+__global__ void copy_word(uint32_t* dst, const uint32_t* src) { *dst = *src; }
 
 class Events {
 public:
@@ -446,20 +567,31 @@ void download(std::vector<T>& h, const T* d, size_t count) {
     if (count) detail::copy_to_host(h.data(), d, count * sizeof(T));
 }
 
+/// What the pipeline builds over: a mesh's triangles (their Woop maps written, a host copy
+/// downloaded), or instances' world boxes (a TLAS: no triangles, nothing downloaded).
+struct Prims {
+    uint32_t n;
+    const scene::TriangleMesh* mesh;
+    const detail::TlasInput* tlas;
+};
+
 template <typename Key>
-GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
-               bool keep_raw) {
-    const uint32_t n = uint32_t(mesh.triangle_count());
+GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::BuilderOptions& options, bool keep_raw) {
+    const uint32_t n = prims.n;
     const int bits = options.morton_bits;
-    const bool lbvh = kind == accel::BuilderKind::kLbvh;
+    const bool lbvh = kind == accel::BuilderKind::kLbvh, ploc = kind == accel::BuilderKind::kPloc;
     const LeafRule rule{options.config.traversal_cost, options.config.intersection_cost, options.config.min_leaf_size,
                         options.config.max_leaf_size};
     const size_t base = gpu_memory_use().current;
     GpuBuild g;
     Events ev(8);
     ev.record(0);
-    DeviceBuffer<Vec3> verts(mesh.vertices);
-    DeviceBuffer<uint32_t> idx(mesh.indices);
+    DeviceBuffer<Vec3> verts;
+    DeviceBuffer<uint32_t> idx;
+    if (prims.mesh) {
+        verts.upload(prims.mesh->vertices);
+        idx.upload(prims.mesh->indices);
+    }
     ev.record(1);
 
     // Everything the pipeline needs, before its first event.
@@ -470,34 +602,42 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
     DeviceBuffer<uint32_t> parent(lbvh ? nodes : 0), visits(lbvh ? inner : 0), clusters(lbvh ? 0 : n);
-    DeviceBuffer<int32_t> parent_ids(lbvh ? 0 : inner);
-    DeviceBuffer<uint32_t> words(3);  // root, H-PLOC's node counter, the layout's height
+    DeviceBuffer<int32_t> parent_ids(kind == accel::BuilderKind::kHploc ? inner : 0);
+    // PLOC's second cluster list, nearest neighbours, flags and their scan.
+    DeviceBuffer<uint32_t> clusters_alt(ploc ? n : 0), nn(ploc ? n : 0);
+    DeviceBuffer<unsigned long long> flags(ploc ? n : 0), flag_scan(ploc ? n : 0);
+    DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, the layout's height, PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     DeviceBuffer<uint4> levels(2 * inner);  // the layout's entries of two levels
     DeviceBuffer<uint32_t> level_counts(accel::kMaxTreeDepth + 1);
-    g.tris.resize(n);
+    g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
-    size_t reduce_bytes = 0, sort_bytes = 0;
+    size_t reduce_bytes = 0, sort_bytes = 0, scan_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
     BVHLAB_CUDA_CHECK(cub::DeviceReduce::Reduce(nullptr, reduce_bytes, centres.data(), bounds.data(), int(n),
                                                 BoxUnion{}, AABB::empty()));
     BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
-    DeviceBuffer<uint8_t> scratch(std::max(reduce_bytes, sort_bytes));
+    if (ploc)
+        BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, flags.data(), flag_scan.data(), int(n)));
+    DeviceBuffer<uint8_t> scratch(std::max({reduce_bytes, sort_bytes, scan_bytes}));
     g.peak_bytes = gpu_memory_use().current - base;
     uint32_t* root = words.data();
     uint32_t* node_counter = words.data() + 1;
     if (lbvh) {
         detail::fill_device_bytes(parent.data(), 0xff, parent.bytes());
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-    } else {
+    } else if (!ploc) {
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
     detail::fill_device_bytes(level_counts.data(), 0, level_counts.bytes());
 
     ev.record(2);
-    triangle_boxes<<<grid_for(n), kBlock>>>(n, verts.data(), idx.data(), tri_boxes.data(), centres.data());
+    if (prims.mesh)
+        triangle_boxes<<<grid_for(n), kBlock>>>(n, verts.data(), idx.data(), tri_boxes.data(), centres.data());
+    else
+        instance_boxes<<<grid_for(n), kBlock>>>(n, *prims.tlas, tri_boxes.data(), centres.data());
     BVHLAB_CHECK_LAUNCH();
     BVHLAB_CUDA_CHECK(cub::DeviceReduce::Reduce(scratch.data(), reduce_bytes, centres.data(), bounds.data(), int(n),
                                                 BoxUnion{}, AABB::empty()));
@@ -521,6 +661,27 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
         fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(), visits.data(),
                                            rule);
         BVHLAB_CHECK_LAUNCH();
+    } else if (ploc) {
+        // Rounds until one cluster is left; the host reads each round's list length (a round
+        // trip per round: about 30 rounds for millions of triangles).
+        uint32_t m = n, base = n;
+        uint32_t* list = clusters.data();
+        uint32_t* next = clusters_alt.data();
+        while (m > 1) {
+            ploc_neighbours<<<grid_for(m), kBlock>>>(m, options.ploc_radius, list, boxes.data(), nn.data());
+            ploc_flags<<<grid_for(m), kBlock>>>(m, nn.data(), flags.data());
+            BVHLAB_CUDA_CHECK(
+                cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, flags.data(), flag_scan.data(), int(m)));
+            ploc_merge_round<<<grid_for(m), kBlock>>>(m, base, list, nn.data(), flags.data(), flag_scan.data(), next,
+                                                      boxes.data(), children.data(), meta.data(), words.data(), rule);
+            BVHLAB_CHECK_LAUNCH();
+            uint32_t w[3];  // node counter, height, list length
+            detail::copy_to_host(w, words.data() + 1, sizeof w);
+            base = w[0];
+            m = w[2];
+            std::swap(list, next);
+        }
+        copy_word<<<1, 1>>>(root, list);
     } else {
         set_word<<<1, 1>>>(node_counter, n);
         hploc<Key><<<grid_for(n), kBlock>>>(n, sorted_keys, parent_ids.data(), clusters.data(), boxes.data(),
@@ -548,8 +709,10 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
                                             level_counts.data() + level + 1);
     }
     BVHLAB_CHECK_LAUNCH();
-    woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
-    BVHLAB_CHECK_LAUNCH();
+    if (prims.mesh) {
+        woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
+        BVHLAB_CHECK_LAUNCH();
+    }
     ev.record(7);
     ev.sync(7);
 
@@ -568,7 +731,12 @@ GpuBuild build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const a
     NodeMeta root_meta;
     detail::copy_to_host(&root_meta, meta.data() + w[0], sizeof root_meta);
     const size_t node_count = root_meta.leaf() ? 1 : root_meta.interior;
+    g.node_count = node_count;
     g.host.depth = height;
+    if (!prims.mesh) {  // a TLAS: the nodes stay in their buffer (room for n - 1)
+        g.nodes = std::move(out_nodes);
+        return g;
+    }
     download(g.host.nodes, out_nodes.data(), node_count);
     g.nodes.upload(g.host.nodes);
     download(g.host.tris, g.tris.data(), n);
@@ -597,8 +765,16 @@ namespace detail {
 
 GpuBuild gpu_build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
                    bool keep_raw) {
-    return options.morton_bits == 60 ? build<uint64_t>(mesh, kind, options, keep_raw)
-                                     : build<uint32_t>(mesh, kind, options, keep_raw);
+    const Prims p{uint32_t(mesh.triangle_count()), &mesh, nullptr};
+    return options.morton_bits == 60 ? build<uint64_t>(p, kind, options, keep_raw)
+                                     : build<uint32_t>(p, kind, options, keep_raw);
+}
+
+GpuBuild gpu_build_tlas(uint32_t instances, const TlasInput& in, accel::BuilderKind kind,
+                        const accel::BuilderOptions& options) {
+    const Prims p{instances, nullptr, &in};
+    return options.morton_bits == 60 ? build<uint64_t>(p, kind, options, false)
+                                     : build<uint32_t>(p, kind, options, false);
 }
 
 }  // namespace detail

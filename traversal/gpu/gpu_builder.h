@@ -2,6 +2,10 @@
 // BVH builders that run on the GPU, in plain C++ (the kernels are in gpu_builder.cu):
 //  - lbvh: Morton codes (30 or 60 bits), CUB's radix sort, Karras's (2012) parallel hierarchy
 //    and bottom-up box fitting;
+//  - ploc: PLOC (Meister & Bittner 2018) over the sorted leaves: rounds in which each cluster
+//    finds its nearest neighbour within a search radius (a block's clusters in shared memory),
+//    mutual pairs merge, and CUB's scan compacts the list, until one cluster is left; the same
+//    hierarchy as accel::ploc_reference, bit for bit;
 //  - hploc: H-PLOC (Benthin, Meister, Barczak, Mehalwal, Tsakok, Kensler, HPG 2024): Apetrei's
 //    bottom-up LBVH in which each warp, at every node with more than 16 clusters below it,
 //    merges them by PLOC's nearest-neighbour rule (Meister & Bittner 2018) within a search
@@ -14,13 +18,16 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "accel/builders/builder.h"
 #include "accel/builders/lbvh_reference.h"
 #include "accel/layouts/bvh2_node.h"
 #include "scene/mesh.h"
+#include "scene/scene.h"
 #include "traversal/gpu/device_buffer.h"
+#include "traversal/gpu/device_structure.h"
 
 namespace bvhlab::trav {
 
@@ -30,7 +37,7 @@ struct GpuBuildTimes {
     double bounds_ms = 0.0;     ///< triangle boxes and the centres' bounds (CUB reduce)
     double morton_ms = 0.0;     ///< Morton codes
     double sort_ms = 0.0;       ///< CUB radix sort of the codes with the triangle ids
-    double hierarchy_ms = 0.0;  ///< LBVH hierarchy and box fitting, or H-PLOC's clustering
+    double hierarchy_ms = 0.0;  ///< LBVH hierarchy and box fitting, or (H-)PLOC's clustering
     double convert_ms = 0.0;    ///< leaves chosen by SAH, BVH2 nodes and Woop triangles written
     double total_ms = 0.0;      ///< bounds to convert: the build time
 };
@@ -43,12 +50,14 @@ struct GpuBuild {
     accel::Bvh2 host;  ///< the same structure downloaded (with its depth)
     GpuBuildTimes times;
     size_t peak_bytes = 0;    ///< the most device memory the build held (buffers and CUB's scratch)
+    size_t node_count = 0;    ///< layout nodes written (the first node_count of `nodes`)
     accel::RawHierarchy raw;  ///< the hierarchy before leaves were chosen, when asked for
 };
 
 /// Builds `mesh` (at least one triangle) with GPU builder `kind` and the options' leaf sizes,
-/// costs, Morton bits and H-PLOC search radius. `keep_raw` also downloads the hierarchy before
-/// the leaves are chosen (the LBVH's is comparable bit for bit with accel::lbvh_reference).
+/// costs, Morton bits and (H-)PLOC search radius. `keep_raw` also downloads the hierarchy before
+/// the leaves are chosen (the LBVH's and PLOC's are comparable bit for bit with
+/// accel::lbvh_reference and accel::ploc_reference).
 /// Throws bvhlab::Error without a GPU, for a CPU builder, or for a mesh past the BVH2 layout's
 /// 2^25 triangle references.
 GpuBuild build_on_gpu(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
@@ -59,11 +68,67 @@ GpuBuild build_on_gpu(const scene::TriangleMesh& mesh, accel::BuilderKind kind, 
 std::vector<GpuBuildTimes> time_gpu_builds(const scene::TriangleMesh& mesh, accel::BuilderKind kind,
                                            const accel::BuilderOptions& options, int runs, int warmup = 1);
 
+/// The TLAS of a two-level BVH2 structure rebuilt on the GPU, once per frame, from the instances'
+/// transforms; the BLAS stay as built. Each instance's world box is the box of its BLAS's frontier
+/// boxes' transformed corners (the nodes four levels below the root, as accel::build_two_level
+/// bounds instances), the instance records are written anew (inverse transforms in double, as the
+/// host inverts them), and a GPU builder makes the TLAS over the boxes with one instance per leaf
+/// (the traversal enters a leaf's first instance only). Nothing returns to the host but the
+/// layout's height and an error flag.
+class GpuTlasBuilder {
+public:
+    /// Uploads structure `s` (layout two-level) and what every rebuild reads. Throws
+    /// bvhlab::Error for another layout, or without a GPU.
+    explicit GpuTlasBuilder(const Structure& s);
+
+    /// Rebuilds the TLAS for `object_to_world` (one transform per instance, in the structure's
+    /// order) with GPU builder `kind` and its options (the leaf sizes are set to one instance).
+    /// Returns the device time of each stage (upload_ms: the transforms). Throws bvhlab::Error for
+    /// a wrong count, a CPU builder, or a singular or non-finite transform or world box (the
+    /// structure then keeps its last TLAS and instance records).
+    GpuBuildTimes rebuild(const std::vector<scene::Transform>& object_to_world, accel::BuilderKind kind,
+                          const accel::BuilderOptions& options = {});
+
+    /// The structure on the device with the last TLAS, for make_gpu_tracer.
+    std::shared_ptr<const DeviceStructure> device() const { return device_; }
+    /// The last TLAS downloaded: nodes, instance ids (tri_ids), depth; no triangles.
+    accel::Bvh2 download_tlas() const;
+    /// The instance records on the device, downloaded.
+    std::vector<accel::InstanceRecord> download_instances() const;
+    size_t instance_count() const { return instances_; }
+
+private:
+    std::shared_ptr<DeviceStructure> device_;
+    size_t instances_ = 0;
+    DeviceBuffer<uint32_t> blas_of_;         // each instance's BLAS
+    DeviceBuffer<uint32_t> first_id_;        // each instance's first scene-wide triangle id
+    DeviceBuffer<uint32_t> frontier_first_;  // each BLAS's first frontier box, and the end
+    DeviceBuffer<AABB> frontier_;
+    size_t tlas_nodes_ = 0;  // nodes of the last TLAS
+    uint32_t tlas_depth_ = 0;
+};
+
 namespace detail {
 /// The pipeline behind build_on_gpu, its arguments checked (gpu_builder.cu; runtime_stub.cpp
 /// without CUDA).
 GpuBuild gpu_build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
                    bool keep_raw);
+
+/// What a TLAS rebuild reads on the device.
+struct TlasInput {
+    const scene::Transform* object_to_world;  ///< one per instance
+    const uint32_t* blas;                     ///< each instance's BLAS
+    const uint32_t* first_id;                 ///< each instance's first scene-wide triangle id
+    const uint32_t* frontier_first;           ///< each BLAS's first frontier box, and the end
+    const AABB* frontier;                     ///< every BLAS's frontier boxes, in object space
+    accel::InstanceRecord* records;           ///< written whole
+    uint32_t* bad;                            ///< the lowest instance with a bad transform, or ~0
+};
+
+/// The TLAS pipeline over `instances` instances (gpu_builder.cu): the nodes and instance ids stay
+/// on the device (GpuBuild::nodes, tri_ids; host.depth), no host copy.
+GpuBuild gpu_build_tlas(uint32_t instances, const TlasInput& in, accel::BuilderKind kind,
+                        const accel::BuilderOptions& options);
 }  // namespace detail
 
 }  // namespace bvhlab::trav

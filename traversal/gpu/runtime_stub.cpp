@@ -32,6 +32,9 @@ void fill_device_bytes(void*, uint8_t, size_t, void*) { throw Error(kNoCuda); }
 GpuBuild gpu_build(const scene::TriangleMesh&, accel::BuilderKind, const accel::BuilderOptions&, bool) {
     throw Error(kNoCuda);
 }
+GpuBuild gpu_build_tlas(uint32_t, const TlasInput&, accel::BuilderKind, const accel::BuilderOptions&) {
+    throw Error(kNoCuda);
+}
 }  // namespace detail
 
 DeviceTimer::DeviceTimer() { throw Error(kNoCuda); }
