@@ -8,17 +8,17 @@
 #include <string>
 #include <vector>
 
+#include "accel/builders/builder.h"
 #include "accel/builders/lbvh_reference.h"
 #include "accel/core/stats.h"
 #include "accel/layouts/bvh2_convert.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
 #include "traversal/cpu/cpu_trace.h"
+#include "traversal/factory.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/protocol.h"
 #include "traversal/rays/raygen.h"
-#include "accel/builders/builder.h"
-#include "traversal/factory.h"
-#include "scene/io/obj_loader.h"
-#include "scene/io/procedural.h"
 
 using namespace bvhlab;
 

@@ -21,6 +21,7 @@
 #include "tests/support/edge_rays.h"
 #include "tests/support/gpu_support.h"
 #include "tests/support/test_support.h"
+#include "traversal/cpu/cpu_trace.h"
 #include "traversal/gpu/gpu_builder.h"
 #include "traversal/gpu/gpu_tracer.h"
 #include "traversal/gpu/registry.h"
@@ -341,6 +342,97 @@ void expect_tlas_sound(const accel::Bvh2& tlas, const accel::TwoLevelBvh& t,
 }
 
 }  // namespace
+
+namespace {
+
+/// `mesh`'s vertices moved by a travelling wave of phase `phase` (y up and down with x and z).
+std::vector<Vec3> waved(const scene::TriangleMesh& mesh, float phase) {
+    std::vector<Vec3> v = mesh.vertices;
+    const float d = mesh.diagonal();
+    for (Vec3& p : v) p.y += 0.05f * d * std::sin(6.0f * p.x / d + 4.0f * p.z / d + phase);
+    return v;
+}
+
+}  // namespace
+
+TEST(GpuRefit, DeformingMeshKeepsTightBoxesAndAgreesWithEmbree) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    for (const char* builder : {"binned", "sbvh", "hploc"}) {
+        SCOPED_TRACE(builder);
+        const scene::TriangleMesh base = scene::make_procedural(scene::ProceduralKind::kStructured, 6000, 4);
+        StructureSpec spec = gpu_spec(builder);
+        const AccelStructure as = build_structure(base, spec);
+        GpuRefitter refitter(as.structure, base);
+        if (std::string(builder) != "sbvh") {
+            // The same vertices again: boxes already tight, the same layout byte for byte (SBVH's
+            // leaf boxes are clipped at split planes, tighter than their triangles' boxes).
+            refitter.refit(base.vertices);
+            const accel::Bvh2 same = refitter.download();
+            EXPECT_TRUE(same_bytes(same.nodes, as.structure.bvh2.nodes));
+            EXPECT_TRUE(same_bytes(same.tris, as.structure.bvh2.tris));
+        }
+        for (float phase : {0.5f, 2.0f, 4.5f}) {
+            SCOPED_TRACE(phase);
+            scene::TriangleMesh mesh = base;
+            mesh.vertices = waved(base, phase);
+            const GpuBuildTimes t = refitter.refit(mesh.vertices);
+            EXPECT_GT(t.total_ms, 0.0);
+            const accel::Bvh2 b = refitter.download();
+            // Every leaf box is its triangles' box and every node box its children's, exactly.
+            std::vector<AABB> node_box(b.nodes.size(), AABB::empty());
+            for (size_t n = b.nodes.size(); n-- > 0;) {
+                const accel::Bvh2Node& node = b.nodes[n];
+                for (int k = 0; k < 2; ++k) {
+                    AABB expect = AABB::empty();
+                    if (node.child[k] >= 0) {
+                        ASSERT_GT(size_t(node.child[k]), n) << "children after their parent";
+                        expect = node_box[size_t(node.child[k])];
+                    } else if (k == 0 || node.child[1] != node.child[0]) {
+                        const uint32_t first = accel::Bvh2Node::leaf_first(node.child[k]);
+                        for (uint32_t i = first; i < first + accel::Bvh2Node::leaf_count(node.child[k]); ++i)
+                            expect.extend(mesh.triangle_bounds(b.tri_ids[i]));
+                    } else {
+                        continue;
+                    }
+                    const AABB got = node.child_box(k);
+                    ASSERT_EQ(std::memcmp(&got, &expect, sizeof got), 0) << "node " << n << " slot " << k;
+                    node_box[n].extend(got);
+                }
+            }
+            for (size_t k = 0; k < b.tris.size(); ++k) {
+                const uint32_t id = b.tri_ids[k];
+                const accel::WoopTriangle w =
+                    accel::make_woop_triangle(mesh.vertex(id, 0), mesh.vertex(id, 1), mesh.vertex(id, 2));
+                ASSERT_EQ(std::memcmp(&w, &b.tris[k], sizeof w), 0) << "triangle " << id;
+            }
+            // Traced on the GPU and on the CPU (the downloaded layout): Embree's hits of the
+            // moved mesh.
+            const EmbreeOracle oracle(mesh);
+            auto gpu = make_gpu_tracer(refitter.device(), default_kernel(Layout::kBvh2));
+            test::expect_protocol_agreement(mesh, oracle, framing_camera(mesh), 0.05f * mesh.diagonal(), 96, 72,
+                                            [&](const RaySet& set, std::vector<Hit>& hits) { gpu->trace(set, hits); });
+            test::expect_protocol_agreement(
+                mesh, oracle, framing_camera(mesh), 0.05f * mesh.diagonal(), 64, 48,
+                [&](const RaySet& set, std::vector<Hit>& hits) { trace_cpu(b, set.rays, set.query, hits); });
+        }
+        // Bad frames are refused, the structure unchanged.
+        const accel::Bvh2 before = refitter.download();
+        std::vector<Vec3> bad = waved(base, 1.0f);
+        bad[100].x = std::numeric_limits<float>::quiet_NaN();
+        try {
+            refitter.refit(bad);
+            FAIL() << "no error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("refit: vertex 100"), std::string::npos) << e.what();
+        }
+        bad.pop_back();
+        EXPECT_THROW(refitter.refit(bad), Error);
+        EXPECT_TRUE(same_bytes(refitter.download().nodes, before.nodes));
+    }
+    StructureSpec wide = gpu_spec("binned", "cwbvh");
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 100, 1);
+    EXPECT_THROW(GpuRefitter(build_structure(m, wide).structure, m), Error);
+}
 
 TEST(GpuTlas, RebuiltEachFrameAgreesWithEmbreeWhereverTheInstancesMove) {
     BVHLAB_SKIP_WITHOUT_GPU();

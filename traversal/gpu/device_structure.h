@@ -45,6 +45,10 @@ public:
     /// Device memory of every buffer the structure uploaded.
     size_t bytes() const;
 
+    /// A single-level BVH2 layout's nodes and triangles, writable, for a refit (GpuRefitter).
+    accel::Bvh2Node* bvh2_nodes_for_refit() { return bvh_nodes_.data(); }
+    accel::WoopTriangle* bvh2_tris_for_refit() { return bvh_tris_.data(); }
+
     /// A two-level BVH2 structure's TLAS replaced by one built on the device (GpuTlasBuilder):
     /// its nodes, instance ids, instance records and depth. Throws bvhlab::Error for another
     /// layout.

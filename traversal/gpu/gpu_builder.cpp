@@ -6,6 +6,7 @@
 
 #include "accel/core/check.h"
 #include "accel/layouts/two_level.h"
+#include "scene/domain.h"
 
 namespace bvhlab::trav {
 
@@ -112,6 +113,79 @@ std::vector<accel::InstanceRecord> GpuTlasBuilder::download_instances() const {
     std::vector<accel::InstanceRecord> r(instances_);
     detail::copy_to_host(r.data(), device_->two_level().instances, instances_ * sizeof(accel::InstanceRecord));
     return r;
+}
+
+GpuRefitter::GpuRefitter(const Structure& s, const scene::TriangleMesh& mesh) {
+    if (s.layout != Layout::kBvh2) throw Error("a refit on the GPU needs a single-level BVH2 structure, not " + s.name);
+    std::string why;
+    if (!gpu_available(&why)) throw Error("a refit runs on the GPU, and there is none: " + why);
+    const accel::Bvh2& b = s.bvh2;
+    for (uint32_t id : b.tri_ids)
+        if (id >= mesh.triangle_count())
+            throw Error("the structure names triangle " + std::to_string(id) + " and the mesh has " +
+                        std::to_string(mesh.triangle_count()));
+    std::vector<uint32_t> parents(b.nodes.size(), ~0u), leaves;
+    for (size_t n = 0; n < b.nodes.size(); ++n) {
+        const accel::Bvh2Node& node = b.nodes[n];
+        for (int k = 0; k < 2; ++k) {
+            if (node.child[k] >= 0)
+                parents[size_t(node.child[k])] = uint32_t(n) << 1 | uint32_t(k);
+            else if (k == 0 || node.child[1] != node.child[0])  // a root leaf's second slot repeats the first
+                leaves.push_back(uint32_t(n) << 1 | uint32_t(k));
+        }
+    }
+    vertex_count_ = mesh.vertices.size();
+    node_count_ = b.nodes.size();
+    tri_count_ = b.tri_ids.size();
+    depth_ = b.depth;
+    indices_.upload(mesh.indices);
+    parents_.upload(parents);
+    leaves_.upload(leaves);
+    visits_.resize(node_count_);
+    device_ = std::make_shared<DeviceStructure>(s);
+}
+
+GpuBuildTimes GpuRefitter::refit(const std::vector<Vec3>& vertices) {
+    if (vertices.size() != vertex_count_)
+        throw Error("a refit needs the mesh's " + std::to_string(vertex_count_) + " vertices, not " +
+                    std::to_string(vertices.size()));
+    for (size_t v = 0; v < vertices.size(); ++v)
+        if (const std::string p = scene::vec_problem(("refit: vertex " + std::to_string(v)).c_str(), vertices[v]);
+            !p.empty())
+            throw Error(p);
+    GpuBuildTimes t;
+    DeviceTimer upload;
+    upload.start();
+    DeviceBuffer<Vec3> verts(vertices);
+    t.upload_ms = upload.stop();
+    detail::fill_device_bytes(visits_.data(), 0, visits_.bytes());
+    const Bvh2View v = device_->bvh2();
+    const detail::RefitInput in{verts.data(),
+                                indices_.data(),
+                                v.tri_ids,
+                                parents_.data(),
+                                leaves_.data(),
+                                uint32_t(leaves_.size()),
+                                uint32_t(tri_count_),
+                                visits_.data(),
+                                device_->bvh2_nodes_for_refit(),
+                                device_->bvh2_tris_for_refit()};
+    t.total_ms = detail::gpu_refit(in);
+    t.hierarchy_ms = t.total_ms;
+    return t;
+}
+
+accel::Bvh2 GpuRefitter::download() const {
+    accel::Bvh2 b;
+    const Bvh2View v = device_->bvh2();
+    b.nodes.resize(node_count_);
+    b.tris.resize(tri_count_);
+    b.tri_ids.resize(tri_count_);
+    detail::copy_to_host(b.nodes.data(), v.nodes, node_count_ * sizeof(accel::Bvh2Node));
+    detail::copy_to_host(b.tris.data(), v.tris, tri_count_ * sizeof(accel::WoopTriangle));
+    detail::copy_to_host(b.tri_ids.data(), v.tri_ids, tri_count_ * sizeof(uint32_t));
+    b.depth = depth_;
+    return b;
 }
 
 }  // namespace bvhlab::trav

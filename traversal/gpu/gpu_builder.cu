@@ -537,6 +537,43 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
+// --- Refit of a BVH2 layout (GpuRefitter).
+
+__device__ AABB load_child_box(const Bvh2Node* n, int slot) {
+    const float* xy = slot == 0 ? &n->c0_lo_x : &n->c1_lo_x;
+    const float* z = slot == 0 ? &n->c0_lo_z : &n->c1_lo_z;
+    return {{__ldcg(xy), __ldcg(xy + 2), __ldcg(z)}, {__ldcg(xy + 1), __ldcg(xy + 3), __ldcg(z + 1)}};
+}
+
+/// From each leaf (a node's slot) upwards: the leaf's box from its triangles, then each node's
+/// box in its parent's slot, written by the second of its two children to finish.
+__global__ void refit_leaves(detail::RefitInput in) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= in.leaf_count) return;
+    uint32_t node = in.leaves[k] >> 1;
+    int slot = int(in.leaves[k] & 1);
+    const int32_t ref = in.nodes[node].child[slot];
+    const uint32_t first = Bvh2Node::leaf_first(ref), count = Bvh2Node::leaf_count(ref);
+    AABB box = AABB::empty();
+    for (uint32_t t = first; t < first + count; ++t) {
+        const uint32_t tri = in.tri_ids[t];
+        for (int v = 0; v < 3; ++v) box.extend(in.verts[in.idx[3 * tri + v]]);
+    }
+    in.nodes[node].set_child_box(slot, box);
+    if (in.nodes[node].child[0] == in.nodes[node].child[1]) return;  // a root leaf: one slot
+    for (;;) {
+        __threadfence();  // this thread's box before the counter
+        if (atomicAdd(&in.visits[node], 1u) == 0) return;
+        __threadfence();
+        const AABB b = merge(load_child_box(in.nodes + node, 0), load_child_box(in.nodes + node, 1));
+        const uint32_t p = in.parents[node];
+        if (p == kInvalid) return;
+        node = p >> 1;
+        slot = int(p & 1);
+        in.nodes[node].set_child_box(slot, b);
+    }
+}
+
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
 __global__ void copy_word(uint32_t* dst, const uint32_t* src) { *dst = *src; }
 
@@ -762,6 +799,18 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
 }  // namespace
 
 namespace detail {
+
+double gpu_refit(const RefitInput& in) {
+    Events ev(2);
+    ev.record(0);
+    refit_leaves<<<grid_for(in.leaf_count), kBlock>>>(in);
+    BVHLAB_CHECK_LAUNCH();
+    woop_maps<<<grid_for(in.tri_count), kBlock>>>(in.tri_count, in.tri_ids, in.verts, in.idx, in.tris);
+    BVHLAB_CHECK_LAUNCH();
+    ev.record(1);
+    ev.sync(1);
+    return ev.ms(0, 1);
+}
 
 GpuBuild gpu_build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
                    bool keep_raw) {

@@ -108,7 +108,55 @@ private:
     uint32_t tlas_depth_ = 0;
 };
 
+/// A single-level BVH2 refitted on the GPU after its mesh's vertices moved (the same triangles):
+/// each leaf's box from its triangles' new vertices, each node's box bottom-up (the second child
+/// to finish a node boxes it and goes on to its parent), and the Woop triangles anew; the tree's
+/// shape stays, so its quality is the old tree's over the new geometry (a rebuild restores it).
+/// For animated meshes, frame by frame.
+class GpuRefitter {
+public:
+    /// Uploads structure `s` (layout bvh2) and what every refit reads: the mesh's indices, each
+    /// node's parent and each leaf's slot. Throws bvhlab::Error for another layout, a mesh that
+    /// is not the structure's, or without a GPU.
+    GpuRefitter(const Structure& s, const scene::TriangleMesh& mesh);
+
+    /// Refits to `vertices` (as many as the mesh has, same indices). Returns the device time
+    /// (total_ms; upload_ms: the vertices). Throws bvhlab::Error for a wrong count or a vertex
+    /// outside bvhlab's numeric domain (nothing is changed then).
+    GpuBuildTimes refit(const std::vector<Vec3>& vertices);
+
+    /// The structure on the device, refitted, for make_gpu_tracer.
+    std::shared_ptr<const DeviceStructure> device() const { return device_; }
+    /// The refitted layout downloaded (nodes, Woop triangles, ids, depth).
+    accel::Bvh2 download() const;
+
+private:
+    std::shared_ptr<DeviceStructure> device_;
+    size_t vertex_count_ = 0, node_count_ = 0, tri_count_ = 0;
+    uint32_t depth_ = 0;
+    DeviceBuffer<uint32_t> indices_;
+    DeviceBuffer<uint32_t> parents_;  // each node's parent << 1 | its slot there; ~0 for the root
+    DeviceBuffer<uint32_t> leaves_;   // each leaf as its node << 1 | slot
+    DeviceBuffer<uint32_t> visits_;   // per node, zeroed before each refit
+};
+
 namespace detail {
+/// The refit kernels (gpu_builder.cu): leaves, then nodes bottom-up, then the Woop triangles.
+struct RefitInput {
+    const Vec3* verts;
+    const uint32_t* idx;
+    const uint32_t* tri_ids;
+    const uint32_t* parents;
+    const uint32_t* leaves;
+    uint32_t leaf_count;
+    uint32_t tri_count;
+    uint32_t* visits;
+    accel::Bvh2Node* nodes;
+    accel::WoopTriangle* tris;
+};
+/// Runs the refit on the device; returns its device time in milliseconds.
+double gpu_refit(const RefitInput& in);
+
 /// The pipeline behind build_on_gpu, its arguments checked (gpu_builder.cu; runtime_stub.cpp
 /// without CUDA).
 GpuBuild gpu_build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,

@@ -32,6 +32,7 @@ void fill_device_bytes(void*, uint8_t, size_t, void*) { throw Error(kNoCuda); }
 GpuBuild gpu_build(const scene::TriangleMesh&, accel::BuilderKind, const accel::BuilderOptions&, bool) {
     throw Error(kNoCuda);
 }
+double gpu_refit(const RefitInput&) { throw Error(kNoCuda); }
 GpuBuild gpu_build_tlas(uint32_t, const TlasInput&, accel::BuilderKind, const accel::BuilderOptions&) {
     throw Error(kNoCuda);
 }
