@@ -91,13 +91,20 @@ Bvh2 convert_bvh2_nodes(const BuildTree& tree) {
 BuildTree build_tree_from_bvh2(const Bvh2& bvh) {
     BVHLAB_CHECK(!bvh.nodes.empty(), "cannot convert an empty BVH2");
     BuildTree tree;
-    tree.prim_indices = bvh.tri_ids;
+    tree.prim_indices.reserve(bvh.tri_ids.size());
+    // Leaves are met depth first, left to right: their triangles are appended in that order.
     auto set = [&](size_t at, const Bvh2Node& n, int slot) {
         BuildNode& b = tree.nodes[at];
         b.bounds = n.child_box(slot);
         const int32_t c = n.child[slot];
-        b.first_index = c < 0 ? Bvh2Node::leaf_first(c) : 0;
-        b.prim_count = c < 0 ? Bvh2Node::leaf_count(c) : 0;
+        b.first_index = 0;
+        b.prim_count = 0;
+        if (c >= 0) return;
+        b.first_index = uint32_t(tree.prim_indices.size());
+        b.prim_count = Bvh2Node::leaf_count(c);
+        const uint32_t first = Bvh2Node::leaf_first(c);
+        tree.prim_indices.insert(tree.prim_indices.end(), bvh.tri_ids.begin() + first,
+                                 bvh.tri_ids.begin() + first + b.prim_count);
     };
     const Bvh2Node& root = bvh.nodes[0];
     tree.nodes.resize(1);
@@ -114,10 +121,9 @@ BuildTree build_tree_from_bvh2(const Bvh2& bvh) {
         const size_t first = tree.nodes.size();
         tree.nodes[at].first_index = uint32_t(first);
         tree.nodes.resize(first + 2);
-        for (int slot = 1; slot >= 0; --slot) {
-            set(first + size_t(slot), n, slot);
+        for (int slot = 0; slot < 2; ++slot) set(first + size_t(slot), n, slot);
+        for (int slot = 1; slot >= 0; --slot)
             if (n.child[slot] >= 0) todo.push_back({n.child[slot], first + size_t(slot)});
-        }
     }
     return tree;
 }

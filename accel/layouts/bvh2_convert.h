@@ -17,9 +17,11 @@ Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh);
 Bvh2 convert_bvh2_nodes(const BuildTree& tree);
 
 /// The BuildTree of a BVH2 (the binary tree that a GPU builder writes straight into the layout):
-/// node 0 the root, each interior node's two children adjacent, each leaf the same tri_ids range
-/// (prim_indices = tri_ids); the boxes are the layout's child boxes. Figures, validation and
-/// structure files work on it.
+/// node 0 the root, each interior node's two children adjacent (depth first), each leaf's
+/// triangles those of its tri_ids range, renumbered depth first so that every subtree's
+/// triangles are contiguous in prim_indices as a top-down builder leaves them (a GPU layout
+/// need not place leaves in that order); the boxes are the layout's child boxes. Figures,
+/// validation and structure files work on it.
 BuildTree build_tree_from_bvh2(const Bvh2& bvh);
 
 }  // namespace bvhlab::accel

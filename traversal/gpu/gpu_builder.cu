@@ -29,10 +29,6 @@ constexpr uint32_t kWarp = 32;
 constexpr uint32_t kHplocThreshold = kWarp / 2;
 constexpr int kBlock = 256;
 
-/// Subtrees of at most this many interior layout nodes are written by one thread, start to end;
-/// larger ones node by node, a level per launch.
-constexpr uint32_t kSubtreeInterior = 2;
-
 /// What the leaf choice and the layout need of a node: the triangles below it, the BVH2 interior
 /// nodes its subtree becomes (0: it becomes a leaf), its SAH cost (times its own half area), and
 /// the height of its subtree in the layout (interior nodes on its longest path).
@@ -406,12 +402,7 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
-// --- The BVH2 layout, top down, one level per launch.
-
-struct Mesh {
-    const Vec3* verts;
-    const uint32_t* idx;
-};
+// --- The BVH2 layout, flat: one scan over every node places them all.
 
 /// The triangle ids of leaf subtree `node` to tri_ids[first, ...), left to right (their Woop maps
 /// come after, from a flat kernel: the maps' double-precision math stays out of the tree walks).
@@ -432,7 +423,8 @@ __device__ void emit_leaf(uint32_t node, uint32_t first, uint32_t n, const uint2
     }
 }
 
-/// The Woop map of every triangle in leaf order.
+/// The Woop map of every triangle in leaf order (gathered: writing each map to its place from the
+/// mesh's order was slower, experiments/NOTES.md).
 __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, const Vec3* __restrict__ verts,
                           const uint32_t* __restrict__ idx, WoopTriangle* __restrict__ tris) {
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
@@ -455,85 +447,87 @@ struct LayoutInput {
     const AABB* boxes;
     const NodeMeta* meta;
     const uint32_t* sorted_ids;
-    Mesh mesh;
 };
 
-/// Writes layout node `slot` for hierarchy node `node` (interior, not a leaf): its children's
-/// boxes and references, their leaves' triangles. The left child's subtree takes the slots
-/// after `slot`, the right one's those after the left's. Calls next(child, first, slot) for
-/// each interior child.
-template <typename Next>
-__device__ void write_node(const LayoutInput& in, const Layout& out, uint32_t node, uint32_t first, uint32_t slot,
-                           Next&& next) {
-    const uint2 c = in.children[node];
-    const NodeMeta m[2] = {in.meta[c.x], in.meta[c.y]};
-    const uint32_t child[2] = {c.x, c.y};
-    const uint32_t firsts[2] = {first, first + m[0].count};
-    const uint32_t slots[2] = {slot + 1, slot + 1 + m[0].interior};
-    Bvh2Node o{};
-    for (int k = 0; k < 2; ++k) {
-        o.set_child_box(k, in.boxes[child[k]]);
-        o.child[k] = m[k].leaf() ? Bvh2Node::leaf_ref(firsts[k], m[k].count) : int32_t(slots[k]);
-    }
-    out.nodes[slot] = o;
-    for (int k = 0; k < 2; ++k) {
-        if (m[k].leaf())
-            emit_leaf(child[k], firsts[k], in.n, in.children, in.sorted_ids, out.tri_ids);
-        else
-            next(child[k], firsts[k], slots[k]);
-    }
+/// Every node's parent from the children (PLOC and H-PLOC record none while they merge).
+__global__ void parents_of(uint32_t n, const uint2* __restrict__ children, uint32_t* __restrict__ parent) {
+    const uint32_t x = n + blockIdx.x * blockDim.x + threadIdx.x;
+    if (x >= 2 * n - 1) return;
+    const uint2 c = children[x];
+    parent[c.x] = x;
+    parent[c.y] = x;
 }
 
-/// Writes the whole subtree below `node` (at most kSubtreeInterior interior nodes) in this
-/// thread, depth first.
-__device__ void write_subtree(const LayoutInput& in, const Layout& out, uint32_t node, uint32_t first, uint32_t slot) {
-    uint4 stack[kSubtreeInterior];
-    int sp = 0;
-    stack[sp++] = make_uint4(node, first, slot, 0);
-    while (sp) {
-        const uint4 t = stack[--sp];
-        write_node(in, out, t.x, t.y, t.z,
-                   [&](uint32_t c, uint32_t f, uint32_t sl) { stack[sp++] = make_uint4(c, f, sl, 0); });
+/// The layout orders nodes by id: the LBVH's root is its first interior node (n); PLOC and
+/// H-PLOC number nodes as they make them, so the root is the last and the order is reversed.
+struct LayoutOrder {
+    uint32_t total;  // 2n - 1 hierarchy nodes
+    bool reverse;
+    __device__ uint32_t operator()(uint32_t x) const { return reverse ? total - 1 - x : x; }
+};
+
+/// Per hierarchy node, in layout order: 1 << 32 for a layout node (interior, not collapsed into
+/// a leaf), its triangle count for a layout leaf, 0 for a node inside a leaf. A node is inside a
+/// leaf when an ancestor chose to be one, and only ancestors of at most max_leaf triangles can.
+__global__ void layout_flags(LayoutOrder order, uint32_t max_leaf, const uint32_t* __restrict__ parent,
+                             const NodeMeta* __restrict__ meta, unsigned long long* __restrict__ flags) {
+    const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
+    if (x >= order.total) return;
+    const NodeMeta m = meta[x];
+    bool live = true;
+    for (uint32_t y = x;;) {
+        const uint32_t p = parent[y];
+        if (p == kInvalid) break;
+        const NodeMeta pm = meta[p];
+        if (pm.count > max_leaf) break;
+        if (pm.leaf()) {
+            live = false;
+            break;
+        }
+        y = p;
     }
+    flags[order(x)] = !live ? 0ull : m.leaf() ? m.count : 1ull << 32;
 }
 
-/// After the hierarchy: the root and the layout's height, for the host to launch one level each;
-/// a root that is a leaf is written at once (both slots name it, the second behind an empty
-/// box), otherwise the root is the first level's one entry.
-__global__ void seed_layout(LayoutInput in, uint32_t* words, Layout out, uint4* level0, uint32_t* counts) {
-    const uint32_t root = words[0];
-    const NodeMeta rm = in.meta[root];
-    words[2] = max(rm.height, 1u);
-    if (!rm.leaf()) {
-        level0[0] = make_uint4(root, 0, 0, 0);
-        counts[0] = 1;
+/// The layout from the flags' exclusive scan: a layout node's slot is the number of layout
+/// nodes before it, a leaf's first triangle the triangles of the leaves before it. A root that
+/// is a leaf is node 0 with both slots naming it (the second behind an empty box).
+__global__ void layout_write(LayoutOrder order, LayoutInput in, const uint32_t* __restrict__ parent, Layout out,
+                             const unsigned long long* __restrict__ flags,
+                             const unsigned long long* __restrict__ scan) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= order.total) return;
+    const unsigned long long f = flags[k];
+    if (!f) return;
+    const uint32_t x = order(k);  // the order is its own inverse
+    const unsigned long long at = scan[k];
+    // A leaf's first triangle: the LBVH's subtrees are ranges of the sorted triangles, so its
+    // leftmost leaf (tri_ids are then the sorted ids, in Morton order); else the scan's count.
+    auto first_of = [&](uint32_t node, unsigned long long scanned) {
+        if (order.reverse) return uint32_t(scanned);
+        while (node >= in.n) node = in.children[node].x;
+        return node;
+    };
+    if (f >> 32) {
+        const uint2 c = in.children[x];
+        const uint32_t child[2] = {c.x, c.y};
+        Bvh2Node o{};
+        for (int j = 0; j < 2; ++j) {
+            const NodeMeta cm = in.meta[child[j]];
+            const unsigned long long cs = scan[order(child[j])];
+            o.set_child_box(j, in.boxes[child[j]]);
+            o.child[j] = cm.leaf() ? Bvh2Node::leaf_ref(first_of(child[j], cs), cm.count) : int32_t(cs >> 32);
+        }
+        out.nodes[at >> 32] = o;
         return;
     }
-    Bvh2Node o{};
-    o.set_child_box(0, in.boxes[root]);
-    o.set_child_box(1, AABB::empty());
-    o.child[0] = o.child[1] = Bvh2Node::leaf_ref(0, rm.count);
-    out.nodes[0] = o;
-    emit_leaf(root, 0, in.n, in.children, in.sorted_ids, out.tri_ids);
-}
-
-/// One level of the layout, top down: each entry (node, first triangle, layout slot) is
-/// written whole by its thread when its subtree is small, else its node is written and its
-/// interior children become the next level's entries. Slots are depth first (a node's left
-/// child in the next slot), whatever order the entries come in.
-__global__ void __launch_bounds__(kBlock)
-    write_level(LayoutInput in, Layout out, const uint4* __restrict__ level, uint4* __restrict__ next,
-                const uint32_t* counts, uint32_t* next_count) {
-    const uint32_t count = counts[0];
-    for (uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < count; k += gridDim.x * blockDim.x) {
-        const uint4 t = level[k];
-        if (in.meta[t.x].interior <= kSubtreeInterior) {
-            write_subtree(in, out, t.x, t.y, t.z);
-        } else {
-            write_node(in, out, t.x, t.y, t.z, [&](uint32_t c, uint32_t f, uint32_t sl) {
-                next[atomicAdd(next_count, 1u)] = make_uint4(c, f, sl, 0);
-            });
-        }
+    emit_leaf(x, first_of(x, at), in.n, in.children, in.sorted_ids, out.tri_ids);
+    if (parent[x] == kInvalid) {
+        Bvh2Node o{};
+        o.set_child_box(0, in.boxes[x]);
+        o.set_child_box(1, AABB::empty());
+        o.child[0] = o.child[1] = Bvh2Node::leaf_ref(0, in.meta[x].count);
+        out.nodes[0] = o;
     }
 }
 
@@ -638,15 +632,14 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
-    DeviceBuffer<uint32_t> parent(lbvh ? nodes : 0), visits(lbvh ? inner : 0), clusters(lbvh ? 0 : n);
+    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh ? inner : 0), clusters(lbvh ? 0 : n);
     DeviceBuffer<int32_t> parent_ids(kind == accel::BuilderKind::kHploc ? inner : 0);
     // PLOC's second cluster list, nearest neighbours, flags and their scan.
     DeviceBuffer<uint32_t> clusters_alt(ploc ? n : 0), nn(ploc ? n : 0);
     DeviceBuffer<unsigned long long> flags(ploc ? n : 0), flag_scan(ploc ? n : 0);
-    DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, the layout's height, PLOC's list length
+    DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, (unused), PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
-    DeviceBuffer<uint4> levels(2 * inner);  // the layout's entries of two levels
-    DeviceBuffer<uint32_t> level_counts(accel::kMaxTreeDepth + 1);
+    DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
     g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
     size_t reduce_bytes = 0, sort_bytes = 0, scan_bytes = 0;
@@ -655,20 +648,19 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     BVHLAB_CUDA_CHECK(cub::DeviceReduce::Reduce(nullptr, reduce_bytes, centres.data(), bounds.data(), int(n),
                                                 BoxUnion{}, AABB::empty()));
     BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
-    if (ploc)
-        BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, flags.data(), flag_scan.data(), int(n)));
+    BVHLAB_CUDA_CHECK(
+        cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
     DeviceBuffer<uint8_t> scratch(std::max({reduce_bytes, sort_bytes, scan_bytes}));
     g.peak_bytes = gpu_memory_use().current - base;
     uint32_t* root = words.data();
     uint32_t* node_counter = words.data() + 1;
+    detail::fill_device_bytes(parent.data(), 0xff, parent.bytes());
     if (lbvh) {
-        detail::fill_device_bytes(parent.data(), 0xff, parent.bytes());
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
     } else if (!ploc) {
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
-    detail::fill_device_bytes(level_counts.data(), 0, level_counts.bytes());
 
     ev.record(2);
     if (prims.mesh)
@@ -727,24 +719,19 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(6);
-    // The layout, one level per launch: the host reads the layout's height (one small copy, the
-    // pipeline's only round trip) and launches that many levels.
-    const unsigned level_grid = std::min<unsigned>(unsigned(gpu_sm_count()) * 8, grid_for(inner));
+    // The layout, flat: each node's place from a scan over every node's flag (no round trip).
     const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
-    const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids, Mesh{verts.data(), idx.data()}};
-    seed_layout<<<1, 1>>>(in, words.data(), out, levels.data(), level_counts.data());
-    BVHLAB_CHECK_LAUNCH();
-    uint32_t height = 0;
-    detail::copy_to_host(&height, words.data() + 2, sizeof height);
-    if (height > accel::kMaxTreeDepth)
-        throw Error("builder '" + std::string(accel::builder_name(kind)) + "' made a tree " + std::to_string(height) +
-                    " levels deep; the traversal stacks hold " + std::to_string(accel::kMaxTreeDepth));
-    for (uint32_t level = 0; level < height; ++level) {
-        const uint4* cur = levels.data() + (level % 2) * inner;
-        uint4* nxt = levels.data() + ((level + 1) % 2) * inner;
-        write_level<<<level_grid, kBlock>>>(in, out, cur, nxt, level_counts.data() + level,
-                                            level_counts.data() + level + 1);
+    const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
+    const LayoutOrder order{uint32_t(nodes), !lbvh};
+    if (!lbvh && n > 1) {
+        parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
+        BVHLAB_CHECK_LAUNCH();
     }
+    layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(), layout_flags_.data());
+    BVHLAB_CHECK_LAUNCH();
+    BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, layout_flags_.data(),
+                                                    layout_scan.data(), int(nodes)));
+    layout_write<<<grid_for(nodes), kBlock>>>(order, in, parent.data(), out, layout_flags_.data(), layout_scan.data());
     BVHLAB_CHECK_LAUNCH();
     if (prims.mesh) {
         woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
@@ -763,11 +750,15 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     t.total_ms = ev.ms(2, 7);
 
     // The host copy, and the nodes moved to a buffer of their exact size.
-    uint32_t w[3];  // root, node counter, height
+    uint32_t w[3];  // root, node counter, (unused)
     detail::copy_to_host(w, words.data(), sizeof w);
     NodeMeta root_meta;
     detail::copy_to_host(&root_meta, meta.data() + w[0], sizeof root_meta);
     const size_t node_count = root_meta.leaf() ? 1 : root_meta.interior;
+    const uint32_t height = std::max(root_meta.height, 1u);  // a root leaf is one node
+    if (height > accel::kMaxTreeDepth)
+        throw Error("builder '" + std::string(accel::builder_name(kind)) + "' made a tree " + std::to_string(height) +
+                    " levels deep; the traversal stacks hold " + std::to_string(accel::kMaxTreeDepth));
     g.node_count = node_count;
     g.host.depth = height;
     if (!prims.mesh) {  // a TLAS: the nodes stay in their buffer (room for n - 1)

@@ -10,9 +10,10 @@
 //    bottom-up LBVH in which each warp, at every node with more than 16 clusters below it,
 //    merges them by PLOC's nearest-neighbour rule (Meister & Bittner 2018) within a search
 //    radius, down to 16 (to 1 at the root).
-// Both end the same way on the device: each node's SAH cost decides, bottom-up, where leaves of
-// up to max_leaf triangles replace subtrees, and the BVH2 layout is written top down, a level
-// per launch (slots depth first, left child next to its parent) with Woop triangles in leaf order. The result
+// All three end the same way on the device: each node's SAH cost decides, bottom-up, where leaves of
+// up to max_leaf triangles replace subtrees, and the BVH2 layout is written flat: every node's
+// place from one scan over all nodes' flags (nodes in the order of their ids, the LBVH's leaves
+// in Morton order), then the Woop triangles in leaf order. The result
 // stays on the device for the kernels; a host copy is downloaded for the CPU tracers, the
 // figures and structure files.
 #pragma once
