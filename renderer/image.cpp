@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: MIT
 #include "renderer/image.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -130,19 +132,57 @@ void write_image(const Image& img, const std::string& path) {
     scene::commit_temporaries({write_image_temporary(img, path)});
 }
 
+namespace {
+
+/// Sends this thread's and the libraries' writes to stderr to /dev/null while it lives.
+class QuietStderr {
+public:
+    QuietStderr() {
+        std::fflush(stderr);
+        saved_ = ::dup(2);
+        const int null = ::open("/dev/null", O_WRONLY);
+        if (saved_ >= 0 && null >= 0) ::dup2(null, 2);
+        if (null >= 0) ::close(null);
+    }
+    ~QuietStderr() {
+        std::fflush(stderr);
+        if (saved_ >= 0) {
+            ::dup2(saved_, 2);
+            ::close(saved_);
+        }
+    }
+    QuietStderr(const QuietStderr&) = delete;
+    QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+    int saved_ = -1;
+};
+
+}  // namespace
+
 Image read_image(const std::string& path) {
     if (const std::string problem = scene::regular_file_problem(path); !problem.empty())
         throw Error("cannot read " + path + ": " + (problem == scene::kDoesNotExist ? "no such file" : problem));
     if (extension_of(path) == ".pfm") return read_pfm(path);
 #if defined(BVHLAB_HAVE_OIIO)
+    // libpng and OpenImageIO print their own copies of a read error (libpng straight to stderr,
+    // OpenImageIO when the reader is destroyed): the error is reported once, below.
+    const QuietStderr quiet;
     auto in = OIIO::ImageInput::open(path);
-    if (!in) throw Error("cannot read " + path + ": " + OIIO::geterror());
+    if (!in) {
+        const std::string why = OIIO::geterror();
+        throw Error("cannot read " + path + ": " + why.substr(0, why.find('\n')));
+    }
     const OIIO::ImageSpec& spec = in->spec();
     const int ch = spec.nchannels;
     if (spec.width <= 0 || spec.height <= 0 || ch <= 0) throw Error("cannot read " + path + ": an empty image");
     std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(ch));
-    if (!in->read_image(0, 0, 0, ch, OIIO::TypeDesc::FLOAT, px.data()))
-        throw Error("cannot read " + path + ": " + in->geterror());
+    if (!in->read_image(0, 0, 0, ch, OIIO::TypeDesc::FLOAT, px.data())) {
+        // The reader's errors, one per line (the PNG reader adds its own copies); the first says
+        // what went wrong.
+        const std::string why = in->geterror();
+        throw Error("cannot read " + path + ": " + why.substr(0, why.find('\n')));
+    }
     const std::string space = spec.get_string_attribute("oiio:ColorSpace");
     const bool srgb = space == "sRGB" || (space.empty() && spec.format.basetype == OIIO::TypeDesc::UINT8);
     auto linear = [srgb](float c) {

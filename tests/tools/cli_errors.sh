@@ -552,6 +552,19 @@ printf 'newmtl t\nKd 0.5 0.5 0.5\nmap_Kd broken.pfm\n' >"$tmp/texq/b.mtl"
 printf 'mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl t\nf 1/1 2/1 3/1\n' >"$tmp/texq/b.obj"
 printf 'PF\n2 2\n-1.0\nshort' >"$tmp/texq/broken.pfm"
 expect_error render-truncated-texture "broken[.]pfm is truncated" render "$tmp/texq/b.obj" --missing-textures warn -o "$tmp/x.pfm"
+# A truncated PNG: one line naming it (libpng and OpenImageIO print their own copies; without
+# OpenImageIO the build reads .pfm only and says so, also in one line).
+python3 -c "
+import struct, sys, zlib
+w = h = 64
+raw = b''.join(b'\\0' + bytes(sum(([x * 7 % 256, y * 5 % 256, 128] for x in range(w)), [])) for y in range(h))
+chunk = lambda t, d: struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d))
+png = b'\\x89PNG\\r\\n\\x1a\\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 2, 0, 0, 0)) + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b'')
+open(sys.argv[1], 'wb').write(png[: len(png) // 2])
+" "$tmp/texq/half.png"
+printf 'newmtl t\nKd 0.5 0.5 0.5\nmap_Kd half.png\n' >"$tmp/texq/h.mtl"
+printf 'mtllib h.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl t\nf 1/1 2/1 3/1\n' >"$tmp/texq/h.obj"
+expect_error render-truncated-png "cannot read .*half[.]png: " render "$tmp/texq/h.obj" -o "$tmp/x.pfm"
 expect_warned_render render-missing-texture-warn "warning: texture .*maps/gone.png does not exist" "$tmp/texq/q.obj" \
     "$tmp/warn_tex.pfm"
 expect_error render-cache-lens "--first-hit-cache needs camera rays that repeat" render "$data/cornell_box.obj" --first-hit-cache --aperture 2 -o "$tmp/x.pfm"
