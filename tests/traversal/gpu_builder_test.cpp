@@ -69,6 +69,16 @@ bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
+/// The GPU's hierarchy is the CPU reference's, bit for bit.
+void expect_same_hierarchy(const accel::RawHierarchy& gpu, const accel::RawHierarchy& cpu) {
+    EXPECT_EQ(gpu.root, cpu.root);
+    EXPECT_EQ(gpu.keys, cpu.keys);
+    EXPECT_EQ(gpu.sorted_ids, cpu.sorted_ids);
+    EXPECT_EQ(gpu.left, cpu.left);
+    EXPECT_EQ(gpu.right, cpu.right);
+    EXPECT_TRUE(same_bytes(gpu.boxes, cpu.boxes));
+}
+
 }  // namespace
 
 TEST(GpuBuilder, LbvhEqualsTheCpuReferenceBitForBit) {
@@ -78,14 +88,8 @@ TEST(GpuBuilder, LbvhEqualsTheCpuReferenceBitForBit) {
             SCOPED_TRACE(m.name + ", " + std::to_string(bits) + "-bit codes");
             accel::BuilderOptions o;
             o.morton_bits = bits;
-            const GpuBuild g = build_on_gpu(m.mesh, accel::BuilderKind::kLbvh, o, true);
-            const accel::RawHierarchy r = accel::lbvh_reference(m.mesh, bits);
-            EXPECT_EQ(g.raw.root, r.root);
-            EXPECT_EQ(g.raw.keys, r.keys);
-            EXPECT_EQ(g.raw.sorted_ids, r.sorted_ids);
-            EXPECT_EQ(g.raw.left, r.left);
-            EXPECT_EQ(g.raw.right, r.right);
-            EXPECT_TRUE(same_bytes(g.raw.boxes, r.boxes));
+            expect_same_hierarchy(build_on_gpu(m.mesh, accel::BuilderKind::kLbvh, o, true).raw,
+                                  accel::lbvh_reference(m.mesh, bits));
         }
     }
 }
@@ -98,13 +102,8 @@ TEST(GpuBuilder, PlocEqualsTheCpuReferenceBitForBit) {
             accel::BuilderOptions o;
             o.ploc_radius = radius;
             o.morton_bits = radius == 8 ? 60 : 30;
-            const GpuBuild g = build_on_gpu(m.mesh, accel::BuilderKind::kPloc, o, true);
-            const accel::RawHierarchy r = accel::ploc_reference(m.mesh, o.morton_bits, radius);
-            EXPECT_EQ(g.raw.root, r.root);
-            EXPECT_EQ(g.raw.sorted_ids, r.sorted_ids);
-            EXPECT_EQ(g.raw.left, r.left);
-            EXPECT_EQ(g.raw.right, r.right);
-            EXPECT_TRUE(same_bytes(g.raw.boxes, r.boxes));
+            expect_same_hierarchy(build_on_gpu(m.mesh, accel::BuilderKind::kPloc, o, true).raw,
+                                  accel::ploc_reference(m.mesh, o.morton_bits, radius));
         }
     }
 }
