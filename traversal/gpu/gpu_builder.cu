@@ -4,6 +4,7 @@
 // (traversal/CMakeLists.txt): the Woop maps then equal the host's bit for bit.
 #include "traversal/gpu/gpu_builder.h"
 
+#include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
@@ -269,6 +270,67 @@ __global__ void ploc_merge_round(uint32_t m, uint32_t base, const uint32_t* __re
         words[3] = uint32_t(total);
         words[1] = base + uint32_t(total >> 32);
     }
+}
+
+/// PLOC's last rounds in one block: from at most kPlocTail clusters down to the root, the same
+/// rounds as ploc_neighbours, ploc_flags and ploc_merge_round (the same node numbers), with the
+/// list in shared memory and no round trips to the host.
+constexpr uint32_t kPlocTail = 1024;
+__global__ void __launch_bounds__(kPlocTail)
+    ploc_tail(uint32_t m, uint32_t base, int radius, const uint32_t* __restrict__ list, AABB* boxes, uint2* children,
+              NodeMeta* meta, uint32_t* root, LeafRule rule) {
+    using Scan = cub::BlockScan<uint32_t, kPlocTail>;
+    __shared__ typename Scan::TempStorage scan_storage;
+    __shared__ uint32_t ids[kPlocTail], nn[kPlocTail];
+    __shared__ AABB bx[kPlocTail];
+    __shared__ uint32_t totals;
+    const uint32_t i = threadIdx.x;
+    if (i < m) {
+        ids[i] = list[i];
+        bx[i] = boxes[ids[i]];
+    }
+    __syncthreads();
+    while (m > 1) {
+        if (i < m) {
+            const uint32_t lo = i > uint32_t(radius) ? i - uint32_t(radius) : 0;
+            const uint32_t hi = min(i + uint32_t(radius), m - 1);
+            float best = __int_as_float(0x7f800000);  // +inf
+            uint32_t best_j = i;
+            for (uint32_t j = lo; j <= hi; ++j) {
+                if (j == i) continue;
+                const float a = merge(bx[i], bx[j]).half_area();
+                if (a < best) {
+                    best = a;
+                    best_j = j;
+                }
+            }
+            nn[i] = best_j;
+        }
+        __syncthreads();
+        const uint32_t j = i < m ? nn[i] : i;
+        const bool mutual = i < m && nn[j] == i;
+        const uint32_t makes = mutual && i < j, stays = i < m && (!mutual || i < j);
+        uint32_t before, total;
+        Scan(scan_storage).ExclusiveSum(makes << 16 | stays, before, total);  // both at most 1024
+        uint32_t id = i < m ? ids[i] : 0;
+        AABB box = i < m ? bx[i] : AABB::empty();
+        if (makes) {
+            const uint32_t node = base + (before >> 16);
+            box = merge(box, bx[j]);
+            make_node(node, id, ids[j], box, boxes, children, meta, rule);
+            id = node;
+        }
+        if (i == 0) totals = total;
+        __syncthreads();  // every cluster read before the list is rewritten
+        if (stays) {
+            ids[before & 0xffff] = id;
+            bx[before & 0xffff] = box;
+        }
+        __syncthreads();
+        m = totals & 0xffff;
+        base += totals >> 16;
+    }
+    if (i == 0) *root = ids[0];
 }
 
 // --- H-PLOC (Benthin et al. 2024, Algorithm 1).
@@ -569,7 +631,6 @@ __global__ void refit_leaves(detail::RefitInput in) {
 }
 
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
-__global__ void copy_word(uint32_t* dst, const uint32_t* src) { *dst = *src; }
 
 class Events {
 public:
@@ -691,12 +752,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                            rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
-        // Rounds until one cluster is left; the host reads each round's list length (a round
-        // trip per round: about 30 rounds for millions of triangles).
+        // Rounds over the whole list until a block can finish it; the host reads each round's
+        // list length (a round trip per round).
         uint32_t m = n, base = n;
         uint32_t* list = clusters.data();
         uint32_t* next = clusters_alt.data();
-        while (m > 1) {
+        while (m > kPlocTail) {
             ploc_neighbours<<<grid_for(m), kBlock>>>(m, options.ploc_radius, list, boxes.data(), nn.data());
             ploc_flags<<<grid_for(m), kBlock>>>(m, nn.data(), flags.data());
             BVHLAB_CUDA_CHECK(
@@ -710,7 +771,9 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             m = w[2];
             std::swap(list, next);
         }
-        copy_word<<<1, 1>>>(root, list);
+        ploc_tail<<<1, kPlocTail>>>(m, base, options.ploc_radius, list, boxes.data(), children.data(), meta.data(),
+                                    root, rule);
+        BVHLAB_CHECK_LAUNCH();
     } else {
         set_word<<<1, 1>>>(node_counter, n);
         hploc<Key><<<grid_for(n), kBlock>>>(n, sorted_keys, parent_ids.data(), clusters.data(), boxes.data(),
