@@ -73,6 +73,35 @@ nlohmann::json gltf_json(const std::string& path, bool binary) {
 }
 
 /// Refuses a glTF that requires an extension bvhlab does not implement; warns about used ones.
+/// A PLY header as the format defines it: "ply" on the first line, text lines, and an
+/// "end_header" line within the first MiB. Assimp's PLY reader loops forever on a header whose
+/// end_header line is broken by a NUL byte, so the header is checked before Assimp sees it.
+void check_ply_header(const std::string& path) {
+    constexpr size_t kMaxHeader = 1 << 20;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(path, "cannot be opened");
+    std::string head(kMaxHeader, '\0');
+    in.read(head.data(), std::streamsize(head.size()));
+    head.resize(size_t(in.gcount()));
+    if (head.rfind("ply\n", 0) != 0 && head.rfind("ply\r\n", 0) != 0)
+        fail(path, "is not a PLY file (its first line is not 'ply')");
+    size_t line = 0;
+    for (size_t i = 0; i < head.size(); ++i) {
+        const unsigned char c = static_cast<unsigned char>(head[i]);
+        if (c == '\n') {
+            std::string text = head.substr(line, i - line);
+            while (!text.empty() && (text.back() == '\r' || text.back() == ' ' || text.back() == '\t')) text.pop_back();
+            if (text == "end_header") return;
+            line = i + 1;
+        } else if ((c < 0x20 || c > 0x7e) && c != '\r' && c != '\t') {
+            fail(path, "has a byte that is not text (" + std::to_string(int(c)) + ") in its PLY header, at offset " +
+                           std::to_string(i));
+        }
+    }
+    fail(path, "has no end_header line ending its PLY header" +
+                   std::string(head.size() == kMaxHeader ? " in its first MiB" : ""));
+}
+
 void check_gltf_extensions(const std::string& path, bool binary, std::vector<std::string>* warnings) {
     const nlohmann::json doc = gltf_json(path, binary);
     if (!doc.is_object()) return;  // Assimp reports the damage
@@ -304,6 +333,7 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
                        "other formats `assimp listext` lists)");
     const bool gltf = ext == ".gltf" || ext == ".glb";
     if (gltf) check_gltf_extensions(path, ext == ".glb", warnings);
+    if (ext == ".ply") check_ply_header(path);
 
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     auto* io = new RecordingIO;  // the importer owns it

@@ -600,6 +600,14 @@ import json, sys
 r = json.loads(sys.stdin.readline())
 assert r["structure"] == "two-level-cwbvh/binned" and r["layout"] == "two-level-cwbvh" and r["instances"] == 3, r
 '; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL instanced-cwbvh: not a two-level-cwbvh build"; fi
+# PLY headers are checked before Assimp reads them: its reader loops forever on an end_header
+# line broken by a NUL byte (a fuzz finding).
+printf 'ply\nformat ascii 1.0\nend_hea\004\000\000\000der\n' >"$tmp/nul.ply"
+expect_error ply-header-nul "nul[.]ply': has a byte that is not text [(]4[)] in its PLY header, at offset 28" build "$tmp/nul.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\n' >"$tmp/noend.ply"
+expect_error ply-no-end-header "noend[.]ply': has no end_header line ending its PLY header" build "$tmp/noend.ply"
+printf 'solid x\n' >"$tmp/notply.ply"
+expect_error ply-not-ply "notply[.]ply': is not a PLY file" build "$tmp/notply.ply"
 expect_error instanced-out "--out writes a structure file, .* is built two-level .*--flatten" build "$data/instances.glb" \
     -o "$tmp/two-level.tree"
 [ ! -e "$tmp/two-level.tree" ] && pass=$((pass + 1)) || { fail=$((fail + 1)); echo "FAIL instanced-out wrote a file"; }
