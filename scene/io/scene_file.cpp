@@ -338,8 +338,26 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     auto* io = new RecordingIO;  // the importer owns it
     importer.SetIOHandler(io);
-    const aiScene* as =
-        importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+    // Read and validated first; each mesh's primitive types are then taken from its faces before
+    // Assimp triangulates: its PLY reader can declare polygons that a damaged file does not have,
+    // and the triangulation asserts (aborts) on such a mesh (a fuzz finding).
+    const aiScene* as = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+    if (as) {
+        for (unsigned m = 0; m < as->mNumMeshes; ++m) {
+            aiMesh& mesh = *as->mMeshes[m];
+            unsigned types = 0;
+            for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+                const unsigned k = mesh.mFaces[f].mNumIndices;
+                // An empty face counts as a point: dropped with the points, never triangulated.
+                types |= k <= 1   ? aiPrimitiveType_POINT
+                         : k == 2 ? aiPrimitiveType_LINE
+                         : k == 3 ? aiPrimitiveType_TRIANGLE
+                                  : aiPrimitiveType_POLYGON;
+            }
+            mesh.mPrimitiveTypes = types;
+        }
+        as = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_SortByPType);
+    }
     if (dependencies) {
         std::error_code ec;
         const fs::path self = fs::weakly_canonical(fs::absolute(path), ec);

@@ -606,6 +606,9 @@ printf 'ply\nformat ascii 1.0\nend_hea\004\000\000\000der\n' >"$tmp/nul.ply"
 expect_error ply-header-nul "nul[.]ply': has a byte that is not text [(]4[)] in its PLY header, at offset 28" build "$tmp/nul.ply"
 printf 'ply\nformat ascii 1.0\nelement vertex 3\n' >"$tmp/noend.ply"
 expect_error ply-no-end-header "noend[.]ply': has no end_header line ending its PLY header" build "$tmp/noend.ply"
+# A face of no vertices made Assimp's triangulation assert (abort); it is a point now, dropped.
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0\n' >"$tmp/emptyface.ply"
+expect_error ply-empty-face "emptyface[.]ply': has no triangles" build "$tmp/emptyface.ply"
 printf 'solid x\n' >"$tmp/notply.ply"
 expect_error ply-not-ply "notply[.]ply': is not a PLY file" build "$tmp/notply.ply"
 expect_error instanced-out "--out writes a structure file, .* is built two-level .*--flatten" build "$data/instances.glb" \
