@@ -338,23 +338,30 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     auto* io = new RecordingIO;  // the importer owns it
     importer.SetIOHandler(io);
-    // Read and validated first; each mesh's primitive types are then taken from its faces before
-    // Assimp triangulates: its PLY reader can declare polygons that a damaged file does not have,
-    // and the triangulation asserts (aborts) on such a mesh (a fuzz finding).
+    // Read and validated first; each mesh's empty faces are then removed and its primitive types
+    // taken from its faces before Assimp triangulates: its PLY reader keeps faces of no vertices
+    // and declares polygons a damaged file may not have, and the triangulation then asserts
+    // (aborts) and the sorting by type reads out of bounds (fuzz findings).
     const aiScene* as = importer.ReadFile(path, aiProcess_ValidateDataStructure);
     if (as) {
         for (unsigned m = 0; m < as->mNumMeshes; ++m) {
             aiMesh& mesh = *as->mMeshes[m];
-            unsigned types = 0;
+            unsigned types = 0, kept = 0;
             for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
-                const unsigned k = mesh.mFaces[f].mNumIndices;
-                // An empty face counts as a point: dropped with the points, never triangulated.
-                types |= k <= 1   ? aiPrimitiveType_POINT
+                aiFace& face = mesh.mFaces[f];
+                const unsigned k = face.mNumIndices;
+                if (k == 0) continue;
+                types |= k == 1   ? aiPrimitiveType_POINT
                          : k == 2 ? aiPrimitiveType_LINE
                          : k == 3 ? aiPrimitiveType_TRIANGLE
                                   : aiPrimitiveType_POLYGON;
+                // Moved down by swapping (the array still owns and frees every face's indices).
+                std::swap(mesh.mFaces[kept].mIndices, face.mIndices);
+                std::swap(mesh.mFaces[kept].mNumIndices, face.mNumIndices);
+                ++kept;
             }
-            mesh.mPrimitiveTypes = types;
+            mesh.mNumFaces = kept;
+            mesh.mPrimitiveTypes = types ? types : aiPrimitiveType_POINT;  // no faces: removed as points
         }
         as = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_SortByPType);
     }
