@@ -203,9 +203,29 @@ __global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2
 // --- PLOC (Meister & Bittner 2018): rounds over the whole cluster list, as
 // accel::ploc_reference makes them (bit for bit: the same areas, ties and node numbers).
 
-/// Nearest neighbour of each of the m clusters within `radius` places: the smallest merged
-/// box's half area, on equal areas the lower place. The block's clusters and the radius to each
-/// side are read once into shared memory.
+/// PLOC's nearest neighbour of cluster i of m within `radius` places: the smallest merged box's
+/// half area, on equal areas the lower place (so the globally closest pair is always mutual).
+/// box(j) gives cluster j's box.
+template <typename BoxOf>
+__device__ uint32_t ploc_nearest(uint32_t i, uint32_t m, int radius, BoxOf&& box) {
+    const AABB b = box(i);
+    const uint32_t lo = i > uint32_t(radius) ? i - uint32_t(radius) : 0;
+    const uint32_t hi = min(i + uint32_t(radius), m - 1);
+    float best = __int_as_float(0x7f800000);  // +inf
+    uint32_t best_j = i;
+    for (uint32_t j = lo; j <= hi; ++j) {
+        if (j == i) continue;
+        const float a = merge(b, box(j)).half_area();
+        if (a < best) {
+            best = a;
+            best_j = j;
+        }
+    }
+    return best_j;
+}
+
+/// The nearest neighbour of each of the m clusters (ploc_nearest). The block's clusters and the
+/// radius to each side are read once into shared memory.
 constexpr int kPlocMaxRadius = 16;
 __global__ void __launch_bounds__(kBlock) ploc_neighbours(uint32_t m, int radius, const uint32_t* __restrict__ clusters,
                                                           const AABB* __restrict__ boxes, uint32_t* __restrict__ nn) {
@@ -218,20 +238,7 @@ __global__ void __launch_bounds__(kBlock) ploc_neighbours(uint32_t m, int radius
     __syncthreads();
     const uint32_t i = blockIdx.x * kBlock + threadIdx.x;
     if (i >= m) return;
-    const AABB b = tile[threadIdx.x + radius];
-    const uint32_t lo = i > uint32_t(radius) ? i - uint32_t(radius) : 0;
-    const uint32_t hi = min(i + uint32_t(radius), m - 1);
-    float best = __int_as_float(0x7f800000);  // +inf
-    uint32_t best_j = i;
-    for (uint32_t j = lo; j <= hi; ++j) {
-        if (j == i) continue;
-        const float a = merge(b, tile[int64_t(j) - first]).half_area();
-        if (a < best) {
-            best = a;
-            best_j = j;
-        }
-    }
-    nn[i] = best_j;
+    nn[i] = ploc_nearest(i, m, radius, [&](uint32_t j) { return tile[int64_t(j) - first]; });
 }
 
 /// Per cluster, packed for one scan: the low word 1 if it stays in the list (not merged, or the
@@ -291,21 +298,7 @@ __global__ void __launch_bounds__(kPlocTail)
     }
     __syncthreads();
     while (m > 1) {
-        if (i < m) {
-            const uint32_t lo = i > uint32_t(radius) ? i - uint32_t(radius) : 0;
-            const uint32_t hi = min(i + uint32_t(radius), m - 1);
-            float best = __int_as_float(0x7f800000);  // +inf
-            uint32_t best_j = i;
-            for (uint32_t j = lo; j <= hi; ++j) {
-                if (j == i) continue;
-                const float a = merge(bx[i], bx[j]).half_area();
-                if (a < best) {
-                    best = a;
-                    best_j = j;
-                }
-            }
-            nn[i] = best_j;
-        }
+        if (i < m) nn[i] = ploc_nearest(i, m, radius, [&](uint32_t j) { return bx[j]; });
         __syncthreads();
         const uint32_t j = i < m ? nn[i] : i;
         const bool mutual = i < m && nn[j] == i;
