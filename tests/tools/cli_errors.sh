@@ -641,7 +641,16 @@ expect_error gltf-required-extension "draco.gltf': requires the glTF extension K
 sed 's|"uri": "data:[^"]*"|"uri": "missing.bin"|' "$data/instances.gltf" >"$tmp/nobuffer.gltf"
 expect_error gltf-missing-buffer "nobuffer.gltf': Assimp cannot read it" build --flatten "$tmp/nobuffer.gltf"
 head -c 1000 "$data/instances.glb" >"$tmp/truncated.glb"
-expect_error glb-truncated "truncated.glb': Assimp cannot read it" build --flatten "$tmp/truncated.glb"
+expect_error glb-truncated "truncated.glb': is a damaged GLB file: its header claims [0-9]* bytes and the file has 1000" \
+    build --flatten "$tmp/truncated.glb"
+python3 - "$data/instances.glb" "$tmp/long-chunk.glb" <<'PY'
+import struct, sys
+b = bytearray(open(sys.argv[1], "rb").read())
+struct.pack_into("<I", b, 12, 1953261448)  # the JSON chunk claims 1.95 GB
+open(sys.argv[2], "wb").write(b)
+PY
+expect_error glb-long-chunk "long-chunk.glb': is a damaged GLB file: its header claims 1953261468 bytes" \
+    build --flatten "$tmp/long-chunk.glb"
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n' \
     >"$tmp/points.ply"
 expect_error ply-no-faces "points.ply': has no triangles" build "$tmp/points.ply"
