@@ -262,6 +262,8 @@ expect_error kd-ct-nan "--kd-ct: 'nan' is not a finite number" build "$data/corn
 expect_error eye-is-target "^bvhlab: error: camera eye and target coincide$" rays "$data/cornell_box.obj" --type primary --eye 1 2 3 --target 1 2 3 -o "$tmp/x.rays"
 expect_error structure-folder "is a folder, not a structure file" build "$data/cornell_box.obj" --structure "$tmp"
 expect_error unknown-command "unknown command 'frobnicate' \(commands: build" frobnicate
+expect_error command-typo "unknown command 'bnech' \(did you mean bench\?\) \(commands: build" bnech
+expect_error scene-typo "no scene 'cornell-bx': not a file, .* \(did you mean cornell-box\?\)" build cornell-bx
 mkdir -p "$tmp/emptycat" "$tmp/evilcat"
 echo '[]' >"$tmp/emptycat/scenes.json"
 echo '{"scenes": {"x": {"file": "../../../etc/passwd"}}}' >"$tmp/evilcat/scenes.json"

@@ -26,5 +26,6 @@ void register_quality(CLI::App& app, Globals& g);
 void register_kernels(CLI::App& app, Globals& g);
 void register_cache(CLI::App& app, Globals& g);
 void register_render(CLI::App& app, Globals& g);
+void register_sweep(CLI::App& app, Globals& g);
 
 }  // namespace bvhlab::cli

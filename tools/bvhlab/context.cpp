@@ -262,10 +262,14 @@ Scene load_scene(const std::string& spec, const Globals& g) {
         }
         if (!entry) {
             file = spec;
-            if (!fs::exists(file))
+            if (!fs::exists(file)) {
+                std::vector<std::string> names;
+                for (const auto& c : cats)
+                    for (const auto& e : c.entries) names.push_back(e.name);
                 throw Error("no scene '" + spec + "': not a file, and not a name in " +
                             (std::getenv("BVHLAB_SCENES") ? "$BVHLAB_SCENES/scenes.json or " : "") +
-                            "data/scenes.json");
+                            "data/scenes.json" + did_you_mean(spec, names));
+            }
             s.name = file.stem().string();
             // A path inside a catalogue's folder picks up that entry's camera.
             std::error_code ec;
@@ -639,6 +643,37 @@ void emit(const nlohmann::json& record) {
     stamp("build_type", build_type());
     stamp("machine", machine);
     std::cout << j.dump() << std::endl;
+}
+
+std::string did_you_mean(const std::string& word, const std::vector<std::string>& known) {
+    const auto distance = [](const std::string& a, const std::string& b) {
+        std::vector<size_t> row(b.size() + 1);
+        for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+        for (size_t i = 1; i <= a.size(); ++i) {
+            size_t diag = row[0];
+            row[0] = i;
+            for (size_t j = 1; j <= b.size(); ++j) {
+                const size_t up = row[j];
+                row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+                diag = up;
+            }
+        }
+        return row[b.size()];
+    };
+    size_t best = std::max<size_t>(1, word.size() / 3) + 1;
+    std::vector<std::string> names;
+    for (const std::string& k : known) {
+        const size_t d = distance(word, k);
+        if (d < best) {
+            best = d;
+            names.clear();
+        }
+        if (d == best && std::find(names.begin(), names.end(), k) == names.end()) names.push_back(k);
+    }
+    if (names.empty() || names.size() > 3) return "";
+    std::string out = " (did you mean " + names[0];
+    for (size_t i = 1; i < names.size(); ++i) out += (i + 1 == names.size() ? " or " : ", ") + names[i];
+    return out + "?)";
 }
 
 }  // namespace bvhlab::cli

@@ -218,5 +218,10 @@ constexpr int kJsonSchemaVersion = 1;
 /// carries: schema, tool, commit, build_type, machine (and its own "record" kind).
 void emit(const nlohmann::json& j);
 
+/// " (did you mean X?)" or " (did you mean X or Y?)" for the names of `known` closest to `word`
+/// by edit distance (at most a third of its length, and at least 1 apart from the rest), or ""
+/// when none is close. For the errors about unknown names.
+std::string did_you_mean(const std::string& word, const std::vector<std::string>& known);
+
 }  // namespace cli
 }  // namespace bvhlab

@@ -36,11 +36,13 @@ int main(int argc, char** argv) {
     register_kernels(app, g);
     register_cache(app, g);
     register_render(app, g);
+    register_sweep(app, g);
     // Global flags are also accepted after the subcommand name.
     for (CLI::App* sub : app.get_subcommands({})) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
         sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
-        if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen") {
+        if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen" &&
+            sub->get_name() != "sweep") {
             sub->add_flag("--no-scene-cache", g.no_scene_cache, "parse scene files, bypassing the scene cache");
             sub->add_flag("--flatten", g.flatten, "make an instanced scene one mesh");
         }
@@ -51,13 +53,16 @@ int main(int argc, char** argv) {
         if (a == "--json" || a == "-q" || a == "--quiet" || a == "--no-scene-cache" || a == "--flatten") continue;
         if (a.empty() || a[0] == '-') break;
         std::string known;
+        std::vector<std::string> names;
         bool found = false;
         for (CLI::App* sub : app.get_subcommands({})) {
             known += (known.empty() ? "" : ", ") + sub->get_name();
+            names.push_back(sub->get_name());
             found = found || sub->get_name() == a;
         }
         if (!found) {
-            std::fprintf(stderr, "bvhlab: error: unknown command '%s' (commands: %s)\n", a.c_str(), known.c_str());
+            std::fprintf(stderr, "bvhlab: error: unknown command '%s'%s (commands: %s)\n", a.c_str(),
+                         did_you_mean(a, names).c_str(), known.c_str());
             return 2;
         }
         break;

@@ -15,6 +15,8 @@ namespace bvhlab::trav {
 
 /// True when this build has CUDA and a device is usable; otherwise `why` gets the reason.
 bool gpu_available(std::string* why = nullptr);
+/// The CUDA devices this process sees (after CUDA_VISIBLE_DEVICES); 0 without CUDA or a driver.
+int gpu_count();
 /// Device name, compute capability and SM count, e.g. "NVIDIA H100 80GB HBM3 (sm_90, 132 SMs)".
 std::string gpu_description();
 /// The NVIDIA kernel driver version (from /proc/driver/nvidia/version), else the CUDA driver

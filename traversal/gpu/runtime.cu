@@ -26,6 +26,11 @@ bool gpu_available(std::string* why) {
     return true;
 }
 
+int gpu_count() {
+    int n = 0;
+    return cudaGetDeviceCount(&n) == cudaSuccess ? n : 0;
+}
+
 std::string gpu_description() {
     int dev = 0;
     cudaDeviceProp p{};

@@ -17,6 +17,7 @@ bool gpu_available(std::string* why) {
     if (why) *why = kNoCuda;
     return false;
 }
+int gpu_count() { return 0; }
 std::string gpu_description() { return "none"; }
 std::string gpu_driver() { return "none"; }
 SmClock gpu_sm_clock() { return {}; }
