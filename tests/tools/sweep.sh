@@ -3,7 +3,8 @@
 # `bvhlab sweep` on CPU cells: every cell runs once and is keyed in the results; a second run
 # skips them; a sweep killed with -9 takes its running cell with it and resumes with no cell
 # run twice; shards and --merge; a failing cell is named and retried on the next run; bad specs
-# and options get one line and a non-zero exit.
+# and options get one line and a non-zero exit. And `bvhlab rerun` of records: side by side,
+# refused across commits and changed scenes, never over the old outputs.
 # Usage: sweep.sh BVHLAB
 set -u
 bin=$1
@@ -150,6 +151,35 @@ bad no-sbatch "cannot run '$tmp/no-sbatch'" "{$ok}" --slurm
 unset BVHLAB_SBATCH
 "$bin" sweep "$tmp/missing.json" 2>"$tmp/missing.err"
 check "a missing spec is one line" grep -q "sweep spec '.*missing.json': does not exist" "$tmp/missing.err"
+
+# rerun: a record's command line again, old and new side by side; refusals.
+"$bin" -q bench gen:soup:2000:4 --device cpu --types primary,diffuse --width 16 --height 16 --runs 1 --json >"$tmp/b.jsonl"
+"$bin" -q rerun "$tmp/b.jsonl" >"$tmp/rerun.txt"
+rc=$?
+check "rerun runs (rc $rc)" [ "$rc" -eq 0 ]
+check "rerun shows old and new Mrays/s for both ray types" [ "$(grep -c "gen:soup:2000:4 \(primary\|diffuse\) .*mrays_per_s" "$tmp/rerun.txt")" -eq 2 ]
+"$bin" -q rerun "$tmp/b.jsonl" --line 2 --json >"$tmp/rerun.json"
+check "rerun --line 2 --json: the diffuse record with its old figures" python3 -c "
+import json; rows = [json.loads(l) for l in open('$tmp/rerun.json')]
+assert len(rows) == 1 and rows[0]['ray_type'] == 'diffuse' and rows[0]['rerun_of']['figures']['mrays_per_s']['old'] > 0, rows"
+sed 's/"commit":"[^"]*"/"commit":"0000000"/' "$tmp/b.jsonl" >"$tmp/oldcommit.jsonl"
+"$bin" -q rerun "$tmp/oldcommit.jsonl" >/dev/null 2>"$tmp/oc.err"
+check "a record of another commit is refused" grep -q "a record comes from commit 0000000 and this bvhlab is .*--force" "$tmp/oc.err"
+"$bin" -q rerun "$tmp/oldcommit.jsonl" --force >"$tmp/oc.txt" 2>&1
+check "--force reruns it" grep -q "mrays_per_s" "$tmp/oc.txt"
+sed 's/"scene_hash":"[^"]*"/"scene_hash":"0123456789abcdef"/' "$tmp/b.jsonl" >"$tmp/oldscene.jsonl"
+"$bin" -q rerun "$tmp/oldscene.jsonl" >/dev/null 2>"$tmp/os.err"
+rc=$?
+check "a changed scene is not compared (rc $rc)" [ "$rc" -ne 0 ] && grep -q "not compared: the scene changed (scene_hash 0123456789abcdef then" "$tmp/os.err"
+"$bin" -q render gen:soup:500:1 --device cpu --width 8 --height 8 --spp 1 -o "$tmp/img.pfm" --json >"$tmp/render.jsonl"
+touch -d '2000-01-01' "$tmp/img.pfm"
+"$bin" -q rerun "$tmp/render.jsonl" >/dev/null
+check "rerun of a render leaves its image alone" [ "$(stat -c %Y "$tmp/img.pfm")" = "$(date -d '2000-01-01' +%s)" ]
+echo '{"record": "bench", "commit": "x"}' >"$tmp/noargv.jsonl"
+"$bin" -q rerun "$tmp/noargv.jsonl" 2>"$tmp/na.err"
+check "a record without a command line is one line" grep -q "the record names no command line" "$tmp/na.err"
+"$bin" -q rerun "$tmp/b.jsonl" --line 9 2>"$tmp/l9.err"
+check "a line past the end is named" grep -q "has no record on line 9 (it has 2 lines)" "$tmp/l9.err"
 
 echo "sweep.sh: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

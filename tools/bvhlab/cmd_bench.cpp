@@ -99,7 +99,10 @@ void register_bench(CLI::App& app, Globals& g) {
                     j["work_counted_by"] = "the structure's shared traversal on the CPU, same rays";
                 }
                 if (!protocol.is_null()) j["protocol"] = protocol;
-                if (from_file) j["ray_file"] = o->rays_file;
+                if (from_file) {
+                    j["ray_file"] = o->rays_file;
+                    j["ray_file_hash"] = file_hash(o->rays_file);
+                }
                 report(j);
             }
         };

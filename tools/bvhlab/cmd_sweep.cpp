@@ -141,7 +141,8 @@ void submit_slurm(const sweep::Spec& spec, const std::vector<sweep::Cell>& todo,
         } catch (const Error& e) {
             throw Error(std::string("cannot run sbatch: ") + e.what());
         }
-        if (r.exit_code == 127) throw Error("cannot run '" + sbatch + "' (is Slurm installed? BVHLAB_SBATCH names another sbatch)");
+        if (r.exit_code == 127)
+            throw Error("cannot run '" + sbatch + "' (is Slurm installed? BVHLAB_SBATCH names another sbatch)");
         if (r.exit_code != 0)
             throw Error("sbatch refused the job (exit " + std::to_string(r.exit_code) + ")" +
                         (r.err_tail.empty() ? "" : ": " + r.err_tail));
@@ -165,10 +166,11 @@ void submit_slurm(const sweep::Spec& spec, const std::vector<sweep::Cell>& todo,
               {"merge_job", merge_id},
               {"script", script_path}});
     } else {
-        std::printf("sweep '%s': %zu cells submitted as Slurm array job %s (%d tasks), merge job %s; script %s\n"
-                    "progress: bvhlab sweep %s --results %s --status\n",
-                    spec.name.c_str(), todo.size(), array_id.c_str(), tasks, merge_id.c_str(), script_path.c_str(),
-                    spec.path.c_str(), results.c_str());
+        std::printf(
+            "sweep '%s': %zu cells submitted as Slurm array job %s (%d tasks), merge job %s; script %s\n"
+            "progress: bvhlab sweep %s --results %s --status\n",
+            spec.name.c_str(), todo.size(), array_id.c_str(), tasks, merge_id.c_str(), script_path.c_str(),
+            spec.path.c_str(), results.c_str());
     }
 }
 
@@ -211,10 +213,10 @@ void register_sweep(CLI::App& app, Globals& g) {
             throw Error("--shard runs one task's cells; it does not combine with --slurm, --merge or --status");
         sweep::Spec spec = sweep::read_spec(o->spec);
         check_options(app, spec);
-        const std::string results = o->results.empty()
-                                        ? (fs::path(o->spec).parent_path() / fs::path(o->spec).stem()).string() +
-                                              ".results.jsonl"
-                                        : o->results;
+        const std::string results =
+            o->results.empty()
+                ? (fs::path(o->spec).parent_path() / fs::path(o->spec).stem()).string() + ".results.jsonl"
+                : o->results;
         std::error_code ec;
         if (fs::exists(results) && fs::equivalent(results, o->spec, ec))
             throw Error("--results '" + results + "' is the spec file: the results would overwrite it");
@@ -267,8 +269,12 @@ void register_sweep(CLI::App& app, Globals& g) {
                 std::string line;
                 for (const std::string& a : c.args) line += " " + a;
                 if (g.json)
-                    emit({{"record", "sweep_cell"}, {"cell", c.index}, {"gpu", c.gpu}, {"done", progress.has(c.key)},
-                          {"argv", c.args}, {"key", c.key}});
+                    emit({{"record", "sweep_cell"},
+                          {"cell", c.index},
+                          {"gpu", c.gpu},
+                          {"done", progress.has(c.key)},
+                          {"argv", c.args},
+                          {"key", c.key}});
                 else
                     std::printf("cell %zu %s %s: bvhlab%s\n", c.index, c.gpu ? "gpu" : "cpu",
                                 progress.has(c.key) ? "done" : "to run", line.c_str());
@@ -307,12 +313,12 @@ void register_sweep(CLI::App& app, Globals& g) {
                             "gpu, --build-device gpu or a GPU builder, or the spec says \"device\": \"gpu\")");
         }
         if (!g.quiet)
-            std::fprintf(stderr, "[bvhlab] sweep '%s': %zu cells, %zu done, %zu to run here (%s)\n", spec.name.c_str(),
-                         cells.size(), cells.size() - todo.size(), mine.size(),
-                         ro.gpus.empty() ? ("CPU workers: " + std::to_string(o->jobs)).c_str()
-                                         : (std::to_string(ro.gpus.size()) + " GPU workers, " +
-                                            std::to_string(o->jobs) + " CPU")
-                                               .c_str());
+            std::fprintf(
+                stderr, "[bvhlab] sweep '%s': %zu cells, %zu done, %zu to run here (%s)\n", spec.name.c_str(),
+                cells.size(), cells.size() - todo.size(), mine.size(),
+                ro.gpus.empty()
+                    ? ("CPU workers: " + std::to_string(o->jobs)).c_str()
+                    : (std::to_string(ro.gpus.size()) + " GPU workers, " + std::to_string(o->jobs) + " CPU").c_str());
         const sweep::RunSummary sum = sweep::run(spec, mine, ro);
         if (g.json) {
             emit({{"record", "sweep"},
@@ -329,8 +335,9 @@ void register_sweep(CLI::App& app, Globals& g) {
             std::printf("sweep '%s': %zu cells ran, %zu failed, %zu already done; %.1f s; results in %s\n",
                         spec.name.c_str(), sum.ran, sum.failed, cells.size() - todo.size(), sum.seconds, out.c_str());
         }
-        if (sum.failed) throw Error(std::to_string(sum.failed) + " of " + std::to_string(mine.size()) +
-                                    " cells failed (their errors are above); run the sweep again to retry them");
+        if (sum.failed)
+            throw Error(std::to_string(sum.failed) + " of " + std::to_string(mine.size()) +
+                        " cells failed (their errors are above); run the sweep again to retry them");
     });
 }
 

@@ -157,7 +157,12 @@ void register_verify(CLI::App& app, Globals& g) {
                         std::vector<trav::Hit> ours;
                         t->trace(cs.set, ours);
                         check_one(cs, ours, tracer_fields(b, *t));
-                        if (!file->count()) rows.back()["protocol"] = protocol;
+                        if (!file->count()) {
+                            rows.back()["protocol"] = protocol;
+                        } else {
+                            rows.back()["ray_file"] = o->rays_file;
+                            rows.back()["ray_file_hash"] = file_hash(o->rays_file);
+                        }
                     }
                 }
             }

@@ -27,5 +27,6 @@ void register_kernels(CLI::App& app, Globals& g);
 void register_cache(CLI::App& app, Globals& g);
 void register_render(CLI::App& app, Globals& g);
 void register_sweep(CLI::App& app, Globals& g);
+void register_rerun(CLI::App& app, Globals& g);
 
 }  // namespace bvhlab::cli

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "accel/core/check.h"
+#include "accel/core/checksum.h"
 #include "renderer/render_scene.h"
 #include "scene/domain.h"
 #include "scene/io/obj_loader.h"
@@ -628,6 +629,25 @@ nlohmann::json base_record(const char* kind, const Scene& scene) {
             {"meshes", scene.meshes}};
 }
 
+namespace {
+std::vector<std::string>& command_line() {
+    static std::vector<std::string> argv;
+    return argv;
+}
+std::string& working_folder() {
+    static std::string cwd;
+    return cwd;
+}
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+    command_line().assign(argv + 1, argv + argc);
+    std::error_code ec;
+    working_folder() = fs::current_path(ec).string();
+}
+
+std::string file_hash(const std::string& path) { return accel::hash_hex(scene::hash_file(path)); }
+
 void emit(const nlohmann::json& record) {
     // The identifying fields every record carries (README, "JSON lines"), stamped here so that
     // no command can leave them out; a record that set one keeps its own value.
@@ -642,6 +662,10 @@ void emit(const nlohmann::json& record) {
     stamp("commit", git_commit());
     stamp("build_type", build_type());
     stamp("machine", machine);
+    if (!command_line().empty()) {
+        stamp("argv", command_line());
+        stamp("cwd", working_folder());
+    }
     std::cout << j.dump() << std::endl;
 }
 

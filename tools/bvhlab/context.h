@@ -218,6 +218,13 @@ constexpr int kJsonSchemaVersion = 1;
 /// carries: schema, tool, commit, build_type, machine (and its own "record" kind).
 void emit(const nlohmann::json& j);
 
+/// The command line and working folder every JSON line records ("argv", "cwd"), so that
+/// `bvhlab rerun` can repeat it; set once by main.
+void set_command_line(int argc, char** argv);
+
+/// A file's content hash as 16 hex digits (scene::hash_file), for records naming input files.
+std::string file_hash(const std::string& path);
+
 /// " (did you mean X?)" or " (did you mean X or Y?)" for the names of `known` closest to `word`
 /// by edit distance (at most a third of its length, and at least 1 apart from the rest), or ""
 /// when none is close. For the errors about unknown names.

@@ -10,8 +10,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -100,7 +100,8 @@ Spec read_spec(const std::string& path) {
     s.command = j["command"].get<std::string>();
     static const std::vector<std::string> commands{"bench", "verify", "build", "render", "quality"};
     if (std::find(commands.begin(), commands.end(), s.command) == commands.end())
-        bad_spec(path, "command '" + s.command + "' cannot be swept (it takes bench, verify, build, render or quality)");
+        bad_spec(path,
+                 "command '" + s.command + "' cannot be swept (it takes bench, verify, build, render or quality)");
     const auto strings = [&](const char* key, bool required) {
         std::vector<std::string> out;
         if (!j.contains(key)) {
@@ -109,7 +110,8 @@ Spec read_spec(const std::string& path) {
         }
         if (!j[key].is_array()) bad_spec(path, std::string("\"") + key + "\" must be a list of strings");
         for (const auto& e : j[key]) {
-            if (!e.is_string() && !e.is_number()) bad_spec(path, std::string("\"") + key + "\" holds " + e.dump() + ", not a string");
+            if (!e.is_string() && !e.is_number())
+                bad_spec(path, std::string("\"") + key + "\" holds " + e.dump() + ", not a string");
             out.push_back(value_text(e));
         }
         return out;
@@ -124,13 +126,15 @@ Spec read_spec(const std::string& path) {
         std::ifstream again(path);
         const nlohmann::ordered_json ordered = nlohmann::ordered_json::parse(again, nullptr, false);
         for (const auto& [name, values] : ordered["grid"].items()) {
-            if (name.rfind("-", 0) != 0) bad_spec(path, "grid axis '" + name + "' is not an option (options start with -)");
+            if (name.rfind("-", 0) != 0)
+                bad_spec(path, "grid axis '" + name + "' is not an option (options start with -)");
             if (!values.is_array() || values.empty())
                 bad_spec(path, "grid axis '" + name + "' needs a non-empty list of values");
             std::vector<nlohmann::json> vs;
             for (const auto& v : values) {
                 if (!v.is_string() && !v.is_number() && !v.is_boolean())
-                    bad_spec(path, "grid axis '" + name + "' holds " + v.dump() + " (values are strings, numbers or true/false)");
+                    bad_spec(path, "grid axis '" + name + "' holds " + v.dump() +
+                                       " (values are strings, numbers or true/false)");
                 if (v.is_number_float() && !std::isfinite(v.get<double>()))
                     bad_spec(path, "grid axis '" + name + "' holds a value that is not finite");
                 vs.push_back(nlohmann::json::parse(v.dump()));
@@ -144,7 +148,8 @@ Spec read_spec(const std::string& path) {
         }
     }
     for (const std::string& a : s.args)
-        if (a == "--json" || a == "-q" || a == "--quiet") bad_spec(path, "\"args\" holds " + a + ", which the sweep sets itself");
+        if (a == "--json" || a == "-q" || a == "--quiet")
+            bad_spec(path, "\"args\" holds " + a + ", which the sweep sets itself");
     if (j.contains("repetitions")) {
         if (!j["repetitions"].is_number_integer() || j["repetitions"].get<int64_t>() < 1 ||
             j["repetitions"].get<int64_t>() > 1000)
@@ -198,12 +203,13 @@ std::vector<Cell> expand(const Spec& spec) {
             c.args.push_back("--json");
             c.args.push_back("-q");
             c.label = label + (spec.repetitions > 1 ? " (rep " + std::to_string(rep + 1) + ")" : "");
-            c.key = nlohmann::json{{"command", spec.command},
-                                   {"scene", c.scene},
-                                   {"options", options},
-                                   {"args", spec.args},
-                                   {"rep", rep}}
-                        .dump();
+            c.key = nlohmann::json{
+                {"command", spec.command},
+                {"scene", c.scene},
+                {"options", options},
+                {"args", spec.args},
+                {"rep",
+                 rep}}.dump();
             cells.push_back(std::move(c));
         }
     }
@@ -244,7 +250,8 @@ Progress read_progress(const std::string& results, const std::string& commit) {
             if (j.is_discarded() || !j.is_object()) {
                 // A line cut short by a full disk or a kill is the last one; anything else is damage.
                 if (in.peek() == EOF) {
-                    std::fprintf(stderr, "[bvhlab] warning: '%s': line %zu is not a JSON object (a cut-off write?); ignored\n",
+                    std::fprintf(stderr,
+                                 "[bvhlab] warning: '%s': line %zu is not a JSON object (a cut-off write?); ignored\n",
                                  f.c_str(), number);
                     continue;
                 }
@@ -386,8 +393,12 @@ RunSummary run(const Spec& spec, const std::vector<Cell>& cells, const RunOption
                         why = "printed a line that is not a JSON object";
                         break;
                     }
-                    j["sweep"] = {{"key", c.key},   {"spec", spec.name},       {"cell", c.index},
-                                  {"rep", c.rep},   {"argv", c.args},          {"seconds", secs},
+                    j["sweep"] = {{"key", c.key},
+                                  {"spec", spec.name},
+                                  {"cell", c.index},
+                                  {"rep", c.rep},
+                                  {"argv", c.args},
+                                  {"seconds", secs},
                                   {"gpu", gpu.empty() ? nlohmann::json() : nlohmann::json(gpu)}};
                     lines += j.dump() + "\n";
                     ++records;
@@ -407,13 +418,14 @@ RunSummary run(const Spec& spec, const std::vector<Cell>& cells, const RunOption
                 ++sum.ran;
             } else {
                 ++sum.failed;
-                std::fprintf(stderr, "[bvhlab] sweep: cell %zu failed (%s): %s\n", c.index, c.label.c_str(), why.c_str());
+                std::fprintf(stderr, "[bvhlab] sweep: cell %zu failed (%s): %s\n", c.index, c.label.c_str(),
+                             why.c_str());
             }
             const size_t finished = sum.ran + sum.failed;
             if (!opts.quiet) {
                 const double t = elapsed();
-                std::fprintf(stderr, "[bvhlab] sweep: %zu of %zu cells (%zu failed), %s, about %s left: %s%s\n", finished,
-                             cells.size(), sum.failed, format_duration(t).c_str(),
+                std::fprintf(stderr, "[bvhlab] sweep: %zu of %zu cells (%zu failed), %s, about %s left: %s%s\n",
+                             finished, cells.size(), sum.failed, format_duration(t).c_str(),
                              format_duration(t / double(finished) * double(cells.size() - finished)).c_str(),
                              c.label.c_str(), gpu.empty() ? "" : (" on GPU " + gpu).c_str());
             }
@@ -421,7 +433,8 @@ RunSummary run(const Spec& spec, const std::vector<Cell>& cells, const RunOption
     };
     std::vector<std::thread> threads;
     if (!gpu_queue.empty())
-        for (const std::string& g : opts.gpus) threads.emplace_back(worker, std::cref(gpu_queue), std::ref(next_gpu), g);
+        for (const std::string& g : opts.gpus)
+            threads.emplace_back(worker, std::cref(gpu_queue), std::ref(next_gpu), g);
     if (!cpu_queue.empty())
         for (int j = 0; j < std::max(1, opts.jobs); ++j)
             threads.emplace_back(worker, std::cref(cpu_queue), std::ref(next_cpu), std::string());
@@ -441,9 +454,9 @@ size_t merge_parts(const std::string& results) {
     std::string text;
     const auto key_of = [](const nlohmann::json& j) {
         const auto s = j.find("sweep");
-        return (s != j.end() && s->is_object() && s->contains("key")) ? j.value("commit", std::string()) + "\n" +
-                                                                            (*s)["key"].dump()
-                                                                      : std::string();
+        return (s != j.end() && s->is_object() && s->contains("key"))
+                   ? j.value("commit", std::string()) + "\n" + (*s)["key"].dump()
+                   : std::string();
     };
     if (fs::exists(results)) {
         std::ifstream in(results);

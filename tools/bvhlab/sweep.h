@@ -49,11 +49,11 @@ std::vector<Cell> expand(const Spec& spec);
 /// What the results on disk say: the keys done at `commit`, from `results` and its shard parts
 /// (`results`.part-N).
 struct Progress {
-    std::vector<std::string> files;    ///< the files read
-    std::vector<std::string> done;     ///< keys of cells with records at this commit (sorted, unique)
-    size_t records = 0;                ///< JSON lines read
-    size_t other_commit_records = 0;   ///< of those, lines from another commit
-    size_t foreign_records = 0;        ///< lines that are not from a sweep cell
+    std::vector<std::string> files;   ///< the files read
+    std::vector<std::string> done;    ///< keys of cells with records at this commit (sorted, unique)
+    size_t records = 0;               ///< JSON lines read
+    size_t other_commit_records = 0;  ///< of those, lines from another commit
+    size_t foreign_records = 0;       ///< lines that are not from a sweep cell
     bool has(const std::string& key) const;
 };
 Progress read_progress(const std::string& results, const std::string& commit);
@@ -82,9 +82,9 @@ size_t merge_parts(const std::string& results);
 /// Runs a program (found on PATH when it has no '/') to its end; stdout captured, stderr's last
 /// non-empty line kept. extra_env entries ("NAME=value") replace inherited ones.
 struct ChildResult {
-    int exit_code = -1;   ///< the exit status, or 128 + signal
-    std::string out;      ///< everything it wrote on stdout
-    std::string err_tail; ///< its last non-empty stderr line
+    int exit_code = -1;    ///< the exit status, or 128 + signal
+    std::string out;       ///< everything it wrote on stdout
+    std::string err_tail;  ///< its last non-empty stderr line
 };
 ChildResult run_child(const std::string& program, const std::vector<std::string>& args,
                       const std::vector<std::string>& extra_env = {});
