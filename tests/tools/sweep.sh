@@ -152,6 +152,33 @@ unset BVHLAB_SBATCH
 "$bin" sweep "$tmp/missing.json" 2>"$tmp/missing.err"
 check "a missing spec is one line" grep -q "sweep spec '.*missing.json': does not exist" "$tmp/missing.err"
 
+# report: the grid's 16 cells are 8 measurements of 2 repetitions, each the median of its two.
+"$bin" report "$tmp/grid.results.jsonl" --out "$tmp/report" --baseline "binned leaf=1..2" >/dev/null
+rc=$?
+check "report runs (rc $rc)" [ "$rc" -eq 0 ]
+check "report: 8 medians of 2 runs, equal to the records'" python3 -c "
+import collections, json, statistics
+runs = collections.defaultdict(list)
+for line in open('$tmp/grid.results.jsonl'):
+    j = json.loads(line); runs[(j['scene'], j['config'])].append(j['mrays_per_s'])
+s = json.load(open('$tmp/report/summary.json'))['bench']
+assert len(s) == 8 and all(e['n'] == 2 for e in s), s
+for e in s:
+    assert abs(e['mrays_per_s'] - statistics.median(runs[(e['scene'], e['config'])])) < 1e-9, e
+"
+check "report.md has the table, the spread and the speed-up" python3 -c "
+t = open('$tmp/report/report.md').read()
+assert '| gen:soup:3000:1 |' in t and 'run-to-run spread' in t and 'Speed-up against cpu cpu-bvh2-stack [binned leaf=1..2' in t, t"
+check "report draws the plots" [ -s "$tmp/report/mrays-primary.png" ] && [ -s "$tmp/report/speedup.png" ]
+"$bin" report --compare "$tmp/grid.results.jsonl" "$tmp/sh.jsonl" --out "$tmp/cmp" >/dev/null
+check "report --compare: 8 measurements in both" grep -q "8 measurements in both" "$tmp/cmp/report.md"
+"$bin" report "$tmp/grid.results.jsonl" --out "$tmp/grid.json" 2>"$tmp/rep.err"
+check "report --out over a file is refused" grep -q "is a file, not a folder" "$tmp/rep.err"
+"$bin" report "$tmp/grid.results.jsonl" --out "$tmp/r3" --baseline nothing-like-it 2>"$tmp/rep.err"
+check "an unknown baseline names the tracers" grep -q "is not a tracer of these results (tracers: cpu cpu-bvh2-stack" "$tmp/rep.err"
+"$bin" report "$tmp/none.jsonl" --out "$tmp/r4" 2>"$tmp/rep.err"
+check "a missing result file is one line" grep -q "none.jsonl' does not exist" "$tmp/rep.err"
+
 # rerun: a record's command line again, old and new side by side; refusals.
 "$bin" -q bench gen:soup:2000:4 --device cpu --types primary,diffuse --width 16 --height 16 --runs 1 --json >"$tmp/b.jsonl"
 "$bin" -q rerun "$tmp/b.jsonl" >"$tmp/rerun.txt"

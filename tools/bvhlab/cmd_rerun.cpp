@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 
 /// The figures compared, in this order, where both records have them.
-const char* const kFigures[] = {"mrays_per_s", "median_ms", "build_ms", "sah",         "epo",
+const char* const kFigures[] = {"mrays_per_s", "median_ms", "build_ms", "sah",        "epo",
                                 "nodes",       "leaves",    "depth",    "mismatches", "ties"};
 
 /// Options whose value is a file the command writes: a rerun writes them into a scratch folder.
@@ -93,7 +93,8 @@ void register_rerun(CLI::App& app, Globals& g) {
     };
     auto o = std::make_shared<Options>();
     CLI::App* sub = app.add_subcommand(
-        "rerun", "repeat the command line of JSON records (a results file, or one record) and show old and new figures");
+        "rerun",
+        "repeat the command line of JSON records (a results file, or one record) and show old and new figures");
     sub->add_option("RECORDS", o->source, "a file of JSON lines from bvhlab, or one JSON record as text")->required();
     sub->add_option("--line", o->line, "rerun only the record on this line of the file (1 = first)")
         ->check(CLI::Range(1, 1 << 30));
@@ -131,7 +132,8 @@ void register_rerun(CLI::App& app, Globals& g) {
                         " command line (\"argv\"): it was written by a bvhlab older than the records that name "
                         "their command line, and cannot be rerun exactly");
         if (without_argv)
-            std::fprintf(stderr, "[bvhlab] warning: %zu of %zu records name no command line (older bvhlab) and are not rerun\n",
+            std::fprintf(stderr,
+                         "[bvhlab] warning: %zu of %zu records name no command line (older bvhlab) and are not rerun\n",
                          without_argv, records.size());
         for (const Group& gr : groups) {
             const std::string commit = gr.records.front().value("commit", std::string("unknown"));
@@ -189,7 +191,8 @@ void register_rerun(CLI::App& app, Globals& g) {
             std::vector<bool> used(fresh.size(), false);
             for (const nlohmann::json& old : gr.records) {
                 size_t k = 0;
-                while (k < fresh.size() && (used[k] || !fresh[k].is_object() || signature(fresh[k]) != signature(old))) ++k;
+                while (k < fresh.size() && (used[k] || !fresh[k].is_object() || signature(fresh[k]) != signature(old)))
+                    ++k;
                 if (k == fresh.size()) {
                     std::fprintf(stderr, "[bvhlab] warning: the rerun printed no record matching '%s'\n",
                                  signature(old).c_str());

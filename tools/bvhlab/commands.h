@@ -28,5 +28,6 @@ void register_cache(CLI::App& app, Globals& g);
 void register_render(CLI::App& app, Globals& g);
 void register_sweep(CLI::App& app, Globals& g);
 void register_rerun(CLI::App& app, Globals& g);
+void register_report(CLI::App& app, Globals& g);
 
 }  // namespace bvhlab::cli

@@ -39,12 +39,13 @@ int main(int argc, char** argv) {
     register_render(app, g);
     register_sweep(app, g);
     register_rerun(app, g);
+    register_report(app, g);
     // Global flags are also accepted after the subcommand name.
     for (CLI::App* sub : app.get_subcommands({})) {
         sub->add_flag("--json", g.json, "print one JSON object per line on stdout");
         sub->add_flag("-q,--quiet", g.quiet, "no progress on stderr");
         if (sub->get_name() != "cache" && sub->get_name() != "kernels" && sub->get_name() != "gen" &&
-            sub->get_name() != "sweep" && sub->get_name() != "rerun") {
+            sub->get_name() != "sweep" && sub->get_name() != "rerun" && sub->get_name() != "report") {
             sub->add_flag("--no-scene-cache", g.no_scene_cache, "parse scene files, bypassing the scene cache");
             sub->add_flag("--flatten", g.flatten, "make an instanced scene one mesh");
         }
