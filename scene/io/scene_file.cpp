@@ -109,6 +109,15 @@ void check_ply_header(const std::string& path) {
                    std::string(head.size() == kMaxHeader ? " in its first MiB" : ""));
 }
 
+/// Whether the file begins with PLY's magic line ("ply" and a line end).
+bool starts_as_ply(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char head[5] = {};
+    in.read(head, sizeof head);
+    const std::string h(head, size_t(in.gcount()));
+    return h.rfind("ply\n", 0) == 0 || h.rfind("ply\r\n", 0) == 0;
+}
+
 void check_gltf_extensions(const std::string& path, bool binary, std::vector<std::string>* warnings) {
     const nlohmann::json doc = gltf_json(path, binary);
     if (!doc.is_object()) return;  // Assimp reports the damage
@@ -340,7 +349,10 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
                        "other formats `assimp listext` lists)");
     const bool gltf = ext == ".gltf" || ext == ".glb";
     if (gltf) check_gltf_extensions(path, ext == ".glb", warnings);
-    if (ext == ".ply") check_ply_header(path);
+    // Assimp picks a reader by the file's first bytes when the extension's reader declines it, so
+    // a file of any extension that starts as a PLY file is checked as one (fuzz finding: a .gltf
+    // holding a damaged PLY header looped in Assimp's PLY reader).
+    if (ext == ".ply" || starts_as_ply(path)) check_ply_header(path);
 
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     auto* io = new RecordingIO;  // the importer owns it
@@ -368,7 +380,7 @@ InstancedScene load_assimp(const std::string& path, std::vector<std::string>* wa
                 ++kept;
             }
             mesh.mNumFaces = kept;
-            mesh.mPrimitiveTypes = types ? types : aiPrimitiveType_POINT;  // no faces: removed as points
+            mesh.mPrimitiveTypes = types ? types : unsigned(aiPrimitiveType_POINT);  // no faces: removed as points
         }
         as = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_SortByPType);
     }

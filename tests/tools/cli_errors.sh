@@ -655,6 +655,9 @@ expect_error glb-long-chunk "long-chunk.glb': is a damaged GLB file: its header 
     build --flatten "$tmp/long-chunk.glb"
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n' \
     >"$tmp/points.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\340\340\nend_header\n' >"$tmp/ply-inside.gltf"
+expect_error gltf-holding-ply "ply-inside.gltf': has a byte that is not text [(]224[)] in its PLY header" \
+    build --flatten "$tmp/ply-inside.gltf"
 expect_error ply-no-faces "points.ply': has no triangles" build "$tmp/points.ply"
 cp "$data/instances.glb" "$tmp/copy.glb"
 expect_error out-over-gltf "copy.glb. is this command.s input [(]the scene[)]" build --flatten "$tmp/copy.glb" -o "$tmp/copy.glb"
