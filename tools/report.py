@@ -351,8 +351,13 @@ def compare_section(a_recs, b_recs, names, out, plt):
     return lines, {"compare": {"a": names[0], "b": names[1], "measurements": len(common), "geomean": geo}}
 
 
+class Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, as every bvhlab error
+        fail(f"{message} (see bvhlab report --help)")
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="bvhlab report", description=__doc__.split("\n\n")[0])
+    ap = Parser(prog="bvhlab report", description=__doc__.split("\n\n")[0])
     ap.add_argument("results", nargs="*", help="result files (JSON lines from bvhlab --json or bvhlab sweep)")
     ap.add_argument("--out", required=True, help="folder for report.md, the plots and summary.json")
     ap.add_argument("--baseline", help="the tracer label that speed-ups are measured against (report.md lists them)")

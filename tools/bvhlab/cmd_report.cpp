@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // `bvhlab report RESULTS... --out DIR`: tables and plots from result files. The work is
 // tools/report.py (Python: matplotlib draws the plots); this command finds it and runs it with
-// the same arguments, so that `bvhlab report -- --help` and its errors are the script's.
+// the same arguments, so that `bvhlab report --help` and its errors are the script's.
 #include <unistd.h>
 
 #include <cerrno>
@@ -30,9 +30,10 @@ void register_report(CLI::App& app, Globals&) {
     CLI::App* sub = app.add_subcommand(
         "report",
         "merge result files into Markdown tables and plots: RESULTS... --out DIR [--baseline TRACER] "
-        "[--compare A B] [--no-plots] (Python with matplotlib; `bvhlab report -- --help` for the options)");
+        "[--compare A B] [--no-plots] (Python with matplotlib; `bvhlab report --help` lists the options)");
     sub->allow_extras();
     sub->prefix_command();
+    sub->set_help_flag();  // --help is the script's
     sub->callback([sub] {
         const std::string script = report_script();
         if (!fs::exists(script))
