@@ -658,6 +658,9 @@ printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty floa
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\340\340\nend_header\n' >"$tmp/ply-inside.gltf"
 expect_error gltf-holding-ply "ply-inside.gltf': has a byte that is not text [(]224[)] in its PLY header" \
     build --flatten "$tmp/ply-inside.gltf"
+printf 'ply\nformat ascii 1.0\nelement vertex 5000\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n' >"$tmp/ply-count.ply"
+expect_error ply-huge-count "ply-count.ply': has a PLY element 'vertex' of 5000 entries, more than the file's [0-9]+ bytes can hold" \
+    build "$tmp/ply-count.ply"
 expect_error ply-no-faces "points.ply': has no triangles" build "$tmp/points.ply"
 cp "$data/instances.glb" "$tmp/copy.glb"
 expect_error out-over-gltf "copy.glb. is this command.s input [(]the scene[)]" build --flatten "$tmp/copy.glb" -o "$tmp/copy.glb"
