@@ -5,7 +5,7 @@ bench.jsonl): every kernel's Mrays/s on the anchors' ray files, the best kernel 
 ray type against tinybvh's best (../shared/anchors/README.md) and Embree on the same host's
 cores, and the coherence report (primary -> diffuse slowdown, per-ray work).
 
-Usage: experiments/gpu_report.py BENCH.jsonl [--anchors ANCHORS_README.md] [--readme README.md]
+Usage: experiments/gpu_report.py BENCH.jsonl [--anchors ANCHORS_README.md] [--readme docs/results.md]
 Prints Markdown on stdout, or with --readme replaces the README's block between
 <!-- gpu-tables:begin --> and <!-- gpu-tables:end --> with it. Records whose check against Embree failed are listed as FAILED and
 never enter a best-of or a ratio."""

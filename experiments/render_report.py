@@ -21,7 +21,7 @@ What comes out:
   - PNG plots of the last three (matplotlib) and a PNG contact sheet of the renders.
 
 Usage:
-  experiments/render_report.py RUN_DIR [--readme README.md] [--figures experiments/results]
+  experiments/render_report.py RUN_DIR [--readme docs/results.md] [--figures experiments/results]
                                [--tag NAME]
 Without --readme the section goes to stdout. With it, the text between the README's
 '<!-- render-report:begin -->' and '<!-- render-report:end -->' lines is replaced.

@@ -27,7 +27,7 @@
 #             switches (SWITCH_SPP, default 256, three rounds; render_switches.jsonl): material
 #             sorting, the first-hit cache, no compaction; and compute-sanitizer memcheck of
 #             small renders.
-#             experiments/render_report.py turns OUT into the README's renderer section
+#             experiments/render_report.py turns OUT into docs/results.md's renderer section
 # GPU_TESTS: a gtest filter for the tests phase (default: all). BENCH_KERNELS: the kernels of
 # bvhbench and cwbench (default: all).
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
@@ -184,7 +184,7 @@ fi
 
 if has render; then
     # The renderer's experiment (issue 19), one run that experiments/render_report.py turns
-    # into the README's renderer section and its plots.
+    # into docs/results.md's renderer section and its plots.
     kernel=${RENDER_KERNEL:-dynamic-speculative-fma}
     switch_spp=${SWITCH_SPP:-256}
     mkdir -p /tmp/renders

@@ -291,7 +291,7 @@ else
     fail=$((fail + 1)); echo "FAIL build --layout cwbvh --cw-tris vertices --json"
 fi
 
-# The numeric domain (README): values Embree or float32 traversal cannot handle are refused by
+# The numeric domain (docs/bad-input.md): values Embree or float32 traversal cannot handle are refused by
 # name before any work (they aborted inside Embree, or gave empty or NaN images).
 expect_error domain-eye "the camera's eye [(]1e[+]19, 0, 0[)] is outside" verify "$data/cornell_box.obj" --eye 1e19 0 0 \
     --width 4 --height 4
@@ -396,7 +396,7 @@ keep = sys.argv[-1] == '--keep-checksum'
 vals = [float(v) if '.' in v or v == 'nan' else int(v) for v in sys.argv[5:len(sys.argv) - keep]]
 d = bytearray(open(src, 'rb').read())
 struct.pack_into('<' + fmt, d, 48 + off, *vals)
-if not keep:  # FNV-1a over 8-byte words of everything before the checksum (README, "File formats")
+if not keep:  # FNV-1a over 8-byte words of everything before the checksum (docs/formats.md)
     h, body = 1469598103934665603, d[:-8]
     for i in range(0, len(body) - len(body) % 8, 8):
         h = ((h ^ struct.unpack_from('<Q', body, i)[0]) * 1099511628211) % 2**64
@@ -496,7 +496,7 @@ if grep -q '"config":"sbvh leaf=1..4 ' "$tmp/cfg.json"; then
 else
     fail=$((fail + 1)); echo "FAIL bench-config: $(head -c 300 "$tmp/cfg.json")"
 fi
-# Every command's --json lines carry the identifying fields of the schema (README, "JSON lines").
+# Every command's --json lines carry the identifying fields of the schema (docs/formats.md, "JSON lines").
 check_schema() {
     local name=$1
     shift
