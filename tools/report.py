@@ -104,9 +104,11 @@ def labels_for(aggs):
         base = tracer_label(r)
         a["label"] = base
         if len(configs[base]) > 1:
-            split = [c.split() for c in configs[base]]
-            common = set.intersection(*(set(t) for t in split))
+            # The builder (a configuration's first word), and the settings that differ between
+            # configurations of that builder.
             toks = (r.get("config") or "").split()
+            same_builder = [c.split() for c in configs[base] if c.split()[:1] == toks[:1]]
+            common = set.intersection(*(set(t) for t in same_builder))
             a["label"] = f"{base} [{' '.join(t for i, t in enumerate(toks) if i == 0 or t not in common)}]"
     seen = collections.Counter((a["record"].get("scene"), a["record"].get("ray_type"), a["label"]) for a in aggs)
     clash = {lab for (_, _, lab), n in seen.items() if n > 1}
@@ -125,7 +127,11 @@ def fmt(v, digits=1):
 
 
 def md_table(header, rows):
-    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" if i == 0 else "---:" for i in range(len(header))) + "|"]
+    """A Markdown table; columns whose cells are all numbers are right-aligned."""
+    def numeric(i):
+        cells = [str(r[i]) for r in rows if i < len(r) and str(r[i])]
+        return bool(cells) and all(c[0].isdigit() or c[0] in "-+." for c in cells)
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---:" if numeric(i) else "---" for i in range(len(header))) + "|"]
     out += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
     return "\n".join(out)
 
@@ -158,6 +164,30 @@ def bench_section(records, out, baseline, plt):
         lines.append("One run per measurement (no repetitions: the run-to-run spread is not known).")
     lines.append("")
     cell = {(a["record"].get("scene"), a["record"].get("ray_type"), a["label"]): a for a in aggs}
+    if baseline and baseline not in labels:
+        # A part of one label is enough ("binned leaf=1..8", or a kernel's name).
+        matches = [lab for lab in labels if baseline in lab]
+        if len(matches) != 1:
+            fail(f"--baseline '{baseline}' {'names several tracers' if matches else 'is not a tracer'} of these "
+                 f"results (tracers: {'; '.join(matches or labels)})")
+        baseline = matches[0]
+    # The headline: the fastest tracer of each scene and ray type.
+    best_rows = []
+    for t in types:
+        for s in scenes:
+            here = [a for (sc, ty, _), a in cell.items() if sc == s and ty == t]
+            if not here:
+                continue
+            b = max(here, key=lambda a: a["median"])
+            row = [s, t, b["label"], fmt(b["median"]) + (f" ±{100 * b['spread'] / 2:.1f}%" if b["spread"] else "")]
+            if baseline:
+                base = cell.get((s, t, baseline))
+                row += [fmt(base["median"]) if base else "", f"{b['median'] / base['median']:.2f}×" if base else ""]
+            best_rows.append(row)
+    header = ["scene", "rays", "fastest tracer", "Mrays/s"] + ([baseline, "speed-up"] if baseline else [])
+    headline = ["### Fastest tracer per scene and ray type", "", md_table(header, best_rows), ""]
+    lines += headline
+    summary["_headline"] = [lines[2]] + [""] + headline
     for t in types:
         lines += [f"### {t} rays", ""]
         rows = []
@@ -165,7 +195,7 @@ def bench_section(records, out, baseline, plt):
             row = [s]
             for lab in labels:
                 a = cell.get((s, t, lab))
-                row.append(fmt(a["median"]) + (f" ±{100 * a['spread'] / 2:.0f}%" if a and a["spread"] else "") if a else "")
+                row.append(fmt(a["median"]) + (f" ±{100 * a['spread'] / 2:.1f}%" if a and a["spread"] else "") if a else "")
             rows.append(row)
         lines += [md_table(["scene"] + labels, rows), ""]
     for a in aggs:
@@ -175,7 +205,7 @@ def bench_section(records, out, baseline, plt):
                                  "config": r.get("config"), "commit": r.get("commit"), "gpu": r.get("gpu")})
     if plt:
         for t in types:
-            fig, ax = plt.subplots(figsize=(max(6, 0.5 * len(scenes) * max(1, len(labels))) + 4, 4))
+            fig, ax = plt.subplots(figsize=(min(12, max(5, 0.22 * len(scenes) * max(1, len(labels)))) + 4, 4.5))
             width = 0.8 / max(1, len(labels))
             for i, lab in enumerate(labels):
                 vals = [cell[(s, t, lab)]["median"] if (s, t, lab) in cell else 0 for s in scenes]
@@ -190,13 +220,7 @@ def bench_section(records, out, baseline, plt):
             fig.savefig(os.path.join(out, name), dpi=110)
             plt.close(fig)
             lines += [f"![Mrays/s, {t} rays]({name})", ""]
-    if baseline and baseline not in labels:
-        # A part of one label is enough ("binned leaf=1..8", or a kernel's name).
-        matches = [lab for lab in labels if baseline in lab]
-        if len(matches) != 1:
-            fail(f"--baseline '{baseline}' {'names several tracers' if matches else 'is not a tracer'} of these "
-                 f"results (tracers: {'; '.join(matches or labels)})")
-        baseline = matches[0]
+            summary.setdefault("_plots", []).append((f"Mrays/s, {t} rays", name))
     if baseline:
         lines += [f"### Speed-up against {baseline}", ""]
         others = [lab for lab in labels if lab != baseline]
@@ -364,6 +388,9 @@ def main(argv=None):
     ap.add_argument("--compare", nargs=2, metavar=("A", "B"), help="two result files: B's figures against A's")
     ap.add_argument("--title", default="bvhlab results")
     ap.add_argument("--no-plots", action="store_true", help="tables only (no matplotlib needed)")
+    ap.add_argument("--readme", metavar="FILE",
+                    help="also write the headline (machines, spread, fastest tracer per scene, the plots) into FILE "
+                         "between its '<!-- bvhlab-report:begin -->' and '<!-- bvhlab-report:end -->' lines")
     args = ap.parse_args(argv)
     if not args.results and not args.compare:
         fail("give result files, or --compare A B")
@@ -387,7 +414,7 @@ def main(argv=None):
     if args.results:
         records = load(args.results)
         commits = sorted({r.get("commit", "?") for r in records})
-        lines += [f"{len(records)} records from {len(args.results)} files; commits {', '.join(commits)}; "
+        lines += [f"{len(records)} records from {len(args.results)} file{'s' if len(args.results) > 1 else ''}; commits {', '.join(commits)}; "
                   f"machines: {'; '.join(machines(records))}.", ""]
         for part, s in (bench_section(records, args.out, args.baseline, plt), verify_section(records),
                         build_section(records, args.out, plt), render_section(records, args.out, plt)):
@@ -399,6 +426,27 @@ def main(argv=None):
         part, s = compare_section(load([args.compare[0]]), load([args.compare[1]]), args.compare, args.out, plt)
         lines += part
         summary.update(s)
+    headline = summary.pop("_headline", None)
+    plots = summary.pop("_plots", [])
+    if args.readme:
+        begin, end = "<!-- bvhlab-report:begin -->", "<!-- bvhlab-report:end -->"
+        try:
+            text = open(args.readme, encoding="utf-8").read()
+        except OSError as e:
+            fail(f"--readme '{args.readme}': {e.strerror}")
+        if text.count(begin) != 1 or text.count(end) != 1 or text.index(begin) > text.index(end):
+            fail(f"--readme '{args.readme}' needs one '{begin}' line and one '{end}' line after it")
+        if not headline:
+            fail("--readme: the result files hold no bench record to summarise")
+        rel = os.path.relpath(os.path.realpath(args.out), os.path.dirname(os.path.realpath(args.readme)))
+        block = [lines[2], ""] + headline + [f"![{alt}]({rel}/{name})" for alt, name in plots] + [""]
+        generated = (f"<!-- generated by: bvhlab report {' '.join(args.results)} --out {args.out}"
+                     f"{' --baseline ' + repr(args.baseline) if args.baseline else ''} --readme {args.readme} -->")
+        text = text[:text.index(begin) + len(begin)] + "\n" + generated + "\n" + "\n".join(block) + text[text.index(end):]
+        tmp = args.readme + ".tmp"
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, args.readme)
     for name, text in (("report.md", "\n".join(lines) + "\n"), ("summary.json", json.dumps(summary, indent=1) + "\n")):
         tmp = os.path.join(args.out, f".{name}.tmp")
         with open(tmp, "w", encoding="utf-8") as f:
