@@ -84,13 +84,20 @@ nlohmann::json gltf_json(const std::string& path, bool binary) {
 /// A PLY header as the format defines it: "ply" on the first line, text lines, and an
 /// "end_header" line within the first MiB. Assimp's PLY reader loops forever on a header whose
 /// end_header line is broken by a NUL byte, so the header is checked before Assimp sees it.
-/// An "element NAME COUNT" line of a PLY header: a count that the file's size cannot hold (each
+/// A line of a PLY header after "ply": one of the header's keywords; and for an "element NAME
+/// COUNT" line, a count that the file's size cannot hold (each
 /// entry takes at least a byte) is refused, since Assimp's PLY reader loops over the count
 /// before it finds the file short (fuzz finding: a count of 8.3e40 in a 300-byte file).
-void check_ply_element(const std::string& path, const std::string& line) {
+void check_ply_header_line(const std::string& path, const std::string& line) {
     std::istringstream ss(line);
     std::string word, name, count;
     ss >> word >> name >> count;
+    // The header's grammar: anything else makes Assimp's reader misread what follows (fuzz
+    // finding: a stray line made it allocate 15 GB).
+    static const char* const kWords[] = {"format", "comment", "obj_info", "element", "property"};
+    if (!word.empty() && std::none_of(std::begin(kWords), std::end(kWords), [&](const char* w) { return word == w; }))
+        fail(path, "has a PLY header line that is not format, comment, obj_info, element or property: '" +
+                       line.substr(0, 40) + (line.size() > 40 ? "..." : "") + "'");
     if (word != "element") return;
     std::error_code ec;
     const uintmax_t size = fs::file_size(path, ec);
@@ -119,7 +126,7 @@ void check_ply_header(const std::string& path) {
             std::string text = head.substr(line, i - line);
             while (!text.empty() && (text.back() == '\r' || text.back() == ' ' || text.back() == '\t')) text.pop_back();
             if (text == "end_header") return;
-            check_ply_element(path, text);
+            if (line > 0) check_ply_header_line(path, text);
             line = i + 1;
         } else if ((c < 0x20 || c > 0x7e) && c != '\r' && c != '\t') {
             fail(path, "has a byte that is not text (" + std::to_string(int(c)) + ") in its PLY header, at offset " +

@@ -117,6 +117,16 @@ printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n' >"$tmp/long_min
 expect_error face-index-long-min "bad vertex reference '-9223372036854775808'" build "$tmp/long_min.obj"
 printf 'v 1e38 1e38 1e38\nv -1e38 1e38 -1e38\nv 0 -1e38 0\nf 1 2 3\n' >"$tmp/huge.obj"
 expect_error huge-coordinates "vertex 1 [(]1e[+]38, 1e[+]38, 1e[+]38[)] is outside [[]-1e[+]10, 1e[+]10[]], the numeric domain" build "$tmp/huge.obj"
+expect_error rays-two-types "--types primary,diffuse: a ray file holds one ray type" rays "$data/cornell_box.obj" --types primary,diffuse -o "$tmp/x.rays"
+expect_error rays-type-typo "--types prmary: not a ray type .* \(did you mean primary\?\)" rays "$data/cornell_box.obj" --types prmary -o "$tmp/x.rays"
+if "$bin" -q rays "$data/cornell_box.obj" --types diffuse --width 8 --height 8 -o "$tmp/types.rays" >/dev/null &&
+    "$bin" -q run "$data/cornell_box.obj" --no-epo --types primary --width 8 --height 8 --runs 1 --json |
+    python3 -c 'import json,sys; b=[json.loads(l) for l in sys.stdin if "\"record\":\"build\"" in l]; assert b and b[0]["epo"] is None, b'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1))
+    echo "FAIL rays --types and run --no-epo"
+fi
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100
@@ -661,6 +671,9 @@ expect_error gltf-holding-ply "ply-inside.gltf': has a byte that is not text [(]
 printf 'ply\nformat ascii 1.0\nelement vertex 5000\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n' >"$tmp/ply-count.ply"
 expect_error ply-huge-count "ply-count.ply': has a PLY element 'vertex' of 5000 entries, more than the file's [0-9]+ bytes can hold" \
     build "$tmp/ply-count.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nply\nproperty float y\nend_header\n' >"$tmp/ply-stray.ply"
+expect_error ply-stray-line "ply-stray.ply': has a PLY header line that is not format, comment, obj_info, element or property: 'ply'" \
+    build "$tmp/ply-stray.ply"
 expect_error ply-no-faces "points.ply': has no triangles" build "$tmp/points.ply"
 cp "$data/instances.glb" "$tmp/copy.glb"
 expect_error out-over-gltf "copy.glb. is this command.s input [(]the scene[)]" build --flatten "$tmp/copy.glb" -o "$tmp/copy.glb"

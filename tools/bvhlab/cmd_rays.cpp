@@ -20,9 +20,10 @@ void register_rays(CLI::App& app, Globals& g) {
     CLI::App* sub =
         app.add_subcommand("rays", "generate a seeded ray set and export it as a ray file, or describe a ray file");
     auto* scene = sub->add_option("scene", o->scene, kSceneHelp);
-    auto* type = sub->add_option("--type", o->type, "primary, ao, diffuse or shadow")
-                     ->check(CLI::IsMember({"primary", "ao", "diffuse", "shadow"}))
-                     ->capture_default_str();
+    // --types, as bench, verify and run name it (--type is kept for old scripts); one per file.
+    auto* type =
+        sub->add_option("--types,--type", o->type, "the ray type: primary, ao, diffuse or shadow (one per file)")
+            ->capture_default_str();
     auto* out = sub->add_option("-o,--out", o->out, "ray file to write");
     auto* info =
         sub->add_option("--info", o->info, "print the header and ray count of a ray file")->check(CLI::ExistingFile);
@@ -48,6 +49,11 @@ void register_rays(CLI::App& app, Globals& g) {
             return;
         }
         if (!scene->count()) throw Error("rays needs a scene (or --info FILE)");
+        if (o->type.find(',') != std::string::npos || o->type == "all")
+            throw Error("--types " + o->type + ": a ray file holds one ray type; run rays once per type");
+        if (o->type != "primary" && o->type != "ao" && o->type != "diffuse" && o->type != "shadow")
+            throw Error("--types " + o->type + ": not a ray type (primary, ao, diffuse or shadow)" +
+                        did_you_mean(o->type, {"primary", "ao", "diffuse", "shadow"}));
         if (!out->count()) throw Error("rays needs --out FILE for the ray set");
         const std::vector<scene::NamedFile> outputs{{"--out", o->out}};
         scene::refuse_clashing_files(outputs, {{"the scene", o->scene}});

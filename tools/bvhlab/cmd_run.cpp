@@ -2,6 +2,7 @@
 // `bvhlab run`: the main job. For each scene: build, print quality figures, benchmark every
 // ray type, verify every ray against Embree, then print one summary table.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "accel/core/check.h"
@@ -9,6 +10,8 @@
 #include "tools/bvhlab/pipeline.h"
 
 namespace bvhlab::cli {
+
+namespace fs = std::filesystem;
 
 void print_bench_row(const nlohmann::json& j);
 void print_verify_header();
@@ -33,6 +36,7 @@ void register_run(CLI::App& app, Globals& g) {
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
     o->build.add_to(*sub);
+    sub->add_flag("!--no-epo", o->build.epo, "skip EPO (slow on very large scenes)");
     o->rays.add_to(*sub);
     add_compare_options(*sub, o->cc);
     o->trace.add_to(*sub);
@@ -53,7 +57,11 @@ void register_run(CLI::App& app, Globals& g) {
         for (const auto& spec : scenes) {
             Scene s = load_scene(spec, g);
             Built b = build_scene(s, o->build, g);
-            Row row{s.name, b.record, {}, {}};
+            // Two scenes of one name (data/'s Cornell box and a catalogue's) are told apart by file.
+            std::string name = s.name;
+            for (const Row& r : rows)
+                if (r.scene == name) name = s.name + " (" + fs::path(s.source).filename().string() + ")";
+            Row row{name, b.record, {}, {}};
             if (g.json) emit(b.record);
             const std::unique_ptr<trav::EmbreeOracle> oracle_owner = make_oracle(s);
             const trav::EmbreeOracle& oracle = *oracle_owner;
@@ -76,7 +84,7 @@ void register_run(CLI::App& app, Globals& g) {
                 }
             }
             if (!g.json) {
-                std::printf("\n== %s ==\n", s.name.c_str());
+                std::printf("\n== %s ==\n", row.scene.c_str());
                 print_build_table(s, b);
                 std::printf("\n");
                 for (const auto& j : row.bench) print_bench_row(j);
@@ -90,14 +98,14 @@ void register_run(CLI::App& app, Globals& g) {
         if (!g.json) {
             std::printf("\n== summary (%s, %s build, commit %s) ==\n", machine_description().c_str(), build_type(),
                         git_commit());
-            std::printf("%-16s %10s %8s %8s %9s", "scene", "triangles", "SAH", "EPO", "build ms");
+            std::printf("%-24s %10s %8s %8s %9s", "scene", "triangles", "SAH", "EPO", "build ms");
             for (auto t : types) std::printf(" %10s", (std::string(trav::ray_type_name(t)) + " Mr/s").c_str());
             std::printf(" %10s\n", "mismatch");
             for (const auto& r : rows) {
                 size_t mism = 0;
                 for (const auto& v : r.verify) mism += v["mismatches"].get<size_t>();
                 const double epo = r.build["epo"].is_null() ? -1.0 : r.build["epo"].get<double>();
-                std::printf("%-16s %10zu %8.3f %8.3f %9.1f", r.scene.c_str(), r.build["triangles"].get<size_t>(),
+                std::printf("%-24s %10zu %8.3f %8.3f %9.1f", r.scene.c_str(), r.build["triangles"].get<size_t>(),
                             r.build["sah"].get<double>(), epo, r.build["build_ms"].get<double>());
                 for (const auto& bj : r.bench)
                     std::printf(" %10.2f", bj["status"] == "ok" ? bj["mrays_per_s"].get<double>() : 0.0);

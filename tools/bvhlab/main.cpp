@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <exception>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "accel/core/check.h"
 #include "tools/bvhlab/commands.h"
@@ -12,6 +14,33 @@
 namespace bvhlab::cli {
 int g_exit_code = 0;
 }
+
+namespace {
+
+/// The help heading of a command's option, by its name; null keeps CLI11's "Options".
+const char* help_group(const std::string& name, const std::string& command) {
+    static const std::vector<std::pair<const char*, std::vector<std::string>>> groups{
+        {"Structure",
+         {"--structure",   "--builder",  "--build-device", "--layout",       "--max-leaf",      "--min-leaf",
+          "--bins",        "--alpha",    "--budget",       "--spatial-bins", "--reinsert",      "--collapse",
+          "--cw-tris",     "--kd-bonus", "--kd-ci",        "--kd-ct",        "--kd-max-depth",  "--kd-stack",
+          "--morton-bits", "--radius",   "--no-epo",       "--flatten",      "--no-scene-cache"}},
+        {"Rays",
+         {"--types", "--rays", "--width", "--height", "--spp", "--tile", "--seed", "--diffuse-rays", "--ao-rays",
+          "--eye", "--target", "--up", "--fov"}},
+        {"Device and timing", {"--device", "--kernel", "--block-size", "--fetch-threshold", "--runs", "--warmup"}},
+        {"Verification", {"--edge-eps", "--t-tol", "--hits"}},
+        {"Output", {"--json", "--quiet", "--out", "--hits-out", "--cost-image", "--aov", "--dump-rays", "--info"}},
+    };
+    if (command == "render" && (name == "--seed" || name == "--spp" || name == "--width" || name == "--height"))
+        return "Image and sampling";
+    for (const auto& [heading, names] : groups)
+        for (const std::string& n : names)
+            if (name == n) return heading;  // get_name() is the first long name: "--out" for "-o,--out"
+    return nullptr;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace bvhlab::cli;
@@ -50,6 +79,39 @@ int main(int argc, char** argv) {
             sub->add_flag("--flatten", g.flatten, "make an instanced scene one mesh");
         }
     }
+    // Help text in groups: each option under the heading of what it chooses; examples below.
+    static const std::vector<std::pair<std::string, std::string>> examples{
+        {"build",
+         "  bvhlab build stanford-bunny --builder sbvh --max-leaf 4\n"
+         "  bvhlab build furball --builder hploc --runs 10 --json     # a GPU build, timed\n"
+         "  bvhlab build sibenik --layout cwbvh -o sibenik.bvh        # saved for --structure sibenik.bvh"},
+        {"rays", "  bvhlab rays stanford-bunny --types diffuse -o diffuse.rays\n  bvhlab rays --info diffuse.rays"},
+        {"bench",
+         "  bvhlab bench stanford-bunny --device gpu --kernel all --types primary,diffuse\n"
+         "  bvhlab bench furball --device gpu --builder sbvh --rays diffuse.rays\n"
+         "  bvhlab bench dragon-100k --device embree"},
+        {"verify",
+         "  bvhlab verify sibenik --structure all --device gpu --kernel all\n"
+         "  bvhlab verify stanford-bunny --rays diffuse.rays --hits my-tracer.hits   # another tracer's hits"},
+        {"run",
+         "  bvhlab run                         # the Cornell box, and $BVHLAB_SCENES' scenes\n"
+         "  bvhlab run stanford-bunny --device gpu --no-epo"},
+        {"quality", "  bvhlab quality furball --structure sbvh --types primary,diffuse"},
+        {"render",
+         "  bvhlab render cornell-box --device gpu --spp 256 -o cornell.png --aov\n"
+         "  bvhlab render sibenik --device gpu --time-limit 10 --env sky.exr -o sibenik.exr"},
+        {"sweep",
+         "  bvhlab sweep grid.json              # results in grid.results.jsonl\n"
+         "  bvhlab sweep grid.json --status\n"
+         "  bvhlab sweep grid.json --slurm --tasks 8 --sbatch-arg=--partition=gpu"},
+        {"rerun", "  bvhlab rerun grid.results.jsonl --line 12"},
+    };
+    for (CLI::App* sub : app.get_subcommands({}))
+        for (const auto& [name, text] : examples)
+            if (sub->get_name() == name) sub->footer("\nExamples:\n" + text);
+    for (CLI::App* sub : app.get_subcommands({}))
+        for (CLI::Option* opt : sub->get_options())
+            if (const char* heading = help_group(opt->get_name(), sub->get_name())) opt->group(heading);
     // An unknown first word is named (CLI11 would only say that a subcommand is required).
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
