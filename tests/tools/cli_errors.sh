@@ -127,6 +127,8 @@ else
     fail=$((fail + 1))
     echo "FAIL rays --types and run --no-epo"
 fi
+expect_error structure-typo "--structure 'sbhv' is neither a structure .* nor an existing file \(did you mean sbvh\?\)" \
+    bench "$data/cornell_box.obj" --structure sbhv
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100

@@ -354,8 +354,9 @@ void BuildOptions::add_to(CLI::App& app) {
             ->capture_default_str();
     auto* st = structure_flag = app.add_option(
         "--structure", structure,
-        "bvh|sweep|sbvh|kdtree, or a structure file from `bvhlab build --out` to load instead of building "
-        "(verify also takes all: every structure and its tracers)");
+        "what to build: binned (or bvh), sweep, sbvh, lbvh, ploc, hploc or kdtree; or a structure file from `bvhlab "
+        "build --out` to load instead of building (verify also takes all: every structure and its tracers). "
+        "--builder NAME is the same for the BVH builders");
     st->excludes(builder_flag);
     st->check(CLI::Validator(
         [this](std::string& v) -> std::string {
@@ -400,7 +401,7 @@ void BuildOptions::add_to(CLI::App& app) {
     st->each([this](const std::string& v) {
         if (v == "bvh" || v == "binned")
             builder = "binned";
-        else if (v == "sweep" || v == "sbvh")
+        else if (v == "sweep" || v == "sbvh" || v == "lbvh" || v == "ploc" || v == "hploc")
             builder = v;
     });
     layout_flag =
@@ -442,7 +443,8 @@ void BuildOptions::add_to(CLI::App& app) {
 
 std::string BuildOptions::structure_file() const {
     if (structure.empty() || structure == "bvh" || structure == "binned" || structure == "sweep" ||
-        structure == "sbvh" || structure == "kdtree" || structure == "all")
+        structure == "sbvh" || structure == "lbvh" || structure == "ploc" || structure == "hploc" ||
+        structure == "kdtree" || structure == "all")
         return {};
     return structure;
 }
@@ -465,6 +467,13 @@ void BuildOptions::check_applicable() const {
     if (collapse_flag->count() && !is_cwbvh()) throw Error("--collapse applies to --layout cwbvh");
     if (cw_tris_flag->count() && !is_cwbvh()) throw Error("--cw-tris applies to --layout cwbvh");
     if (!structure_file().empty()) {
+        std::error_code ec;
+        if (!fs::exists(structure_file(), ec))
+            throw Error("--structure '" + structure_file() +
+                        "' is neither a structure (binned, sweep, sbvh, lbvh, ploc, hploc, kdtree) nor an existing "
+                        "file" +
+                        did_you_mean(structure_file(), {"binned", "bvh", "sweep", "sbvh", "lbvh", "ploc", "hploc",
+                                                        "kdtree", "all"}));
         if (build_device_flag->count())
             throw Error("--build-device applies when a structure is built, not to structure file '" + structure_file() +
                         "'");
