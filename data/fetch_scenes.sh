@@ -65,6 +65,7 @@ for n in "${names[@]}"; do [[ "$known" == *" $n "* ]] || die "unknown scene '$n'
 wanted() { [ ${#names[@]} -eq 0 ] || [[ " ${names[*]} " == *" $1 "* ]]; }
 py=/usr/bin/python3
 [ -x "$py" ] || py=python3
+command -v unzip >/dev/null || die "unzip is needed (apt-get install unzip; tools/install_deps.sh installs it)"
 mkdir -p "$dest"
 dest=$(cd "$dest" && pwd)
 work="$dest/.downloads"
