@@ -472,8 +472,8 @@ void BuildOptions::check_applicable() const {
             throw Error("--structure '" + structure_file() +
                         "' is neither a structure (binned, sweep, sbvh, lbvh, ploc, hploc, kdtree) nor an existing "
                         "file" +
-                        did_you_mean(structure_file(), {"binned", "bvh", "sweep", "sbvh", "lbvh", "ploc", "hploc",
-                                                        "kdtree", "all"}));
+                        did_you_mean(structure_file(),
+                                     {"binned", "bvh", "sweep", "sbvh", "lbvh", "ploc", "hploc", "kdtree", "all"}));
         if (build_device_flag->count())
             throw Error("--build-device applies when a structure is built, not to structure file '" + structure_file() +
                         "'");
