@@ -145,6 +145,17 @@ def machines(records):
     return list(seen)
 
 
+def save_plot(plt, fig, ax, out, name, xlabel, ylabel, alt):
+    """Labels, legend and file of a plot; returns its Markdown lines."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, name), dpi=110)
+    plt.close(fig)
+    return [f"![{alt}]({name})", ""]
+
+
 def bench_section(records, out, baseline, plt):
     bench = [r for r in records if r["record"] == "bench" and r.get("status", "ok") == "ok"]
     if not bench:
@@ -296,13 +307,8 @@ def build_section(records, out, plt):
         for who, p in sorted(pts.items()):
             p.sort()
             ax.loglog([t for t, _ in p], [m for _, m in p], "o-", label=who)
-        ax.set_xlabel("triangles")
-        ax.set_ylabel("build time (ms)")
-        ax.legend(fontsize="small")
-        fig.tight_layout()
-        fig.savefig(os.path.join(out, "build-time.png"), dpi=110)
-        plt.close(fig)
-        lines += ["![build time against triangles](build-time.png)", ""]
+        lines += save_plot(plt, fig, ax, out, "build-time.png", "triangles", "build time (ms)",
+                           "build time against triangles")
     return lines, {"builds": len(aggs)}
 
 
@@ -323,13 +329,8 @@ def render_section(records, out, plt):
             if b:
                 ax.semilogy(range(len(b)), [max(1, x.get("extension_rays", 0)) for x in b], "o-",
                             label=f"{r.get('scene')} {tracer_label(r)}")
-        ax.set_xlabel("bounce")
-        ax.set_ylabel("active paths (extension rays)")
-        ax.legend(fontsize="small")
-        fig.tight_layout()
-        fig.savefig(os.path.join(out, "paths-per-bounce.png"), dpi=110)
-        plt.close(fig)
-        lines += ["![active paths per bounce](paths-per-bounce.png)", ""]
+        lines += save_plot(plt, fig, ax, out, "paths-per-bounce.png", "bounce", "active paths (extension rays)",
+                           "active paths per bounce")
     return lines, {"renders": len(renders)}
 
 

@@ -8,13 +8,7 @@ set -u
 src=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-pass=0
-fail=0
-check() {  # check NAME CONDITION...
-    local name=$1
-    shift
-    if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $name"; fi
-}
+. "$(dirname "$0")/check_lib.sh"
 py=/usr/bin/python3
 [ -x "$py" ] || py=python3
 
@@ -43,5 +37,4 @@ bash "$src/data/fetch_scenes.sh" --from "$tmp/none" 2>"$tmp/err"
 check "--from a missing folder is refused" grep -q "from needs an existing folder" "$tmp/err"
 check "--list names the benchmark scenes" [ "$(bash "$src/data/fetch_scenes.sh" --list | head -6 | tr '\n' ' ')" = "cornell-box furball sibenik stanford-bunny dragon-100k buddha-100k " ]
 
-echo "fetch_scenes.sh test: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish "fetch_scenes.sh test"

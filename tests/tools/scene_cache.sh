@@ -9,13 +9,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 export BVHLAB_CACHE_DIR=$tmp/cache
-pass=0
-fail=0
-check() {  # check NAME CONDITION...
-    local name=$1
-    shift
-    if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $name"; fi
-}
+. "$(dirname "$0")/check_lib.sh"
 field() {  # field KEY < one JSON line
     python3 -c "import json,sys; print(json.loads(sys.stdin.readline())['$1'])"
 }
@@ -85,5 +79,4 @@ check "cache clear empties it ($left entries)" [ "$left" -eq 0 ]
 BVHLAB_CACHE_DIR= HOME= XDG_CACHE_HOME= "$bin" -q cache info >/dev/null 2>"$tmp/nodir.err"
 check "no cache folder at all is an error" grep -q "no scene cache folder" "$tmp/nodir.err"
 
-echo "$pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish "scene_cache.sh"

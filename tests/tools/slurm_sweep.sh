@@ -24,13 +24,7 @@ cleanup() {
     rm -rf "$tmp"
 }
 trap cleanup EXIT
-pass=0
-fail=0
-check() {  # check NAME CONDITION...
-    local name=$1
-    shift
-    if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $name"; fi
-}
+. "$(dirname "$0")/check_lib.sh"
 die() {
     echo "slurm_sweep.sh: $*"
     for f in "$tmp"/log/* "$tmp"/*.log; do [ -f "$f" ] && { echo "--- $f"; tail -20 "$f"; }; done
@@ -125,5 +119,4 @@ check "a second submission finds nothing to run" grep -q "every cell is done; no
 if [ "$fail" -ne 0 ]; then
     for f in "$tmp"/*.log; do echo "--- $f"; tail -5 "$f"; done
 fi
-echo "slurm_sweep.sh: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish "slurm_sweep.sh"

@@ -11,13 +11,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 export BVHLAB_CACHE_DIR=$tmp/cache
-pass=0
-fail=0
-check() {  # check NAME CONDITION...
-    local name=$1
-    shift
-    if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL $name"; fi
-}
+. "$(dirname "$0")/check_lib.sh"
 # Distinct cells in a results file, and the largest number of records one cell has.
 cells_in() { python3 -c "
 import collections, json, sys
@@ -208,5 +202,4 @@ check "a record without a command line is one line" grep -q "the record names no
 "$bin" -q rerun "$tmp/b.jsonl" --line 9 2>"$tmp/l9.err"
 check "a line past the end is named" grep -q "has no record on line 9 (it has 2 lines)" "$tmp/l9.err"
 
-echo "sweep.sh: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish "sweep.sh"
