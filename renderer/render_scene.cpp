@@ -265,7 +265,14 @@ CameraData make_camera(const trav::Camera& cam, uint32_t width, uint32_t height,
     const Vec3 right_raw = cross(view, up);
     BVHLAB_CHECK(dist > 0.0f && std::isfinite(dist) && length(right_raw) > 0.0f,
                  "degenerate camera: eye and target coincide or up is parallel to the view");
-    BVHLAB_CHECK(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f, "the field of view must be in (0, 180) degrees");
+    const bool wide = cam.projection != trav::Projection::kPerspective;
+    BVHLAB_CHECK(wide || (cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f),
+                 "the field of view must be in (0, 180) degrees");
+    BVHLAB_CHECK(
+        cam.projection != trav::Projection::kFisheye || (cam.fisheye_fov_deg > 0.0f && cam.fisheye_fov_deg <= 360.0f),
+        "the fish-eye's field of view must be in (0, 360] degrees");
+    BVHLAB_CHECK(!wide || (lens.aperture_radius == 0.0f && lens.focus_distance == 0.0f),
+                 "a fish-eye or panorama camera has no lens: no aperture or focus distance");
     BVHLAB_CHECK(lens.aperture_radius >= 0.0f && lens.focus_distance >= 0.0f,
                  "aperture and focus distance must not be negative");
     BVHLAB_CHECK(lens.shutter_open >= 0.0f && lens.shutter_open <= lens.shutter_close && lens.shutter_close <= 1.0f,
@@ -285,6 +292,8 @@ CameraData make_camera(const trav::Camera& cam, uint32_t width, uint32_t height,
     c.width = width;
     c.height = height;
     c.pixel_centres = lens.pixel_centres ? 1u : 0u;
+    c.projection = cam.projection;
+    c.half_fov = 0.5f * cam.fisheye_fov_deg * kPi / 180.0f;
     return c;
 }
 

@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: MIT
 // The render camera: jittered sub-pixel samples, a thin lens and a shutter interval over which
-// the eye moves. Host and device code; the host fills CameraData once per render.
+// the eye moves; or a fish-eye or panorama projection (traversal/device/projection.h). Host and device code; the host
+// fills CameraData once per render.
 #pragma once
 
 #include <cstdint>
 
 #include "renderer/core/sampling.h"
+#include "traversal/device/projection.h"
 #include "traversal/device/ray.h"
 
 namespace bvhlab::render {
@@ -21,6 +23,8 @@ struct CameraData {
     float shutter_open, shutter_close;  ///< in [0, 1]: the part of the eye's motion the frame sees
     uint32_t width, height;
     uint32_t pixel_centres;  ///< 1: every sample through its pixel's centre (no anti-aliasing)
+    trav::Projection projection = trav::Projection::kPerspective;  ///< fish-eye and panorama: no lens
+    float half_fov = 0.0f;                                         ///< the fish-eye's half field of view in radians
 };
 
 /// Whether every sample of a pixel gets the same camera ray: pixel centres, a pinhole and an
@@ -40,6 +44,11 @@ BVHLAB_HD inline trav::Ray camera_ray(const CameraData& c, uint32_t pixel, uint3
     const float ut = rand01(pixel, sample, kDimTime, seed);
     const float time = c.shutter_open + (c.shutter_close - c.shutter_open) * ut;
     const Vec3 eye = c.eye0 + (c.eye1 - c.eye0) * time;
+    if (c.projection != trav::Projection::kPerspective) {
+        const Vec3 d = trav::wide_direction(c.projection, (float(x) + jx) / float(c.width),
+                                            (float(y) + jy) / float(c.height), c.aspect, c.half_fov);
+        return {eye, 0.0f, trav::camera_to_world(d, c.right, c.up, c.back), INFINITY};
+    }
     Vec3 dir = normalize(c.right * sx + c.up * sy - c.back);
     Vec3 org = eye;
     if (c.lens_radius > 0.0f) {

@@ -325,3 +325,30 @@ TEST(GpuRender, DumpedRaysOfEveryBounceVerifyAgainstEmbree) {
 
 }  // namespace
 }  // namespace bvhlab::render
+
+namespace bvhlab::render {
+
+// The fish-eye and panorama cameras on the GPU agree with the CPU reference within noise.
+TEST(GpuRender, FisheyeAndPanoramaAgreeWithTheCpu) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    for (trav::Projection p : {trav::Projection::kFisheye, trav::Projection::kPanorama}) {
+        SCOPED_TRACE(trav::projection_name(p));
+        Scene s = scene_named("glass-mirror");
+        s.camera.projection = p;
+        s.camera.fisheye_fov_deg = 160.0f;
+        RenderSettings rs;
+        rs.max_depth = 8;
+        rs.spp = 256;
+        rs.seed = 1;
+        const RenderResult cpu = cpu_reference(s, 48, 24, rs);
+        rs.spp = 1024;
+        rs.seed = 2;
+        const RenderResult gpu = gpu_render(s, 48, 24, rs, "dynamic-speculative-fma");
+        CompareConfig cc;
+        cc.pixel_outliers = 0.05;
+        const Comparison c = compare_renders(cpu, gpu, cc);
+        EXPECT_TRUE(c.agree) << c.summary();
+    }
+}
+
+}  // namespace bvhlab::render

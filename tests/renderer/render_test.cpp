@@ -737,3 +737,32 @@ TEST(Camera, CentreRayLooksAtTheTargetAndTheLensFocuses) {
 
 }  // namespace
 }  // namespace bvhlab::render
+
+namespace bvhlab::render {
+
+// The path tracer's fish-eye and panorama cameras are the ray generator's, pixel for pixel
+// (one projection for both: traversal/device/projection.h).
+TEST(Camera, FisheyeAndPanoramaRaysAreTheRayGeneratorsRays) {
+    trav::Camera cam;
+    cam.eye = {0.5f, 1.0f, -2.0f};
+    cam.target = {0.2f, 0.8f, 1.0f};
+    for (trav::Projection p : {trav::Projection::kFisheye, trav::Projection::kPanorama}) {
+        cam.projection = p;
+        cam.fisheye_fov_deg = 200.0f;
+        LensOptions lens;
+        lens.pixel_centres = true;
+        const CameraData cd = make_camera(cam, 8, 4, lens);
+        const std::vector<trav::Ray> rays = trav::generate_primary(cam, {8, 4, 1, 0});
+        for (uint32_t px = 0; px < 32; ++px) {
+            const trav::Ray r = camera_ray(cd, px, 0, 1);
+            EXPECT_NEAR(r.dir.x, rays[px].dir.x, 2e-6f) << px;
+            EXPECT_NEAR(r.dir.y, rays[px].dir.y, 2e-6f) << px;
+            EXPECT_NEAR(r.dir.z, rays[px].dir.z, 2e-6f) << px;
+            EXPECT_EQ(r.org.x, cam.eye.x);
+        }
+        lens.aperture_radius = 0.1f;
+        EXPECT_THROW(make_camera(cam, 8, 4, lens), Error) << "a wide projection has no lens";
+    }
+}
+
+}  // namespace bvhlab::render

@@ -129,6 +129,28 @@ else
 fi
 expect_error structure-typo "--structure 'sbhv' is neither a structure .* nor an existing file \(did you mean sbvh\?\)" \
     bench "$data/cornell_box.obj" --structure sbhv
+expect_error fisheye-fov "--fov applies to --camera pinhole or thin-lens; a fish-eye takes --fisheye-fov" \
+    rays "$data/cornell_box.obj" --camera fisheye --fov 30 -o "$tmp/x.rays"
+expect_error fisheye-fov-alone "--fisheye-fov applies to --camera fisheye" rays "$data/cornell_box.obj" --fisheye-fov 90 -o "$tmp/x.rays"
+expect_error rays-thin-lens "--camera thin-lens applies to render" bench "$data/cornell_box.obj" --camera thin-lens
+expect_error camera-unknown "--camera: fish not in" rays "$data/cornell_box.obj" --camera fish -o "$tmp/x.rays"
+expect_error render-thin-lens-no-aperture "--camera thin-lens needs --aperture R" \
+    render "$data/cornell_box.obj" --camera thin-lens --width 4 --height 4 --spp 1 -o "$tmp/x.pfm"
+expect_error render-pinhole-aperture "--aperture applies to --camera thin-lens \(a pinhole has no lens\)" \
+    render "$data/cornell_box.obj" --camera pinhole --aperture 1 --width 4 --height 4 --spp 1 -o "$tmp/x.pfm"
+expect_error render-panorama-aperture "--aperture applies to --camera thin-lens, not panorama" \
+    render "$data/cornell_box.obj" --camera panorama --aperture 1 --width 4 --height 4 --spp 1 -o "$tmp/x.pfm"
+if "$bin" -q rays "$data/cornell_box.obj" --types primary --camera panorama --width 8 --height 4 -o "$tmp/pano.rays" --json |
+    python3 -c 'import json,sys; j=json.loads(sys.stdin.readline()); assert j["rays"] == 32, j' &&
+    "$bin" -q bench "$data/cornell_box.obj" --types primary,diffuse --camera fisheye --fisheye-fov 200 --width 8 --height 8 --runs 1 --json |
+    python3 -c 'import json,sys; r=[json.loads(l) for l in sys.stdin]; c=r[0]["protocol"]["camera"]; assert len(r)==2 and c["projection"]=="fisheye" and c["fisheye_fov_deg"]==200 and "fov_y_deg" not in c, c' &&
+    "$bin" -q render "$data/cornell_box.obj" --camera panorama --width 8 --height 4 --spp 1 -o "$tmp/pano.pfm" --json |
+    python3 -c 'import json,sys; j=json.loads(sys.stdin.readline()); assert j["camera"]=="panorama", j'; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1))
+    echo "FAIL fisheye and panorama rays, bench and render"
+fi
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100

@@ -131,3 +131,72 @@ TEST(Protocol, SecondaryOriginsLeaveTheSurfaceOnTheRaySide) {
 }
 
 }  // namespace bvhlab::trav
+
+namespace bvhlab::trav {
+namespace {
+
+void expect_dir(Vec3 got, Vec3 want, const char* what) {
+    EXPECT_NEAR(got.x, want.x, 1e-6f) << what;
+    EXPECT_NEAR(got.y, want.y, 1e-6f) << what;
+    EXPECT_NEAR(got.z, want.z, 1e-6f) << what;
+}
+
+float angle_between(Vec3 a, Vec3 b) { return std::acos(std::fmin(1.0f, dot(a, b) / (length(a) * length(b)))); }
+
+}  // namespace
+
+// Camera space: x right, y up, the view along -z. The closed forms at chosen image points.
+TEST(Projection, PanoramaIsEquirectangular) {
+    const auto at = [](float u, float v) { return wide_direction(Projection::kPanorama, u, v, 2.0f, 0.0f); };
+    expect_dir(at(0.5f, 0.5f), {0, 0, -1}, "centre: ahead");
+    expect_dir(at(0.75f, 0.5f), {1, 0, 0}, "three quarters across: right");
+    expect_dir(at(0.25f, 0.5f), {-1, 0, 0}, "a quarter across: left");
+    expect_dir(at(0.0f, 0.5f), {0, 0, 1}, "the left edge: behind");
+    expect_dir(at(0.5f, 0.0f), {0, 1, 0}, "the top: up");
+    expect_dir(at(0.5f, 1.0f), {0, -1, 0}, "the bottom: down");
+    const float s = std::sqrt(0.5f);
+    expect_dir(at(0.375f, 0.25f), {-0.5f, s, -0.5f}, "45 degrees left, 45 up");
+}
+
+TEST(Projection, FisheyeIsEquidistant) {
+    const float half = 0.5f * 3.14159265f;  // 180 degrees across the inscribed circle
+    const auto at = [&](float u, float v, float aspect) {
+        return wide_direction(Projection::kFisheye, u, v, aspect, half);
+    };
+    expect_dir(at(0.5f, 0.5f, 1.0f), {0, 0, -1}, "centre: ahead");
+    expect_dir(at(0.5f, 0.0f, 1.0f), {0, 1, 0}, "top of the circle: 90 degrees up");
+    expect_dir(at(1.0f, 0.5f, 1.0f), {1, 0, 0}, "right of the circle: 90 degrees right");
+    expect_dir(at(1.0f, 0.5f, 2.0f), {0, 0, 1}, "a 2:1 image's right edge: 180 degrees, behind");
+    // Equidistant: the angle from the axis is the distance from the centre times half the
+    // field of view, whatever the direction; and the direction has unit length.
+    for (float u : {0.1f, 0.3f, 0.62f, 0.9f})
+        for (float v : {0.05f, 0.4f, 0.77f}) {
+            const float aspect = 1.5f, x = (2 * u - 1) * aspect, y = 1 - 2 * v;
+            const Vec3 d = at(u, v, aspect);
+            EXPECT_NEAR(length(d), 1.0f, 1e-6f);
+            EXPECT_NEAR(angle_between(d, {0, 0, -1}), std::sqrt(x * x + y * y) * half, 2e-4f) << u << " " << v;
+            EXPECT_NEAR(std::atan2(d.y, d.x), std::atan2(y, x), 2e-4f) << u << " " << v;
+        }
+}
+
+TEST(PrimaryRays, PanoramaAndFisheyeRaysFollowTheProjection) {
+    Camera c;
+    c.eye = {1, 2, 3};
+    c.target = {1, 2, 2};  // looking along -z, up +y: camera space is world space
+    c.projection = Projection::kPanorama;
+    const std::vector<Ray> pano = generate_primary(c, {4, 2, 1, 0});
+    const float s = std::sqrt(0.5f);
+    expect_dir(pano[1].dir, {-0.5f, s, -0.5f}, "pixel (1, 0): 45 degrees left, 45 up");
+    expect_dir(pano[6].dir, {0.5f, -s, -0.5f}, "pixel (2, 1): 45 degrees right, 45 down");
+    EXPECT_EQ(pano[6].org.x, 1.0f);
+    c.projection = Projection::kFisheye;
+    c.fisheye_fov_deg = 180.0f;
+    const std::vector<Ray> fish = generate_primary(c, {3, 3, 1, 0});
+    expect_dir(fish[4].dir, {0, 0, -1}, "centre pixel: ahead");
+    const float edge = 2.0f / 3.0f * 0.5f * 3.14159265f;  // pixel (2, 1): r = 2/3
+    expect_dir(fish[5].dir, {std::sin(edge), 0, -std::cos(edge)}, "pixel (2, 1)");
+    c.fisheye_fov_deg = 0.0f;
+    EXPECT_THROW(generate_primary(c, {3, 3, 1, 0}), Error);
+}
+
+}  // namespace bvhlab::trav

@@ -205,6 +205,17 @@ void register_render(CLI::App& app, Globals& g) {
         if (s.mesh.triangle_count() == 0) throw Error("cannot render " + o->scene + ": it has no triangles");
 
         const trav::Camera cam = o->camera.apply(s.camera);
+        // --camera thin-lens needs an aperture; an aperture alone makes the camera a thin lens
+        // (unless --camera says pinhole); the wide projections have no lens.
+        const std::string& kind = o->camera.kind;
+        const bool camera_given = o->camera.kind_flag->count() > 0;
+        if (kind == "thin-lens" && !(o->aperture > 0.0f))
+            throw Error("--camera thin-lens needs --aperture R (a radius above 0)");
+        if (camera_given && kind == "pinhole" && o->aperture > 0.0f)
+            throw Error("--aperture applies to --camera thin-lens (a pinhole has no lens)");
+        if ((kind == "fisheye" || kind == "panorama") && (o->aperture > 0.0f || o->focus > 0.0f))
+            throw Error(std::string(o->aperture > 0.0f ? "--aperture" : "--focus") +
+                        " applies to --camera thin-lens, not " + kind);
         render::LensOptions lens;
         lens.aperture_radius = o->aperture;
         lens.focus_distance = o->focus;
@@ -333,6 +344,8 @@ void register_render(CLI::App& app, Globals& g) {
         j["wave_samples"] = res.wave_samples;
         j["strategy"] = o->strategy;
         j["pixel_centres"] = lens.pixel_centres;
+        j["camera"] = kind == "pinhole" && o->aperture > 0.0f ? std::string("thin-lens") : kind;
+        if (kind == "fisheye") j["fisheye_fov_deg"] = o->camera.fisheye_fov;
         j["first_hit_cache"] = o->rs.first_hit_cache;
         j["cached_hits"] = res.cached_hits;
         j["sort_materials"] = o->rs.sort_by_material;

@@ -566,15 +566,38 @@ void RayOptions::check_types(const std::vector<trav::RayType>& types, const std:
 }
 
 void CameraOptions::add_to(CLI::App& app) {
+    kind_flag = app.add_option("--camera", kind,
+                               "projection: pinhole, thin-lens (render, with --aperture), fisheye (equidistant, "
+                               "--fisheye-fov) or panorama (equirectangular, 360 x 180 degrees)")
+                    ->check(CLI::IsMember({"pinhole", "thin-lens", "fisheye", "panorama"}))
+                    ->capture_default_str();
+    fisheye_fov_flag =
+        app.add_option("--fisheye-fov", fisheye_fov,
+                       "--camera fisheye: degrees seen across the circle inscribed in the image (default 180)")
+            ->check(FiniteRange(1.0, 360.0));
+    flags.push_back(kind_flag);
+    flags.push_back(fisheye_fov_flag);
     flags.push_back(app.add_option("--eye", eye, "camera position x y z (default: the scene's camera)")
                         ->expected(3)
                         ->check(Finite()));
     flags.push_back(app.add_option("--target", target, "camera target x y z")->expected(3)->check(Finite()));
     flags.push_back(app.add_option("--up", up, "camera up vector x y z")->expected(3)->check(Finite()));
-    flags.push_back(app.add_option("--fov", fov, "vertical field of view in degrees")->check(FiniteRange(0.01, 179.0)));
+    fov_flag = app.add_option("--fov", fov, "vertical field of view in degrees (pinhole and thin-lens cameras)")
+                   ->check(FiniteRange(0.01, 179.0));
+    flags.push_back(fov_flag);
 }
 
 trav::Camera CameraOptions::apply(trav::Camera c) const {
+    const bool wide = kind == "fisheye" || kind == "panorama";
+    if (wide && fov_flag->count())
+        throw Error(
+            "--fov applies to --camera pinhole or thin-lens" +
+            std::string(kind == "fisheye" ? "; a fish-eye takes --fisheye-fov" : "; a panorama sees 360 x 180"));
+    if (fisheye_fov_flag->count() && kind != "fisheye") throw Error("--fisheye-fov applies to --camera fisheye");
+    c.projection = kind == "fisheye"    ? trav::Projection::kFisheye
+                   : kind == "panorama" ? trav::Projection::kPanorama
+                                        : trav::Projection::kPerspective;
+    c.fisheye_fov_deg = fisheye_fov;
     if (eye.size() == 3) c.eye = {eye[0], eye[1], eye[2]};
     if (target.size() == 3) c.target = {target[0], target[1], target[2]};
     if (up.size() == 3) c.up = {up[0], up[1], up[2]};
@@ -585,13 +608,31 @@ trav::Camera CameraOptions::apply(trav::Camera c) const {
 }
 
 trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
+    if (camera.kind == "thin-lens")
+        throw Error(
+            "--camera thin-lens applies to render (the ray generators have no lens): use pinhole, fisheye or "
+            "panorama");
     trav::ProtocolConfig c = cfg;
     c.camera = camera.apply(s.camera);
     c.ao_length = s.ao_length;
     return c;
 }
 
+nlohmann::json protocol_json_perspective(const trav::ProtocolConfig& c);
+
 nlohmann::json protocol_json(const trav::ProtocolConfig& c) {
+    nlohmann::json j = protocol_json_perspective(c);
+    // A wide projection is named; a pinhole protocol keeps the fields it always had.
+    if (c.camera.projection != trav::Projection::kPerspective) {
+        j["camera"]["projection"] = trav::projection_name(c.camera.projection);
+        j["camera"].erase("fov_y_deg");
+        if (c.camera.projection == trav::Projection::kFisheye)
+            j["camera"]["fisheye_fov_deg"] = c.camera.fisheye_fov_deg;
+    }
+    return j;
+}
+
+nlohmann::json protocol_json_perspective(const trav::ProtocolConfig& c) {
     return {{"width", c.primary.width},
             {"height", c.primary.height},
             {"spp", c.primary.samples},

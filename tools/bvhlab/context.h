@@ -179,8 +179,14 @@ struct CameraOptions {
     std::vector<CLI::Option*> flags;
     std::vector<float> eye, target, up;  ///< empty = the scene's
     float fov = 0.0f;                    ///< fov_y in degrees, 0 = the scene's
+    std::string kind = "pinhole";        ///< --camera: pinhole, thin-lens, fisheye or panorama
+    float fisheye_fov = 180.0f;          ///< --fisheye-fov in degrees
+    CLI::Option* kind_flag = nullptr;
+    CLI::Option* fov_flag = nullptr;
+    CLI::Option* fisheye_fov_flag = nullptr;
     void add_to(CLI::App& app);
-    /// `scene_camera` with the overrides given.
+    /// `scene_camera` with the overrides given and the projection; refuses --fov for a wide
+    /// projection and --fisheye-fov without a fish-eye (one-line bvhlab::Error).
     trav::Camera apply(trav::Camera scene_camera) const;
 };
 

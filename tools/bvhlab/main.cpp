@@ -27,7 +27,7 @@ const char* help_group(const std::string& name, const std::string& command) {
           "--morton-bits", "--radius",   "--no-epo",       "--flatten",      "--no-scene-cache"}},
         {"Rays",
          {"--types", "--rays", "--width", "--height", "--spp", "--tile", "--seed", "--diffuse-rays", "--ao-rays",
-          "--eye", "--target", "--up", "--fov"}},
+          "--eye", "--target", "--up", "--fov", "--camera", "--fisheye-fov"}},
         {"Device and timing", {"--device", "--kernel", "--block-size", "--fetch-threshold", "--runs", "--warmup"}},
         {"Verification", {"--edge-eps", "--t-tol", "--hits"}},
         {"Output", {"--json", "--quiet", "--out", "--hits-out", "--cost-image", "--aov", "--dump-rays", "--info"}},

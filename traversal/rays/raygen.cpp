@@ -88,12 +88,27 @@ Camera framing_camera(const scene::TriangleMesh& mesh) {
     return cam;
 }
 
+const char* projection_name(Projection p) {
+    switch (p) {
+        case Projection::kFisheye:
+            return "fisheye";
+        case Projection::kPanorama:
+            return "panorama";
+        default:
+            return "pinhole";
+    }
+}
+
 std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg) {
     BVHLAB_CHECK(cfg.width > 0 && cfg.height > 0, "image size must be at least 1x1");
     const auto grid = uint32_t(std::lround(std::sqrt(double(cfg.samples))));
     BVHLAB_CHECK(cfg.samples > 0 && grid * grid == cfg.samples,
                  "samples per pixel must be a perfect square (1, 4, 9, 16, ...) for the regular sub-grid");
-    BVHLAB_CHECK(cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f, "fov_y must be in (0, 180) degrees");
+    const bool wide = cam.projection != Projection::kPerspective;
+    BVHLAB_CHECK(wide || (cam.fov_y_deg > 0.0f && cam.fov_y_deg < 180.0f), "fov_y must be in (0, 180) degrees");
+    BVHLAB_CHECK(
+        cam.projection != Projection::kFisheye || (cam.fisheye_fov_deg > 0.0f && cam.fisheye_fov_deg <= 360.0f),
+        "the fish-eye's field of view must be in (0, 360] degrees");
     const glm::vec3 fwd = cam.target - cam.eye;
     BVHLAB_CHECK(glm::length(fwd) > 0.0f, "camera eye and target coincide");
     const glm::vec3 w = glm::normalize(fwd);
@@ -102,6 +117,7 @@ std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg) {
     const glm::vec3 u = glm::normalize(side), v = glm::cross(u, w);
     const float half_h = std::tan(glm::radians(cam.fov_y_deg) * 0.5f);
     const float half_w = half_h * float(cfg.width) / float(cfg.height);
+    const float half_fisheye = glm::radians(cam.fisheye_fov_deg) * 0.5f;
     const size_t npix = size_t(cfg.width) * cfg.height;
     std::vector<Ray> rays(npix * cfg.samples);
     const uint32_t tile = cfg.tile;
@@ -123,10 +139,18 @@ std::vector<Ray> generate_primary(const Camera& cam, const PrimaryConfig& cfg) {
                 for (uint32_t s = 0; s < cfg.samples; ++s) {
                     const float sx = (float(s % grid) + 0.5f) / float(grid);
                     const float sy = (float(s / grid) + 0.5f) / float(grid);
-                    const float px = (2.0f * (float(x) + sx) / float(cfg.width) - 1.0f) * half_w;
-                    const float py = (1.0f - 2.0f * (float(y) + sy) / float(cfg.height)) * half_h;
-                    const glm::vec3 d = glm::normalize(w + u * px + v * py);
-                    rays[slot * cfg.samples + s] = {to_vec3(cam.eye), 0.0f, to_vec3(d), INFINITY};
+                    Vec3 dir;
+                    if (wide) {
+                        dir = camera_to_world(wide_direction(cam.projection, (float(x) + sx) / float(cfg.width),
+                                                             (float(y) + sy) / float(cfg.height),
+                                                             float(cfg.width) / float(cfg.height), half_fisheye),
+                                              to_vec3(u), to_vec3(v), to_vec3(-w));
+                    } else {
+                        const float px = (2.0f * (float(x) + sx) / float(cfg.width) - 1.0f) * half_w;
+                        const float py = (1.0f - 2.0f * (float(y) + sy) / float(cfg.height)) * half_h;
+                        dir = to_vec3(glm::normalize(w + u * px + v * py));
+                    }
+                    rays[slot * cfg.samples + s] = {to_vec3(cam.eye), 0.0f, dir, INFINITY};
                 }
             }
         }

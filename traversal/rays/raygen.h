@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Seeded ray generators: primary (pinhole), ambient occlusion, diffuse bounce and shadow.
+// Seeded ray generators: primary (pinhole, fish-eye or panorama), ambient occlusion, diffuse bounce and shadow.
 // Defaults follow ray_protocol in the scenes' scenes.json. Same arguments, same bytes.
 #pragma once
 
@@ -9,17 +9,25 @@
 #include <vector>
 
 #include "scene/mesh.h"
+#include "traversal/device/projection.h"
 #include "traversal/device/ray.h"
 
 namespace bvhlab::trav {
 
-/// Pinhole camera; fov_y_deg is the full vertical field of view.
+/// A camera: where it is and looks, and its projection. fov_y_deg is the perspective camera's
+/// full vertical field of view; fisheye_fov_deg the fish-eye's across the circle inscribed in
+/// the image (projection.h).
 struct Camera {
     glm::vec3 eye{0.0f, 0.0f, 1.0f};
     glm::vec3 target{0.0f, 0.0f, 0.0f};
     glm::vec3 up{0.0f, 1.0f, 0.0f};
     float fov_y_deg = 45.0f;
+    Projection projection = Projection::kPerspective;
+    float fisheye_fov_deg = 180.0f;
 };
+
+/// "pinhole", "fisheye" or "panorama".
+const char* projection_name(Projection p);
 
 /// A camera for scenes without one: looks at the bounds' centre from a raised diagonal
 /// (direction (0.5, 0.7, 1)), far enough that the bounding sphere fills the 45-degree view.
