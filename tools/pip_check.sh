@@ -18,3 +18,14 @@ rm -rf "$venv"
 cd "$(mktemp -d)"  # not the source tree: `import bvhlab` must find the installed package
 BVHLAB_DATA="$src/data" "$venv/bin/python" -m pytest -q -p no:cacheprovider "$src/python/tests"
 "$venv/bin/python" -c "import bvhlab; assert 'site-packages' in bvhlab.__file__, bvhlab.__file__; print('pip_check: bvhlab', bvhlab.__commit__, 'from', bvhlab.__file__)"
+
+# Open Image Denoise as users get it: the pyoidn wheel from PyPI (it ships the library) in the
+# same environment; then the denoiser's test of the main build (README command 2's build/)
+# against that library, found as `render --denoise` finds it, through $VIRTUAL_ENV.
+"$venv/bin/pip" install --quiet pyoidn || { echo "pip_check: pip install pyoidn failed" >&2; exit 1; }
+if [ -x "$src/build/tests/bvhlab_tests" ]; then
+    log=$(VIRTUAL_ENV="$venv" "$src/build/tests/bvhlab_tests" --gtest_filter='Denoise.*' 2>&1) || true
+    echo "$log" | tail -3
+    grep -q "PASSED .*1 test" <<<"$log" || { echo "pip_check: the denoiser's test did not pass" >&2; exit 1; }
+    echo "pip_check: denoised with OIDN from $venv"
+fi

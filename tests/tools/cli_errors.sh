@@ -151,6 +151,14 @@ else
     fail=$((fail + 1))
     echo "FAIL fisheye and panorama rays, bench and render"
 fi
+export BVHLAB_OIDN=$tmp/no-oidn
+expect_error denoise-no-oidn "--denoise: BVHLAB_OIDN='.*no-oidn' holds no libOpenImageDenoise.so.2" \
+    render "$data/cornell_box.obj" --denoise --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
+unset BVHLAB_OIDN
+expect_error denoise-oidn-path "--denoise: --oidn '.*nowhere' holds no libOpenImageDenoise.so.2" \
+    render "$data/cornell_box.obj" --denoise --oidn "$tmp/nowhere" --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
+expect_error oidn-without-denoise "--oidn requires --denoise" \
+    render "$data/cornell_box.obj" --oidn "$tmp/nowhere" --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "accel/core/check.h"
+#include "renderer/denoise.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
 #include "renderer/wavefront.h"
@@ -21,7 +22,8 @@ namespace {
 
 struct RenderOpts {
     std::string scene, out, dump_rays, strategy = "mis", cost_image, missing = "error";
-    bool aov = false, pixel_centres = false, no_compaction = false;
+    bool aov = false, pixel_centres = false, no_compaction = false, denoise = false;
+    std::string oidn, denoise_device = "auto";
     BuildOptions build;
     TraceOptions trace;
     uint32_t width = 640, height = 480;
@@ -129,6 +131,18 @@ void register_render(CLI::App& app, Globals& g) {
                     "per file")
         ->check(CLI::IsMember({"error", "warn"}))
         ->capture_default_str();
+    auto* denoise = sub->add_flag(
+        "--denoise", o->denoise,
+        "also write NAME-denoised.EXT: Intel Open Image Denoise's RT filter on the image with its albedo and normal "
+        "AOVs (prefiltered), on OIDN's CUDA device when it has one, else the CPU (pip install pyoidn)");
+    sub->add_option("--oidn", o->oidn,
+                    "--denoise: libOpenImageDenoise.so.2 or its folder (default: $BVHLAB_OIDN, then an installed "
+                    "pyoidn wheel, then the system's)")
+        ->needs(denoise);
+    sub->add_option("--denoise-device", o->denoise_device, "--denoise: auto, cpu or cuda")
+        ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
+        ->capture_default_str()
+        ->needs(denoise);
     sub->add_flag("--aov", o->aov,
                   "also write the first hits' albedo and normal (for denoisers) beside --out, as NAME-albedo.EXT and "
                   "NAME-normal.EXT (normals in [-1, 1]: use .exr or .pfm)");
@@ -172,6 +186,15 @@ void register_render(CLI::App& app, Globals& g) {
             outputs.push_back({"the normal AOV", aov_path(o->out, "normal")});
         }
         outputs.push_back({"--cost-image", o->cost_image});
+        const size_t denoised_at = outputs.size();
+        if (o->denoise) outputs.push_back({"the denoised image", aov_path(o->out, "denoised")});
+        render::DenoiseOptions dopts;
+        dopts.library = o->oidn;
+        dopts.device = o->denoise_device;
+        if (o->denoise) {
+            std::string why;
+            if (render::find_oidn(dopts, &why).empty()) throw Error("--denoise: " + why);
+        }
         for (const scene::NamedFile& f : outputs) {
             if (f.path.empty()) continue;
             std::string why;
@@ -183,7 +206,7 @@ void register_render(CLI::App& app, Globals& g) {
         std::vector<scene::NamedFile> inputs{
             {"the scene", o->scene}, {"--env", o->env}, {"--structure", o->build.structure_file()}};
         scene::refuse_clashing_files(outputs, inputs);  // before the load, and again with its files
-        o->rs.aovs = o->aov;
+        o->rs.aovs = o->aov || o->denoise;              // the denoiser takes the albedo and normal AOVs
         // An instanced scene is traced two-level (unless --flatten) and shaded on its world-space
         // mesh, whose triangle ids are the two-level hits' scene-wide ids.
         Scene s = load_scene(o->scene, g);
@@ -320,6 +343,12 @@ void register_render(CLI::App& app, Globals& g) {
             cost = cost_image(built, o->build.kd_stack, cd, o->rs.seed, o->cost_image, cost_img);
             images.push_back({&cost_img, o->cost_image});
         }
+        render::DenoiseResult dn;
+        if (o->denoise) {
+            Stage st(g, "denoising with Open Image Denoise");
+            dn = render::denoise(res.mean, res.albedo, res.normal, dopts);
+            images.push_back({&dn.image, outputs[denoised_at].path});
+        }
         render::write_images(images);
 
         nlohmann::json bounces = nlohmann::json::array();
@@ -367,13 +396,20 @@ void register_render(CLI::App& app, Globals& g) {
         j["mrays_per_s"] = res.ms_total > 0.0 ? double(res.rays()) / (res.ms_total * 1e3) : 0.0;
         j["bounces"] = bounces;
         if (o->aov) j["aov"] = {outputs[1].path, outputs[2].path};
+        if (o->denoise)
+            j["denoise"] = {
+                {"out", outputs[denoised_at].path}, {"device", dn.device}, {"library", dn.library}, {"ms", dn.ms}};
         if (!cost.is_null()) j["primary_cost"] = cost;
         if (g.json)
             emit(j);
-        else
+        else {
             std::printf("%s: %ux%u, %u spp, %llu rays in %.2f s (%.1f Mrays/s), written to %s\n", s.name.c_str(),
                         o->width, o->height, res.spp, (unsigned long long)res.rays(), res.ms_total / 1e3,
                         j["mrays_per_s"].get<double>(), o->out.c_str());
+            if (o->denoise)
+                std::printf("denoised by Open Image Denoise on its %s device in %.1f ms, written to %s\n",
+                            dn.device.c_str(), dn.ms, outputs[denoised_at].path.c_str());
+        }
     });
 }
 
