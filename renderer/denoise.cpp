@@ -180,13 +180,16 @@ DenoiseResult denoise(const Image& beauty, const Image& albedo, const Image& nor
     try {
         const auto buffer = [&](const Image* from) {
             Handle b = api.new_buffer(device, bytes);
-            if (!b) throw Error("OIDN could not allocate " + std::to_string(bytes) + " bytes: " + device_error(api, device));
+            if (!b)
+                throw Error("OIDN could not allocate " + std::to_string(bytes) +
+                            " bytes: " + device_error(api, device));
             buffers.push_back(b);
             if (from) api.write_buffer(b, 0, bytes, from->pixels.data());
             return b;
         };
         Handle color = buffer(&beauty), alb = buffer(&albedo), nrm = buffer(&normal), result = buffer(nullptr);
-        const auto filter = [&](std::initializer_list<std::pair<const char*, Handle>> images, bool hdr, bool clean_aux) {
+        const auto filter = [&](std::initializer_list<std::pair<const char*, Handle>> images, bool hdr,
+                                bool clean_aux) {
             Handle f = api.new_filter(device, "RT");
             if (!f) throw Error("OIDN has no RT filter: " + device_error(api, device));
             filters.push_back(f);

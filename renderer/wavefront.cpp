@@ -65,6 +65,14 @@ struct HostPaths {
 
 }  // namespace
 
+Image mean_image(const std::vector<Vec3>& sum, uint32_t spp, uint32_t width, uint32_t height) {
+    BVHLAB_CHECK(sum.size() == size_t(width) * height, "pixel sums do not match the image size");
+    Image img(width, height);
+    const float inv = spp ? 1.0f / float(spp) : 0.0f;
+    for (size_t i = 0; i < sum.size(); ++i) img.pixels[i] = sum[i] * inv;
+    return img;
+}
+
 void check_settings(const RenderSettings& s, const CameraData& camera) {
     BVHLAB_CHECK(s.spp >= 1, "--spp must be at least 1");
     BVHLAB_CHECK(s.max_depth >= 1 && s.max_depth <= 1024, "--max-depth must be in [1, 1024]");
@@ -155,6 +163,7 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
     PathParams pp{settings.max_depth, settings.rr_depth,     settings.seed, 0, npix,
                   settings.strategy,  testing::planted_bug()};
     res.ms_setup = ms_since(t_start);
+    auto last_preview = Clock::now();
     for (uint32_t pass = 0; res.spp < settings.spp; ++pass) {
         pp.first_sample = res.spp;
         const uint32_t k = std::min(wave, settings.spp - res.spp);
@@ -245,6 +254,10 @@ RenderResult render_host(const RenderScene& scene, const CameraData& camera, con
         res.ms_accumulate += ms_since(t0);
         res.spp += k;
         if (progress) progress(res.spp, settings.spp, res);
+        if (settings.preview && ms_since(last_preview) >= 1000.0 * settings.preview_every_s) {
+            settings.preview(mean_image(totals.sum, res.spp, camera.width, camera.height), res.spp);
+            last_preview = Clock::now();
+        }
         if (settings.time_limit_s > 0.0 && ms_since(t_start) >= 1000.0 * settings.time_limit_s) break;
     }
     finish_result(res, totals, camera.width, camera.height);

@@ -39,7 +39,15 @@ struct RenderSettings {
     /// GPU only: false keeps dead paths in the queues (placeholder rays that miss at once), the
     /// baseline of the compaction experiment. The image is the same either way.
     bool compaction = true;
+    /// A progressive preview: called with the running mean and its samples per pixel about every
+    /// preview_every_s seconds while the render runs (after the pass that crosses the time), and
+    /// never when empty. On the GPU each call copies the pixel sums back once.
+    std::function<void(const Image& mean, uint32_t spp)> preview;
+    double preview_every_s = 1.0;
 };
+
+/// The mean of `spp` samples from per-pixel sums, as an image.
+Image mean_image(const std::vector<Vec3>& sum, uint32_t spp, uint32_t width, uint32_t height);
 
 /// Per bounce: rays traced (extension rays = paths alive), summed over the passes.
 struct BounceStats {

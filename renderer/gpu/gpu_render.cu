@@ -195,7 +195,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     res.ms_setup = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
     uint32_t enqueued = 0, in_flight = 0;  // samples enqueued; those of the pass not yet collected
     uint32_t pass = 0;
-    auto last_report = Clock::now();
+    auto last_report = Clock::now(), last_preview = Clock::now();
     for (; enqueued < settings.spp; ++pass) {
         Timeline& t = tl[pass % 2];
         pp.first_sample = enqueued;
@@ -267,6 +267,15 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             read_bounces();  // a copy: waits for the pass just enqueued, twice a second at most
             last_report = Clock::now();
             progress(res.spp, settings.spp, res);
+        }
+        if (settings.preview &&
+            std::chrono::duration<double>(Clock::now() - last_preview).count() >= settings.preview_every_s) {
+            // Every pass enqueued so far is in the sums once the stream has run it.
+            BVHLAB_CUDA_CHECK(cudaStreamSynchronize(static_cast<cudaStream_t>(stream)));
+            std::vector<Vec3> host_sum;
+            sum.download(host_sum);
+            settings.preview(mean_image(host_sum, enqueued, camera.width, camera.height), enqueued);
+            last_preview = Clock::now();
         }
         if (settings.time_limit_s > 0.0 &&
             std::chrono::duration<double>(Clock::now() - t_start).count() >= settings.time_limit_s) {

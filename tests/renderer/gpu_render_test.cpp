@@ -352,3 +352,31 @@ TEST(GpuRender, FisheyeAndPanoramaAgreeWithTheCpu) {
 }
 
 }  // namespace bvhlab::render
+
+namespace bvhlab::render {
+
+// On the GPU the preview copies the pixel sums back: the running mean after each pass, the
+// last one the final image bit for bit.
+TEST(GpuRender, PreviewShowsTheRunningMean) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    const Scene s = scene_named("cornell-box");
+    RenderSettings rs;
+    rs.spp = 12;
+    rs.wave_samples = 4;
+    rs.preview_every_s = 0.0;
+    std::vector<uint32_t> spps;
+    Image last;
+    rs.preview = [&](const Image& mean, uint32_t spp) {
+        spps.push_back(spp);
+        last = mean;
+    };
+    const RenderResult r = gpu_render(s, 32, 24, rs, "dynamic-speculative-fma");
+    EXPECT_EQ(spps, (std::vector<uint32_t>{4, 8, 12}));
+    ASSERT_EQ(last.pixels.size(), r.mean.pixels.size());
+    size_t differ = 0;
+    for (size_t i = 0; i < last.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) differ += last.pixels[i][c] != r.mean.pixels[i][c];
+    EXPECT_EQ(differ, 0u);
+}
+
+}  // namespace bvhlab::render

@@ -810,3 +810,36 @@ TEST(Denoise, ANoisyCornellBoxComesCloserToTheReference) {
 }
 
 }  // namespace bvhlab::render
+
+namespace bvhlab::render {
+
+// The progressive preview sees the running mean after each pass (every 0 s here), with the
+// samples so far, and its last picture is the final image bit for bit.
+TEST(Render, PreviewShowsTheRunningMean) {
+    const SceneSetup s = cornell();
+    RenderSettings rs;
+    rs.spp = 6;
+    rs.wave_samples = 2;
+    std::vector<uint32_t> spps;
+    Image last;
+    rs.preview_every_s = 0.0;
+    rs.preview = [&](const Image& mean, uint32_t spp) {
+        spps.push_back(spp);
+        last = mean;
+    };
+    const RenderResult r = render(s.mesh, s.cam, 16, rs);
+    EXPECT_EQ(spps, (std::vector<uint32_t>{2, 4, 6}));
+    ASSERT_EQ(last.pixels.size(), r.mean.pixels.size());
+    size_t differ = 0;
+    for (size_t i = 0; i < last.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) differ += last.pixels[i][c] != r.mean.pixels[i][c];
+    EXPECT_EQ(differ, 0u);
+    // Not due: a long interval gives no call.
+    size_t calls = 0;
+    rs.preview_every_s = 3600.0;
+    rs.preview = [&](const Image&, uint32_t) { ++calls; };
+    render(s.mesh, s.cam, 16, rs);
+    EXPECT_EQ(calls, 0u);
+}
+
+}  // namespace bvhlab::render

@@ -159,6 +159,18 @@ expect_error denoise-oidn-path "--denoise: --oidn '.*nowhere' holds no libOpenIm
     render "$data/cornell_box.obj" --denoise --oidn "$tmp/nowhere" --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
 expect_error oidn-without-denoise "--oidn requires --denoise" \
     render "$data/cornell_box.obj" --oidn "$tmp/nowhere" --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
+expect_error preview-every-alone "--preview-every requires --preview" \
+    render "$data/cornell_box.obj" --preview-every 2 --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
+expect_error preview-is-out "--preview .* and --out are the same file|is also" \
+    render "$data/cornell_box.obj" --preview "$tmp/pv.pfm" --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
+if "$bin" -q render "$data/cornell_box.obj" --width 8 --height 8 --spp 4 --preview "$tmp/preview.pfm" --preview-every 0.05 \
+    -o "$tmp/final.pfm" --json | python3 -c 'import json,sys; j=json.loads(sys.stdin.readline()); assert j["preview"]["out"].endswith("preview.pfm"), j' &&
+    cmp -s "$tmp/preview.pfm" "$tmp/final.pfm"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1))
+    echo "FAIL render --preview: the preview ends as the final image"
+fi
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100

@@ -23,7 +23,8 @@ namespace {
 struct RenderOpts {
     std::string scene, out, dump_rays, strategy = "mis", cost_image, missing = "error";
     bool aov = false, pixel_centres = false, no_compaction = false, denoise = false;
-    std::string oidn, denoise_device = "auto";
+    std::string oidn, denoise_device = "auto", preview;
+    double preview_every = 1.0;
     BuildOptions build;
     TraceOptions trace;
     uint32_t width = 640, height = 480;
@@ -143,6 +144,12 @@ void register_render(CLI::App& app, Globals& g) {
         ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
         ->capture_default_str()
         ->needs(denoise);
+    auto* preview = sub->add_option("--preview", o->preview,
+                                    "rewrite this image with the running mean while the render runs (atomically; "
+                                    "PNG, EXR, HDR or PFM), and with the final mean at the end");
+    sub->add_option("--preview-every", o->preview_every, "--preview: seconds between rewrites (default 1)")
+        ->check(FiniteRange(0.05, 3600.0))
+        ->needs(preview);
     sub->add_flag("--aov", o->aov,
                   "also write the first hits' albedo and normal (for denoisers) beside --out, as NAME-albedo.EXT and "
                   "NAME-normal.EXT (normals in [-1, 1]: use .exr or .pfm)");
@@ -186,6 +193,7 @@ void register_render(CLI::App& app, Globals& g) {
             outputs.push_back({"the normal AOV", aov_path(o->out, "normal")});
         }
         outputs.push_back({"--cost-image", o->cost_image});
+        if (!o->preview.empty()) outputs.push_back({"--preview", o->preview});
         const size_t denoised_at = outputs.size();
         if (o->denoise) outputs.push_back({"the denoised image", aov_path(o->out, "denoised")});
         render::DenoiseOptions dopts;
@@ -306,6 +314,14 @@ void register_render(CLI::App& app, Globals& g) {
             tracer = std::move(make_tracers(built, o->trace, o->build, nullptr).at(0));
         }
         render::RenderResult res;
+        size_t previews = 0;
+        if (!o->preview.empty()) {
+            o->rs.preview_every_s = o->preview_every;
+            o->rs.preview = [&](const render::Image& mean, uint32_t) {
+                render::write_images({{&mean, o->preview}});
+                ++previews;
+            };
+        }
         {
             Stage st(g, "rendering " + std::to_string(o->width) + "x" + std::to_string(o->height) + " at " +
                             std::to_string(o->rs.spp) + " spp on the " + o->trace.device + " (" + tracer->name() + ")");
@@ -349,6 +365,7 @@ void register_render(CLI::App& app, Globals& g) {
             dn = render::denoise(res.mean, res.albedo, res.normal, dopts);
             images.push_back({&dn.image, outputs[denoised_at].path});
         }
+        if (!o->preview.empty()) images.push_back({&res.mean, o->preview});  // the preview ends as the image
         render::write_images(images);
 
         nlohmann::json bounces = nlohmann::json::array();
@@ -400,6 +417,8 @@ void register_render(CLI::App& app, Globals& g) {
             j["denoise"] = {
                 {"out", outputs[denoised_at].path}, {"device", dn.device}, {"library", dn.library}, {"ms", dn.ms}};
         if (!cost.is_null()) j["primary_cost"] = cost;
+        if (!o->preview.empty())
+            j["preview"] = {{"out", o->preview}, {"every_s", o->preview_every}, {"updates", previews}};
         if (g.json)
             emit(j);
         else {
