@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
 // `bvhlab render`: the wavefront path tracer (issue 19). --device cpu is the reference
 // integrator: the shared stages on the host with Embree tracing every ray.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <memory>
 
 #include "accel/core/check.h"
@@ -314,11 +316,18 @@ void register_render(CLI::App& app, Globals& g) {
             tracer = std::move(make_tracers(built, o->trace, o->build, nullptr).at(0));
         }
         render::RenderResult res;
+        // The preview is written on another thread, so the render does not wait for the disk; an
+        // update that comes while the last one is still being written is skipped.
         size_t previews = 0;
+        std::future<void> writing;
         if (!o->preview.empty()) {
             o->rs.preview_every_s = o->preview_every;
             o->rs.preview = [&](const render::Image& mean, uint32_t) {
-                render::write_images({{&mean, o->preview}});
+                if (writing.valid() && writing.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+                if (writing.valid()) writing.get();  // a failed write ends the render with its error
+                writing = std::async(std::launch::async, [&o, img = mean] {
+                    render::write_images({{&img, o->preview}});
+                });
                 ++previews;
             };
         }
@@ -365,6 +374,8 @@ void register_render(CLI::App& app, Globals& g) {
             dn = render::denoise(res.mean, res.albedo, res.normal, dopts);
             images.push_back({&dn.image, outputs[denoised_at].path});
         }
+        if (writing.valid()) writing.get();
+        o->rs.preview = nullptr;
         if (!o->preview.empty()) images.push_back({&res.mean, o->preview});  // the preview ends as the image
         render::write_images(images);
 
