@@ -15,14 +15,15 @@ rm -rf "$venv"
 # --config-settings works with Debian 12's pip 23.0 (its short form -C came with 23.1).
 "$venv/bin/pip" install --quiet "$src" --config-settings=cmake.define.BVHLAB_ENABLE_CUDA=OFF \
     --config-settings=build-dir=build-pip/cmake || { echo "pip_check: pip install . failed" >&2; exit 1; }
+# Open Image Denoise as users get it: the pyoidn wheel from PyPI (it ships the library), so that
+# the module's denoising test runs too.
+"$venv/bin/pip" install --quiet pyoidn || { echo "pip_check: pip install pyoidn failed" >&2; exit 1; }
 cd "$(mktemp -d)"  # not the source tree: `import bvhlab` must find the installed package
 BVHLAB_DATA="$src/data" "$venv/bin/python" -m pytest -q -p no:cacheprovider "$src/python/tests"
 "$venv/bin/python" -c "import bvhlab; assert 'site-packages' in bvhlab.__file__, bvhlab.__file__; print('pip_check: bvhlab', bvhlab.__commit__, 'from', bvhlab.__file__)"
 
-# Open Image Denoise as users get it: the pyoidn wheel from PyPI (it ships the library) in the
-# same environment; then the denoiser's test of the main build (README command 2's build/)
-# against that library, found as `render --denoise` finds it, through $VIRTUAL_ENV.
-"$venv/bin/pip" install --quiet pyoidn || { echo "pip_check: pip install pyoidn failed" >&2; exit 1; }
+# The denoiser's test of the main build (README command 2's build/) against the wheel's library,
+# found as `render --denoise` finds it, through $VIRTUAL_ENV.
 if [ -x "$src/build/tests/bvhlab_tests" ]; then
     log=$(VIRTUAL_ENV="$venv" "$src/build/tests/bvhlab_tests" --gtest_filter='Denoise.*' 2>&1) || true
     echo "$log" | tail -3

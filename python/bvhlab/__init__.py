@@ -11,6 +11,9 @@ checked ray by ray against Embree.
 
 Errors are bvhlab.Error, with the command-line tool's one-line messages. See docs/python.md.
 """
+import os as _os
+
+from ._bvhlab import render as _render
 from ._bvhlab import (  # noqa: F401
     HIT_DTYPE,
     RAY_DTYPE,
@@ -27,7 +30,6 @@ from ._bvhlab import (  # noqa: F401
     rays,
     read_hits,
     read_rays,
-    render,
     trace,
     verify,
     write_hits,
@@ -41,3 +43,21 @@ def mrays_per_s(rays, info):
     mid = len(ms) // 2
     median = ms[mid] if len(ms) % 2 else 0.5 * (ms[mid - 1] + ms[mid])
     return len(rays) / (median * 1e3) if median > 0 else 0.0
+
+
+def render(structure, *args, denoise=False, oidn="", **kwargs):
+    """Path-traces a structure's scene; returns a float32 (height, width, 3) image. With
+    denoise=True also Intel Open Image Denoise's result, as (image, denoised): the library is
+    oidn= (a file or folder), else the installed pyoidn wheel's, else what `bvhlab render
+    --denoise` finds. Every other argument is the native render's (see its help)."""
+    if denoise and not oidn:
+        try:
+            import pyoidn
+
+            oidn = _os.path.join(_os.path.dirname(pyoidn.__file__), "oidn", "lib")
+        except ImportError:
+            pass
+    return _render(structure, *args, denoise=denoise, oidn=oidn, **kwargs)
+
+
+render.__doc__ += "\n\n" + (_render.__doc__ or "")

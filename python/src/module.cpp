@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "accel/core/check.h"
+#include "renderer/denoise.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/render_scene.h"
 #include "renderer/wavefront.h"
@@ -522,7 +523,8 @@ PYBIND11_MODULE(_bvhlab, m) {
         "render",
         [](std::shared_ptr<Structure> st, uint32_t width, uint32_t height, uint32_t spp, uint32_t max_depth,
            uint32_t seed, const std::string& device, const std::string& kernel, const py::object& eye,
-           const py::object& target, const py::object& up, float fov, const py::object& sky) {
+           const py::object& target, const py::object& up, float fov, const py::object& sky, bool denoise,
+           const std::string& oidn) -> py::object {
             render::SkyOption so;
             if (!sky.is_none()) {
                 const auto v = sky.cast<std::vector<float>>();
@@ -539,7 +541,14 @@ PYBIND11_MODULE(_bvhlab, m) {
             rs.spp = spp;
             rs.max_depth = max_depth;
             rs.seed = seed;
+            rs.aovs = denoise;  // the denoiser takes the albedo and normal
             render::check_settings(rs, cd);
+            render::DenoiseOptions dopts;
+            dopts.library = oidn;
+            if (denoise) {
+                std::string why;
+                if (render::find_oidn(dopts, &why).empty()) throw Error("denoise: " + why);
+            }
             std::unique_ptr<trav::Tracer> tracer = make_tracer(*st, device, kernel, 0);
             render::RenderResult res;
             {
@@ -551,18 +560,29 @@ PYBIND11_MODULE(_bvhlab, m) {
                     res = render::render_host(rscene, cd, rs, *tracer, *tracer);
                 }
             }
-            py::array_t<float> img({py::ssize_t(res.mean.height), py::ssize_t(res.mean.width), py::ssize_t(3)});
             static_assert(sizeof(Vec3) == 3 * sizeof(float), "an image row is packed floats");
-            std::memcpy(img.mutable_data(), res.mean.pixels.data(), res.mean.pixels.size() * sizeof(Vec3));
-            return img;
+            const auto to_array = [](const render::Image& im) {
+                py::array_t<float> a({py::ssize_t(im.height), py::ssize_t(im.width), py::ssize_t(3)});
+                std::memcpy(a.mutable_data(), im.pixels.data(), im.pixels.size() * sizeof(Vec3));
+                return a;
+            };
+            if (!denoise) return to_array(res.mean);
+            render::DenoiseResult d;
+            {
+                py::gil_scoped_release release;
+                d = render::denoise(res.mean, res.albedo, res.normal, dopts);
+            }
+            return py::make_tuple(to_array(res.mean), to_array(d.image));
         },
         py::arg("structure"), py::arg("width") = 320, py::arg("height") = 240, py::arg("spp") = 16,
         py::arg("max_depth") = 8, py::arg("seed") = 1, py::arg("device") = "cpu", py::arg("kernel") = "",
         py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(), py::arg("fov") = 0.0f,
-        py::arg("sky") = py::none(),
+        py::arg("sky") = py::none(), py::arg("denoise") = false, py::arg("oidn") = "",
         "Path-traces the structure's scene with its OBJ materials, lit by its emissive triangles and the sky (RGB "
         "radiance; default: white without emitters, black with them); returns "
-        "a float32 (height, width, 3) image of linear radiance");
+        "a float32 (height, width, 3) image of linear radiance. denoise=True also runs Intel Open Image Denoise "
+        "(the pyoidn wheel's library, or oidn= a library path) with the albedo and normal, and returns (image, "
+        "denoised)");
 
     m.def(
         "kernels",

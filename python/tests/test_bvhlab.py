@@ -304,3 +304,27 @@ def test_file_checksums_and_scene_hash_follow_the_documented_algorithm(cornell, 
     assert int.from_bytes(data[-8:], "little") == fnv_bytes(data[:-8])
     tri = cornell.vertices[cornell.indices].astype("<f4")  # (triangles, 3 corners, xyz)
     assert "%016x" % fnv_bytes(tri.tobytes()) == cornell.hash
+
+
+def _has_pyoidn():
+    try:
+        import pyoidn  # noqa: F401
+        return True
+    except ImportError:
+        return False
+
+
+@pytest.mark.skipif(not _has_pyoidn(), reason="pyoidn (Intel Open Image Denoise's wheel) is not installed")
+def test_render_denoised_with_pyoidn(cornell):
+    s = bvhlab.build(cornell)
+    ref = bvhlab.render(s, width=32, height=32, spp=1024, seed=7, **CORNELL_CAMERA)
+    raw, denoised = bvhlab.render(s, width=32, height=32, spp=4, denoise=True, **CORNELL_CAMERA)
+    assert denoised.shape == raw.shape == (32, 32, 3) and np.isfinite(denoised).all()
+    mse = lambda a: float(np.mean((np.clip(a, 0, 1) - np.clip(ref, 0, 1)) ** 2))  # noqa: E731
+    assert mse(denoised) * 2 < mse(raw), (mse(raw), mse(denoised))
+
+
+def test_render_denoise_without_oidn_says_how_to_get_it(cornell, tmp_path):
+    s = bvhlab.build(cornell)
+    with pytest.raises(bvhlab.Error, match="denoise: --oidn '.*' holds no libOpenImageDenoise"):
+        bvhlab.render(s, width=8, height=8, spp=1, denoise=True, oidn=str(tmp_path / "none"), **CORNELL_CAMERA)
