@@ -618,10 +618,20 @@ trav::ProtocolConfig RayOptions::for_scene(const Scene& s) const {
     return c;
 }
 
-nlohmann::json protocol_json_perspective(const trav::ProtocolConfig& c);
-
 nlohmann::json protocol_json(const trav::ProtocolConfig& c) {
-    nlohmann::json j = protocol_json_perspective(c);
+    nlohmann::json j = {{"width", c.primary.width},
+                        {"height", c.primary.height},
+                        {"spp", c.primary.samples},
+                        {"tile", c.primary.tile},
+                        {"ao_rays", c.ao_rays},
+                        {"diffuse_rays", c.diffuse_rays},
+                        {"ao_length", c.ao_length},
+                        {"seed", c.seed},
+                        {"camera",
+                         {{"eye", {c.camera.eye.x, c.camera.eye.y, c.camera.eye.z}},
+                          {"target", {c.camera.target.x, c.camera.target.y, c.camera.target.z}},
+                          {"up", {c.camera.up.x, c.camera.up.y, c.camera.up.z}},
+                          {"fov_y_deg", c.camera.fov_y_deg}}}};
     // A wide projection is named; a pinhole protocol keeps the fields it always had.
     if (c.camera.projection != trav::Projection::kPerspective) {
         j["camera"]["projection"] = trav::projection_name(c.camera.projection);
@@ -630,22 +640,6 @@ nlohmann::json protocol_json(const trav::ProtocolConfig& c) {
             j["camera"]["fisheye_fov_deg"] = c.camera.fisheye_fov_deg;
     }
     return j;
-}
-
-nlohmann::json protocol_json_perspective(const trav::ProtocolConfig& c) {
-    return {{"width", c.primary.width},
-            {"height", c.primary.height},
-            {"spp", c.primary.samples},
-            {"tile", c.primary.tile},
-            {"ao_rays", c.ao_rays},
-            {"diffuse_rays", c.diffuse_rays},
-            {"ao_length", c.ao_length},
-            {"seed", c.seed},
-            {"camera",
-             {{"eye", {c.camera.eye.x, c.camera.eye.y, c.camera.eye.z}},
-              {"target", {c.camera.target.x, c.camera.target.y, c.camera.target.z}},
-              {"up", {c.camera.up.x, c.camera.up.y, c.camera.up.z}},
-              {"fov_y_deg", c.camera.fov_y_deg}}}};
 }
 
 std::vector<trav::RayType> parse_ray_types(const std::string& list) {

@@ -86,7 +86,8 @@ Spec read_spec(const std::string& path) {
     std::ifstream in(path);
     if (!in) bad_spec(path, fs::exists(path) ? "cannot be read" : "does not exist");
     if (fs::is_directory(path)) bad_spec(path, "is a folder");
-    nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    // Ordered, so that the cells come in the order the file lists the axes.
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(in, nullptr, /*allow_exceptions=*/false);
     if (j.is_discarded()) bad_spec(path, "is not valid JSON");
     if (!j.is_object()) bad_spec(path, "must hold one JSON object");
     static const std::vector<std::string> keys{"name", "command", "scenes", "grid", "args", "repetitions", "device"};
@@ -121,11 +122,7 @@ Spec read_spec(const std::string& path) {
     s.args = strings("args", false);
     if (j.contains("grid")) {
         if (!j["grid"].is_object()) bad_spec(path, "\"grid\" must be an object of option names and lists of values");
-        // nlohmann::json sorts an object's keys; the file's order is kept by reading it again
-        // as ordered_json, so that the cells come in the order the file lists the axes.
-        std::ifstream again(path);
-        const nlohmann::ordered_json ordered = nlohmann::ordered_json::parse(again, nullptr, false);
-        for (const auto& [name, values] : ordered["grid"].items()) {
+        for (const auto& [name, values] : j["grid"].items()) {
             if (name.rfind("-", 0) != 0)
                 bad_spec(path, "grid axis '" + name + "' is not an option (options start with -)");
             if (!values.is_array() || values.empty())
