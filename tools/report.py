@@ -145,14 +145,21 @@ def machines(records):
     return list(seen)
 
 
+def write_figure(plt, fig, out, name):
+    """A PNG written whole or not at all: into a temporary beside it, then renamed."""
+    tmp = os.path.join(out, f".{name}.tmp")
+    fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    os.replace(tmp, os.path.join(out, name))
+
+
 def save_plot(plt, fig, ax, out, name, xlabel, ylabel, alt):
     """Labels, legend and file of a plot; returns its Markdown lines."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.legend(fontsize="small")
     fig.tight_layout()
-    fig.savefig(os.path.join(out, name), dpi=110)
-    plt.close(fig)
+    write_figure(plt, fig, out, name)
     return [f"![{alt}]({name})", ""]
 
 
@@ -228,8 +235,7 @@ def bench_section(records, out, baseline, plt):
             ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
             fig.tight_layout()
             name = f"mrays-{t}.png"
-            fig.savefig(os.path.join(out, name), dpi=110)
-            plt.close(fig)
+            write_figure(plt, fig, out, name)
             lines += [f"![Mrays/s, {t} rays]({name})", ""]
             summary.setdefault("_plots", []).append((f"Mrays/s, {t} rays", name))
     if baseline:
@@ -263,8 +269,7 @@ def bench_section(records, out, baseline, plt):
             ax.set_title(f"against {baseline}", fontsize="small")
             ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
             fig.tight_layout()
-            fig.savefig(os.path.join(out, "speedup.png"), dpi=110)
-            plt.close(fig)
+            write_figure(plt, fig, out, "speedup.png")
             lines += ["![speed-up](speedup.png)", ""]
     return lines, summary
 
@@ -370,8 +375,7 @@ def compare_section(a_recs, b_recs, names, out, plt):
         ax.axvline(1.0, color="grey", lw=0.8)
         ax.set_xlabel("B / A")
         fig.tight_layout()
-        fig.savefig(os.path.join(out, "compare.png"), dpi=110)
-        plt.close(fig)
+        write_figure(plt, fig, out, "compare.png")
         lines += ["![B against A](compare.png)", ""]
     return lines, {"compare": {"a": names[0], "b": names[1], "measurements": len(common), "geomean": geo}}
 

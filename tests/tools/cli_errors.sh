@@ -171,6 +171,10 @@ else
     fail=$((fail + 1))
     echo "FAIL render --preview: the preview ends as the final image"
 fi
+expect_error denoise-device-bad "--denoise-device: gpu not in \{auto,cpu,cuda\}" \
+    render "$data/cornell_box.obj" --denoise --denoise-device gpu --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
+expect_error preview-every-zero "--preview-every: .*0.*not a finite number in \[0.05, 3600\]|--preview-every" \
+    render "$data/cornell_box.obj" --preview "$tmp/pv2.pfm" --preview-every 0 --width 4 --height 4 --spp 1 -o "$tmp/pv3.pfm"
 expect_error spp-not-square "perfect square" verify "$data/cornell_box.obj" --spp 3 --width 4 --height 4
 expect_error bad-type "ray type" bench "$data/cornell_box.obj" --types primary,sideways
 expect_error bad-gen "procedural|generated" build gen:blobs:100
