@@ -200,3 +200,28 @@ TEST(PrimaryRays, PanoramaAndFisheyeRaysFollowTheProjection) {
 }
 
 }  // namespace bvhlab::trav
+
+namespace bvhlab::trav {
+
+// Every primary hit gets its shadow ray, the first one too: with a narrow view every pixel
+// sees the back wall, and each shadow ray runs from its hit to the light.
+TEST(Protocol, EveryHitHasItsShadowRayFromTheFirstOn) {
+    scene::TriangleMesh mesh = scene::load_obj(test::data_dir() + "/cornell_box.obj");
+    EmbreeOracle oracle(mesh);
+    ProtocolConfig cfg;
+    cfg.camera = cornell_camera();
+    cfg.camera.fov_y_deg = 10.0f;
+    cfg.primary = {8, 6, 1, 0};
+    RayProtocol p(mesh, oracle, cfg);
+    const RaySet shadow = p.make(RayType::kShadow);
+    ASSERT_EQ(shadow.rays.size(), 48u) << "every pixel of the narrow view hits";
+    const float diag = mesh.diagonal();
+    const Vec3 light{278.0f, 273.0f + 0.25f * diag, -800.0f};
+    for (size_t i = 0; i < shadow.rays.size(); ++i) {
+        const Ray& r = shadow.rays[i];
+        EXPECT_NEAR(length(r.dir), 1.0f, 1e-4f) << i;
+        EXPECT_NEAR(length(r.org + r.dir * r.tmax - light), 0.0f, 1e-2f) << i;
+    }
+}
+
+}  // namespace bvhlab::trav
