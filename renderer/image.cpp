@@ -160,7 +160,7 @@ private:
 
 }  // namespace
 
-Image read_image(const std::string& path) {
+Image read_image(const std::string& path, ImageValues values) {
     if (const std::string problem = scene::regular_file_problem(path); !problem.empty())
         throw Error("cannot read " + path + ": " + (problem == scene::kDoesNotExist ? "no such file" : problem));
     if (extension_of(path) == ".pfm") return read_pfm(path);
@@ -184,7 +184,8 @@ Image read_image(const std::string& path) {
         throw Error("cannot read " + path + ": " + why.substr(0, why.find('\n')));
     }
     const std::string space = spec.get_string_attribute("oiio:ColorSpace");
-    const bool srgb = space == "sRGB" || (space.empty() && spec.format.basetype == OIIO::TypeDesc::UINT8);
+    const bool srgb = values == ImageValues::kColour &&
+                      (space == "sRGB" || (space.empty() && spec.format.basetype == OIIO::TypeDesc::UINT8));
     auto linear = [srgb](float c) {
         if (!srgb) return c;
         return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
@@ -197,6 +198,7 @@ Image read_image(const std::string& path) {
     }
     return img;
 #else
+    (void)values;
     throw Error("cannot read " + path + ": this build has no OpenImageIO, so it reads .pfm images only");
 #endif
 }

@@ -38,11 +38,14 @@ void write_images(const std::vector<std::pair<const Image*, std::string>>& image
 /// Reads a PFM file (colour "PF" or grey "Pf", either byte order). Throws bvhlab::Error.
 Image read_pfm(const std::string& path);
 
-/// Reads an image as linear RGB: PFM always, anything else through OpenImageIO (8-bit and
-/// other sRGB-tagged files are linearised; one channel is grey; alpha is dropped). Throws
-/// bvhlab::Error naming the file when it is missing, unreadable, or needs OpenImageIO that this
-/// build lacks.
-Image read_image(const std::string& path);
+/// What an image's values are: colours (8-bit and other sRGB-tagged files are linearised) or
+/// data such as normal and height maps (values as stored, scaled to [0, 1] for integer formats).
+enum class ImageValues { kColour, kData };
+
+/// Reads an image as RGB: PFM always, anything else through OpenImageIO (colours linearised as
+/// `values` says; one channel is grey; alpha is dropped). Throws bvhlab::Error naming the file
+/// when it is missing, unreadable, or needs OpenImageIO that this build lacks.
+Image read_image(const std::string& path, ImageValues values = ImageValues::kColour);
 
 /// Linear to sRGB-encoded, for 8-bit output.
 float srgb_encode(float linear);

@@ -21,6 +21,9 @@ RenderMaterial default_material() {
     m.alpha = 1.0f;
     m.ior = 1.5f;
     m.texture = -1;
+    m.normal_map = -1;
+    m.normal_kind = NormalMapKind::kNone;
+    m.bump_scale = 1.0f;
     return m;
 }
 
@@ -89,44 +92,94 @@ std::string resolve_texture_path(const std::string& base_dir, const std::string&
     return (std::filesystem::path(base_dir) / path).lexically_normal().string();
 }
 
-void RenderScene::load_textures(const TextureOptions& opts) {
-    std::map<std::string, int32_t> loaded;  // resolved path -> texture index, or -1 when missing
-    for (size_t i = 0; i < mesh_.materials.size(); ++i) {
-        const std::string& name = mesh_.materials[i].diffuse_texture;
-        if (name.empty()) continue;
-        const std::string path = resolve_texture_path(opts.base_dir, name);
-        auto it = loaded.find(path);
-        if (it == loaded.end()) {
-            int32_t index = -1;
-            const std::string problem = scene::regular_file_problem(path);
-            if (problem.empty()) {
-                const Image img = read_image(path);
-                for (const Vec3& p : img.pixels)
-                    if (!std::isfinite(p.x + p.y + p.z) || p.x < 0.0f || p.y < 0.0f || p.z < 0.0f)
-                        throw Error("texture " + path + " has a negative, NaN or infinite texel");
-                BVHLAB_CHECK(texels_.size() + img.pixels.size() < (size_t(1) << 32),
-                             "the textures hold 2^32 texels or more");
-                index = int32_t(textures_.size());
-                textures_.push_back({uint32_t(texels_.size()), img.width, img.height, 0});
-                texels_.insert(texels_.end(), img.pixels.begin(), img.pixels.end());
-            } else if (problem != scene::kDoesNotExist) {  // a folder or a device: an error either way
-                throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name + "'): " + problem);
-            } else if (!opts.warn_missing) {
-                throw Error("texture " + path + " (map_Kd of material '" + mesh_.materials[i].name +
-                            "') does not exist (--missing-textures warn renders with its Kd)");
-            } else if (opts.warnings) {
-                opts.warnings->push_back("texture " + path + " does not exist: material '" + mesh_.materials[i].name +
-                                         "' renders with its Kd");
-            }
-            it = loaded.emplace(path, index).first;
+namespace {
+
+/// The problem with a texture's texels for its role, or "": colours must be finite and not
+/// negative, normal maps in [0, 1] (they hold (n + 1) / 2), heights finite.
+std::string texel_problem(const Image& img, const char* role) {
+    const bool normals = std::string(role) == "norm";
+    const bool heights = std::string(role) == "map_Bump";
+    for (const Vec3& p : img.pixels) {
+        if (!std::isfinite(p.x + p.y + p.z)) return "has a NaN or infinite texel";
+        if (heights) continue;
+        if (p.x < 0.0f || p.y < 0.0f || p.z < 0.0f) return "has a negative texel";
+        if (normals && (p.x > 1.0f || p.y > 1.0f || p.z > 1.0f))
+            return "has a texel above 1, which a normal map (texels (n + 1) / 2) cannot hold";
+    }
+    return "";
+}
+
+/// Whether every texel of [p, p + n) is grey (equal channels): a map_Bump image is then a height
+/// map, else a tangent-space normal map.
+bool grey(const Vec3* p, size_t n) {
+    for (size_t i = 0; i < n; ++i)
+        if (p[i].x != p[i].y || p[i].y != p[i].z) return false;
+    return true;
+}
+
+}  // namespace
+
+int32_t RenderScene::load_texture(const TextureOptions& opts, const scene::Material& m, const std::string& name,
+                                  const char* role, std::map<std::string, int32_t>& loaded) {
+    const bool data = std::string(role) != "map_Kd";
+    const std::string path = resolve_texture_path(opts.base_dir, name);
+    const std::string key = std::string(data ? "data:" : "colour:") + path;
+    const std::string what = "texture " + path + " (" + role + " of material '" + m.name + "')";
+    auto it = loaded.find(key);
+    if (it == loaded.end()) {
+        int32_t index = -1;
+        const std::string problem = scene::regular_file_problem(path);
+        if (problem.empty()) {
+            const Image img = read_image(path, data ? ImageValues::kData : ImageValues::kColour);
+            // A map_Bump image is a height map or a normal map: checked for what it is.
+            const bool normals = std::string(role) == "map_Bump" && !grey(img.pixels.data(), img.pixels.size());
+            const char* check = normals ? "norm" : role;
+            if (const std::string p = texel_problem(img, check); !p.empty()) throw Error(what + " " + p);
+            BVHLAB_CHECK(texels_.size() + img.pixels.size() < (size_t(1) << 32),
+                         "the textures hold 2^32 texels or more");
+            index = int32_t(textures_.size());
+            textures_.push_back({uint32_t(texels_.size()), img.width, img.height, 0});
+            texels_.insert(texels_.end(), img.pixels.begin(), img.pixels.end());
+        } else if (problem != scene::kDoesNotExist) {  // a folder or a device: an error either way
+            throw Error(what + ": " + problem);
+        } else if (!opts.warn_missing) {
+            throw Error(what + " does not exist (--missing-textures warn renders without it)");
+        } else if (opts.warnings) {
+            opts.warnings->push_back("texture " + path + " does not exist: material '" + m.name +
+                                     "' renders without its " + role);
         }
-        materials_[i + 1].texture = it->second;
+        it = loaded.emplace(key, index).first;
+    }
+    return it->second;
+}
+
+void RenderScene::load_textures(const TextureOptions& opts) {
+    std::map<std::string, int32_t> loaded;  // kind and resolved path -> texture index, or -1 when missing
+    bool maps = false;
+    for (size_t i = 0; i < mesh_.materials.size(); ++i) {
+        const scene::Material& m = mesh_.materials[i];
+        RenderMaterial& r = materials_[i + 1];
+        if (!m.diffuse_texture.empty()) r.texture = load_texture(opts, m, m.diffuse_texture, "map_Kd", loaded);
+        // norm before map_Bump: one map per material.
+        const bool norm = !m.normal_texture.empty();
+        if (!norm && m.bump_texture.empty()) continue;
+        const int32_t index =
+            load_texture(opts, m, norm ? m.normal_texture : m.bump_texture, norm ? "norm" : "map_Bump", loaded);
+        if (index < 0) continue;
+        const TextureInfo& t = textures_[size_t(index)];
+        const bool height = !norm && grey(texels_.data() + t.offset, size_t(t.width) * t.height);
+        r.normal_map = index;
+        r.normal_kind = height ? NormalMapKind::kHeight : NormalMapKind::kTangentSpace;
+        r.bump_scale = m.bump_multiplier;
+        maps = true;
     }
     if (textures_.empty()) return;
     if (mesh_.texcoords.size() == 6 * mesh_.triangle_count())
         textured_ = true;
     else if (opts.warnings)
-        opts.warnings->push_back("the scene has map_Kd textures but no texture coordinates (vt): they render with Kd");
+        opts.warnings->push_back(
+            std::string("the scene has ") + (maps ? "textures or normal maps" : "map_Kd textures") +
+            " but no texture coordinates (vt): they render with Kd" + (maps ? " and without normal maps" : ""));
 }
 
 RenderScene::RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures)

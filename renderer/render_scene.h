@@ -3,6 +3,7 @@
 // rule and the camera, in the flat arrays both integrators read.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -35,9 +36,11 @@ std::string resolve_texture_path(const std::string& base_dir, const std::string&
 
 class RenderScene {
 public:
-    /// Maps the materials, loads their map_Kd textures (through read_image, each file once) and
-    /// builds the light table. Throws bvhlab::Error for an empty mesh, a texture that cannot be
-    /// read or has a negative or non-finite texel, and a missing one unless warn_missing.
+    /// Maps the materials, loads their map_Kd textures and their normal or height maps (norm,
+    /// else map_Bump: a grey image is a height map, any other a tangent-space normal map) through
+    /// read_image, each file once, and builds the light table. Throws bvhlab::Error for an empty
+    /// mesh, a texture that cannot be read or has a non-finite texel (a negative one in a colour
+    /// texture, one outside [0, 1] in a normal map), and a missing one unless warn_missing.
     RenderScene(const scene::TriangleMesh& mesh, const SkyOption& sky, const TextureOptions& textures = {});
 
     /// Views into this object's arrays (host memory); valid while it lives.
@@ -68,6 +71,10 @@ public:
 private:
     void build_env_tables();
     void load_textures(const TextureOptions& opts);
+    /// The index of the texture `name` (as material m writes it for `role`: "map_Kd", "norm" or
+    /// "map_Bump"), loading it unless `loaded` has it; -1 for a missing file that opts allows.
+    int32_t load_texture(const TextureOptions& opts, const scene::Material& m, const std::string& name,
+                         const char* role, std::map<std::string, int32_t>& loaded);
 
     const scene::TriangleMesh& mesh_;
     std::vector<RenderMaterial> materials_;  // [0] default

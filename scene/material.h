@@ -24,6 +24,9 @@ struct Material {
     float dissolve = 1.0f;            ///< d (1 - Tr)
     int32_t illum = 0;                ///< illumination model
     std::string diffuse_texture;      ///< map_Kd as written in the MTL, backslashes included
+    std::string normal_texture;       ///< norm (glTF normalTexture): a tangent-space normal map
+    std::string bump_texture;         ///< map_Bump / bump: a height map, or a normal map (by content)
+    float bump_multiplier = 1.0f;     ///< -bm of bump/norm (glTF's normalTexture.scale)
 };
 
 }  // namespace bvhlab::scene

@@ -152,7 +152,8 @@ std::string material_problem(const Material& m) {
     for (const std::string& p :
          {color("Kd", m.diffuse, 1.0f), color("Ks", m.specular, 1.0f), color("Ka", m.ambient, kMaxRadiance),
           color("Ke", m.emission, kMaxRadiance), range_problem("Ns", m.shininess, 0.0f, 1e30f),
-          range_problem("Ni", m.ior, 0.0f, 100.0f), range_problem("d", m.dissolve, 0.0f, 1.0f)})
+          range_problem("Ni", m.ior, 0.0f, 100.0f), range_problem("d", m.dissolve, 0.0f, 1.0f),
+          range_problem("-bm", m.bump_multiplier, -1e6f, 1e6f)})
         if (!p.empty()) return p;
     return "";
 }

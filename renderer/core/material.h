@@ -20,16 +20,25 @@ enum class BsdfType : uint32_t {
     kPlastic = 4,    ///< a GGX dielectric coat of index Ni over a Lambertian Kd base
 };
 
+/// How a material's normal_map texture bends the shading normal (renderer/core/normal_map.h).
+enum class NormalMapKind : uint32_t {
+    kNone = 0,
+    kTangentSpace = 1,  ///< texels are (n + 1) / 2 of a unit normal in the (tangent, bitangent, normal) frame
+    kHeight = 2,        ///< texels are heights (their mean), in scene units times bump_scale
+};
+
 /// One material as both integrators read it, 64 bytes.
 struct RenderMaterial {
-    Vec3 base;        ///< Kd: the Lambertian or plastic base colour
-    BsdfType type;    //
-    Vec3 specular;    ///< Ks: mirror and conductor reflectance (F0)
-    float alpha;      ///< GGX roughness, from Ns
-    Vec3 emission;    ///< Ke: radiance leaving either side of the triangle
-    float ior;        ///< Ni (glass and plastic)
-    int32_t texture;  ///< index into the scene's textures for map_Kd, -1 for none
-    uint32_t pad[3];
+    Vec3 base;           ///< Kd: the Lambertian or plastic base colour
+    BsdfType type;       //
+    Vec3 specular;       ///< Ks: mirror and conductor reflectance (F0)
+    float alpha;         ///< GGX roughness, from Ns
+    Vec3 emission;       ///< Ke: radiance leaving either side of the triangle
+    float ior;           ///< Ni (glass and plastic)
+    int32_t texture;     ///< index into the scene's textures for map_Kd, -1 for none
+    int32_t normal_map;  ///< index into the scene's textures for the normal or height map, -1 for none
+    NormalMapKind normal_kind;
+    float bump_scale;  ///< -bm: scales a normal map's tangent-plane part, or a height map's heights
 };
 static_assert(sizeof(RenderMaterial) == 64, "RenderMaterial is 64 bytes");
 
@@ -49,7 +58,7 @@ float roughness_from_shininess(float ns);
 /// Ke, when not black, makes the triangle an area light whatever its BSDF; when Ke is black, a
 /// Ka above 1 in any channel is read as Ke (tinyobjloader's Cornell box writes its light that
 /// way; no reflectance exceeds 1). Emission leaves both sides of the triangle. `texture` is the
-/// index the caller gave map_Kd, or -1.
+/// index the caller gave map_Kd, or -1. The normal map is none; RenderScene sets it.
 RenderMaterial map_material(const scene::Material& m, int32_t texture);
 
 }  // namespace bvhlab::render

@@ -14,6 +14,7 @@
 #include "renderer/core/bsdf.h"
 #include "renderer/core/camera.h"
 #include "renderer/core/lights.h"
+#include "renderer/core/normal_map.h"
 #include "renderer/core/texture.h"
 
 namespace bvhlab::render {
@@ -107,6 +108,27 @@ BVHLAB_HD inline Vec3 shading_normal(const SceneView& s, uint32_t tri, float b1,
     return n * ((dot(n, ng) < 0.0f ? -1.0f : 1.0f) / len);
 }
 
+/// The shading normal ns (unit, on the geometric normal's side) bent by m's normal or height map
+/// at barycentrics (b1, b2) of triangle `tri`, in the frame of the triangle's texture
+/// coordinates. ns itself where m has no map, the mesh no texture coordinates, or the mapping is
+/// degenerate.
+BVHLAB_HD inline Vec3 mapped_normal(const SceneView& s, const RenderMaterial& m, uint32_t tri, float b1, float b2,
+                                    Vec3 ns) {
+    if (m.normal_kind == NormalMapKind::kNone || !s.textures.texcoords) return ns;
+    const Vec3 p0 = s.vertices[s.indices[3 * tri]], p1 = s.vertices[s.indices[3 * tri + 1]],
+               p2 = s.vertices[s.indices[3 * tri + 2]];
+    Vec3 dpdu, dpdv;
+    if (!uv_derivatives(p0, p1, p2, s.textures.texcoords + 6 * size_t(tri), dpdu, dpdv)) return ns;
+    float u, v;
+    triangle_texcoords(s.textures.texcoords, tri, b1, b2, u, v);
+    const TextureInfo& t = s.textures.info[m.normal_map];
+    if (m.normal_kind == NormalMapKind::kTangentSpace)
+        return tangent_space_normal(ns, dpdu, dpdv, sample_texture(s.textures.texels, t, u, v), m.bump_scale);
+    float hu, hv;
+    height_derivatives(s.textures.texels, t, u, v, m.bump_scale, hu, hv);
+    return height_normal(ns, dpdu, dpdv, hu, hv);
+}
+
 /// Whether a path that arrives from wo (pointing away from the surface) and leaves along wi
 /// crosses the geometric surface as the shading frame says it does: reflection (both on one side
 /// of the shading normal n) must stay on one side of ng, transmission must cross it. Shading
@@ -185,7 +207,7 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
     const Vec3 wo = ray.dir * -1.0f;
     // The shading normal, unless wo sees it from the other side than ng (a grazing view of a
     // strongly bent normal): BSDFs take wo on the frame's side, so ng then.
-    Vec3 ns = shading_normal(s, tri, hit.u, hit.v, ng);
+    Vec3 ns = mapped_normal(s, m, tri, hit.u, hit.v, shading_normal(s, tri, hit.u, hit.v, ng));
     if ((dot(ns, wo) > 0.0f) != (dot(ng, wo) > 0.0f)) ns = ng;
     if (bounce == 0 && albedo) {
         albedo[px] = material_albedo(m, base);
@@ -205,8 +227,8 @@ BVHLAB_HD inline ShadeResult shade(uint32_t i, uint32_t bounce, const SceneView&
 
     const bool opaque = m.type != BsdfType::kGlass;
     const Vec3 n = opaque && dot(ns, wo) < 0.0f ? ns * -1.0f : ns;
-    // Without shading normals n is ±ng and the sides always agree: the guard is skipped.
-    const bool bent = s.normals != nullptr;
+    // Without shading normals or a normal map n is ±ng and the sides always agree: the guard is skipped.
+    const bool bent = s.normals != nullptr || m.normal_kind != NormalMapKind::kNone;
     const Frame frame = Frame::around(n);
     const Vec3 wo_l = frame.to_local(wo);
     const uint32_t pixel = pixel_of(p, px), sample = sample_of(p, px);

@@ -304,7 +304,7 @@ public:
     }
 
     /// Throws on a numeric MTL value that is not a finite number: tinyobjloader reads `Kd nan`
-    /// or `Ns 0x10` as 0, which would silently change the material.
+    /// or `Ns 0x10` as 0 (and a map's `-bm nan` as 1), which would silently change the material.
     static void scan_mtl(const std::string& path, const std::string& text) {
         size_t line_no = 0;
         for (size_t pos = 0; pos < text.size();) {
@@ -318,6 +318,18 @@ public:
             if (!next_token(p, e, s)) continue;
             const std::string_view key(s, size_t(p - s));
             const char* const values = p;
+            if (key == "bump" || key == "map_Bump" || key == "map_bump" || key == "norm") {
+                // A map's -bm multiplier (tinyobjloader reads `-bm nan` as 1).
+                while (next_token(p, e, s))
+                    if (std::string_view(s, size_t(p - s)) == "-bm") {
+                        double v = 0.0;
+                        if (!next_token(p, e, s) || !is_number(s, p, v) || !std::isfinite(v))
+                            throw Error("material file '" + path + "' line " + std::to_string(line_no) + ": " +
+                                        std::string(key) + " -bm value '" + std::string(s, p) +
+                                        "' is not a finite number");
+                    }
+                continue;
+            }
             if (key != "Ka" && key != "Kd" && key != "Ks" && key != "Ke" && key != "Kt" && key != "Tf" && key != "Ns" &&
                 key != "Ni" && key != "d" && key != "Tr")
                 continue;
@@ -402,6 +414,10 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
         mat.dissolve = m.dissolve;
         mat.illum = m.illum;
         mat.diffuse_texture = m.diffuse_texname;
+        mat.normal_texture = m.normal_texname;
+        mat.bump_texture = m.bump_texname;
+        // One multiplier: bump's -bm, else norm's (tinyobjloader parses -bm for both).
+        mat.bump_multiplier = !m.bump_texname.empty() ? m.bump_texopt.bump_multiplier : m.normal_texopt.bump_multiplier;
         mesh.materials.push_back(mat);
     }
     const size_t nv = attrib.vertices.size() / 3;

@@ -29,8 +29,9 @@ TriangleMesh load_obj(const std::string& path, std::vector<std::string>* warning
 /// differently (scene_cache.h).
 // 2: materials keep Ks, Ns, Ni, d, illum, map_Kd; 3: texcoords; 4: denormal coordinates as 0;
 // 5: hexadecimal numbers refused (tinyobjloader read them as 0)
-// 6: vt/vn references checked, absolute mtllib, MTL numbers scanned; 7: vn normals per corner
-constexpr uint32_t kObjLoaderVersion = 7;
+// 6: vt/vn references checked, absolute mtllib, MTL numbers scanned; 7: vn normals per corner;
+// 8: norm, map_Bump/bump and -bm
+constexpr uint32_t kObjLoaderVersion = 8;
 
 /// Writes `mesh` as OBJ (v and f lines, usemtl per material run). Throws on I/O errors.
 void write_obj(const TriangleMesh& mesh, const std::string& path);

@@ -178,6 +178,9 @@ Entry parse_entry(const std::string& data) {
         m.dissolve = in.pod<float>();
         m.illum = in.pod<int32_t>();
         m.diffuse_texture = in.str();
+        m.normal_texture = in.str();
+        m.bump_texture = in.str();
+        m.bump_multiplier = in.pod<float>();
         e.scene.materials.push_back(std::move(m));
     }
     const auto meshes = in.pod<uint32_t>();
@@ -275,6 +278,9 @@ void write_entry(const std::string& path, const std::string& file, uint64_t file
         out.pod(m.dissolve);
         out.pod(m.illum);
         out.str(m.diffuse_texture);
+        out.str(m.normal_texture);
+        out.str(m.bump_texture);
+        out.pod(m.bump_multiplier);
     }
     out.pod(uint32_t(scene.meshes.size()));
     for (const TriangleMesh& m : scene.meshes) {

@@ -18,8 +18,9 @@
 
 namespace bvhlab::scene {
 
-// 2: material parameters; 3: texcoords; 4: meshes, instances, camera; 5: shading normals
-constexpr uint32_t kSceneCacheVersion = 5;
+// 2: material parameters; 3: texcoords; 4: meshes, instances, camera; 5: shading normals;
+// 6: normal and bump maps
+constexpr uint32_t kSceneCacheVersion = 6;
 
 /// $BVHLAB_CACHE_DIR, else $XDG_CACHE_HOME/bvhlab, else $HOME/.cache/bvhlab ("" when none is set).
 std::string default_scene_cache_dir();

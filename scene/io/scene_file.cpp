@@ -3,6 +3,7 @@
 #include "scene/io/scene_file.h"
 
 #include <assimp/DefaultIOSystem.h>
+#include <assimp/GltfMaterial.h>
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -196,10 +197,12 @@ std::string texture(const aiMaterial& m, aiTextureType type, const std::string& 
     aiString s;
     if (m.GetTexture(type, 0, &s) != aiReturn_SUCCESS || s.length == 0) return "";
     if (s.C_Str()[0] == '*') {
+        const bool colour = type == aiTextureType_BASE_COLOR || type == aiTextureType_DIFFUSE;
         if (warnings)
-            warnings->push_back("'" + path + "': material '" + name +
-                                "' has an embedded base-colour texture, which bvhlab does not read (it renders "
-                                "with the base colour)");
+            warnings->push_back("'" + path + "': material '" + name + "' has an embedded " +
+                                (colour ? "base-colour texture" : "normal or height map") +
+                                ", which bvhlab does not read (it renders " +
+                                (colour ? "with the base colour)" : "without it)"));
         return "";
     }
     return s.C_Str();
@@ -235,6 +238,8 @@ Material gltf_material(const aiMaterial& am, const std::string& path, std::vecto
     }
     m.diffuse_texture = texture(am, aiTextureType_BASE_COLOR, path, m.name, warnings);
     if (m.diffuse_texture.empty()) m.diffuse_texture = texture(am, aiTextureType_DIFFUSE, path, m.name, warnings);
+    m.normal_texture = texture(am, aiTextureType_NORMALS, path, m.name, warnings);
+    m.bump_multiplier = number(am, AI_MATKEY_GLTF_TEXTURE_SCALE(aiTextureType_NORMALS, 0), 1.0f);
     return m;
 }
 
@@ -250,6 +255,8 @@ Material classic_material(const aiMaterial& am, const std::string& path, std::ve
     m.ior = number(am, AI_MATKEY_REFRACTI, 1.0f);
     m.illum = (m.specular.x > 0 || m.specular.y > 0 || m.specular.z > 0) ? 2 : 0;
     m.diffuse_texture = texture(am, aiTextureType_DIFFUSE, path, m.name, warnings);
+    m.normal_texture = texture(am, aiTextureType_NORMALS, path, m.name, warnings);
+    m.bump_texture = texture(am, aiTextureType_HEIGHT, path, m.name, warnings);
     return m;
 }
 

@@ -17,7 +17,7 @@ namespace bvhlab::scene {
 
 /// The Assimp conversion's version: part of every scene-cache key, bumped whenever the same
 /// file would convert differently.
-constexpr uint32_t kAssimpLoaderVersion = 2;  // 2: vertex normals per corner
+constexpr uint32_t kAssimpLoaderVersion = 3;  // 2: vertex normals per corner; 3: normal/height maps
 
 /// True for a path whose extension (any case) is .obj: the project's own loader reads it.
 bool is_obj_path(const std::string& path);

@@ -272,6 +272,57 @@ TEST(GpuRender, TexturesAgreeWithTheCpu) {
     EXPECT_TRUE(c.agree) << c.summary();
 }
 
+// Normal and height maps on the GPU: the normal buffer shows the analytic bent normal, and the
+// image agrees with the CPU's (a quad under the white sky, as above).
+TEST(GpuRender, NormalAndHeightMapsAgreeWithTheCpuAndTheAnalyticNormal) {
+    BVHLAB_SKIP_WITHOUT_GPU();
+    const Vec3 t = normalize(Vec3{0.5f, -0.3f, 0.6f});
+    test::TempFile normals("gpu_normal_map.pfm"), heights("gpu_height_map.pfm");
+    Image n(4, 4), h(64, 4);
+    for (Vec3& p : n.pixels) p = (t + splat(1.0f)) * 0.5f;
+    for (uint32_t y = 0; y < 4; ++y)
+        for (uint32_t x = 0; x < 64; ++x) h.at(x, y) = splat((float(x) + 0.5f) / 64.0f);  // h = u
+    write_image(n, normals.path());
+    write_image(h, heights.path());
+    // Tangent space as given; heights h = u with -bm 0.8 on x = 2u - 1: normal (-0.4, 0, 1).
+    const std::pair<bool, Vec3> cases[] = {{false, t}, {true, normalize(Vec3{-0.4f, 0.0f, 1.0f})}};
+    for (const auto& [height, want] : cases) {
+        SCOPED_TRACE(height ? "height map" : "normal map");
+        Scene s;
+        s.name = "mapped quad";
+        s.mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+        s.mesh.indices = {0, 1, 2, 0, 2, 3};
+        s.mesh.texcoords = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
+        s.mesh.material_ids = {0, 0};
+        scene::Material m;
+        m.name = "bumpy";
+        m.diffuse = splat(0.5f);
+        (height ? m.bump_texture : m.normal_texture) = height ? heights.path() : normals.path();
+        m.bump_multiplier = height ? 0.8f : 1.0f;
+        s.mesh.materials = {m};
+        s.camera.eye = {0.0f, 0.0f, 3.0f};
+        s.camera.target = {0.0f, 0.0f, 0.0f};
+        s.camera.fov_y_deg = float(2.0 * std::atan(1.0 / 3.0) * 180.0 / M_PI);
+        RenderSettings rs;
+        rs.spp = 256;
+        rs.max_depth = 3;
+        rs.aovs = true;
+        const RenderResult cpu = cpu_reference(s, 16, 16, rs);
+        rs.seed = 2;
+        const RenderResult gpu = gpu_render(s, 16, 16, rs, "dynamic-speculative-fma");
+        for (uint32_t y = 0; y < 16; ++y)
+            for (uint32_t x = 2; x < 14; ++x)  // clear of the heights' repeat at u = 0
+                EXPECT_LT(length(gpu.normal.at(x, y) - want), 1e-4f) << "pixel " << x << "," << y;
+        // 0.5 (1 + cos theta) / 2 under the sky, over the pixels
+        double mean = 0.0;
+        for (uint32_t y = 0; y < 16; ++y)
+            for (uint32_t x = 2; x < 14; ++x) mean += gpu.mean.at(x, y).x / (16.0 * 12.0);
+        EXPECT_NEAR(mean, 0.25 * (1.0 + want.z), 0.01);
+        const Comparison c = compare_renders(cpu, gpu);
+        EXPECT_TRUE(c.agree) << c.summary();
+    }
+}
+
 // The same comparison fails for a GPU render with a planted bug.
 TEST(GpuRender, APlantedBugFailsTheComparison) {
     BVHLAB_SKIP_WITHOUT_GPU();

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: MIT
 // map_Kd textures: the bilinear lookup, path resolution (backslashes), missing files, and a
 // textured quad rendered under the white sky, whose pixels must show the texture's colours.
+// Normal and height maps: the frame of the texture coordinates, the bent normals against closed
+// forms, and a mapped quad whose normal buffer and shading under the sky are the analytic ones.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "accel/core/check.h"
+#include "renderer/core/normal_map.h"
 #include "renderer/image.h"
 #include "renderer/wavefront.h"
 #include "scene/io/obj_loader.h"
@@ -49,8 +52,9 @@ TEST(Texture, PathsWithBackslashesResolve) {
     EXPECT_EQ(resolve_texture_path("", "t.pfm"), "t.pfm");
 }
 
-/// A folder with a 2 x 2 quad facing +z, u = (x + 1) / 2, v = (y + 1) / 2, whose material
-/// `map_Kd` names `texture` (as written in the MTL) and has Kd 0.5.
+/// A folder with a 2 x 2 quad facing +z, u = (x + 1) / 2, v = (y + 1) / 2, whose two triangles'
+/// materials have Kd 0.5 and `map_Kd` names `texture` (as written in the MTL), or, when
+/// `texture` holds a space, the line `texture` itself ("norm maps/n.pfm").
 struct TexturedQuad {
     fs::path dir;
     explicit TexturedQuad(const std::string& texture, bool with_texcoords = true) {
@@ -58,8 +62,10 @@ struct TexturedQuad {
                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
         fs::remove_all(dir);
         fs::create_directories(dir / "maps");
-        std::ofstream(dir / "quad.mtl") << "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd " << texture
-                                        << "\nnewmtl b\nKd 0.5 0.5 0.5\nmap_Kd " << texture << "\n";
+        const std::string line = texture.find(' ') == std::string::npos ? "map_Kd " + texture : texture;
+        std::ofstream(dir / "quad.mtl") << "newmtl a\nKd 0.5 0.5 0.5\n"
+                                        << line << "\nnewmtl b\nKd 0.5 0.5 0.5\n"
+                                        << line << "\n";
         std::ofstream obj(dir / "quad.obj");
         obj << "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n";
         if (with_texcoords)
@@ -152,6 +158,166 @@ TEST(Texture, UnreadableTextureIsAnErrorAndNoTexcoordsAWarning) {
     EXPECT_NE(warnings[0].find("no texture coordinates"), std::string::npos);
     EXPECT_TRUE(scene.texcoords().empty());
     EXPECT_NEAR(render_quad(scene, 4).albedo.at(1, 1).x, 0.5f, 1e-5f);
+}
+
+float distance(Vec3 a, Vec3 b) { return length(a - b); }
+
+TEST(NormalMap, TextureCoordinatesGiveTheTangentFrame) {
+    // u along +x over 2 units, v along +y over 4 units.
+    const float uv[6] = {0, 0, 1, 0, 0, 1};
+    Vec3 dpdu, dpdv;
+    ASSERT_TRUE(uv_derivatives({0, 0, 0}, {2, 0, 0}, {0, 4, 0}, uv, dpdu, dpdv));
+    EXPECT_LT(distance(dpdu, {2, 0, 0}), 1e-6f);
+    EXPECT_LT(distance(dpdv, {0, 4, 0}), 1e-6f);
+    // Rotated a quarter turn: u runs along +y, v along -x.
+    const float turned[6] = {0.5f, 0.5f, 1.0f, 0.5f, 0.5f, 0.0f};
+    ASSERT_TRUE(uv_derivatives({0, 0, 0}, {0, 1, 0}, {1, 0, 0}, turned, dpdu, dpdv));
+    EXPECT_LT(distance(dpdu, {0, 2, 0}), 1e-6f);
+    EXPECT_LT(distance(dpdv, {-2, 0, 0}), 1e-6f);
+    // Collinear or repeated texture coordinates, and NaN ones: no frame.
+    const float line[6] = {0, 0, 1, 1, 2, 2}, nan[6] = {0, 0, 1, 0, NAN, 1};
+    EXPECT_FALSE(uv_derivatives({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, line, dpdu, dpdv));
+    EXPECT_FALSE(uv_derivatives({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, nan, dpdu, dpdv));
+}
+
+TEST(NormalMap, TangentSpaceTexelsTurnWithTheFrame) {
+    const Vec3 n{0, 0, 1};
+    const Vec3 t = normalize(Vec3{0.5f, -0.3f, 0.8f});
+    const Vec3 texel = (t + splat(1.0f)) * 0.5f;
+    // Tangent +x, bitangent +y: the texel's vector as it is.
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 0}, {0, 2, 0}, texel, 1.0f), t), 1e-6f);
+    // Tangent +y, bitangent -x (a quarter turn of the texture coordinates).
+    EXPECT_LT(distance(tangent_space_normal(n, {0, 2, 0}, {-2, 0, 0}, texel, 1.0f), {-t.y, t.x, t.z}), 1e-6f);
+    // Mirrored v (the bitangent follows dpdv, not n x tangent): y changes sign.
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 0}, {0, -2, 0}, texel, 1.0f), {t.x, -t.y, t.z}), 1e-6f);
+    // A tangent with a part along n: that part is taken out.
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 5}, {0, 2, 0}, texel, 1.0f), t), 1e-6f);
+    // -bm scales the tangent-plane part; 0 gives n.
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 0}, {0, 2, 0}, texel, 0.5f),
+                       normalize(Vec3{0.5f * t.x, 0.5f * t.y, t.z})),
+              1e-6f);
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 0}, {0, 2, 0}, texel, 0.0f), n), 1e-6f);
+    // The flat texel (0.5, 0.5, 1) is n; one pointing below the surface, or a tangent along n, gives n.
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, 1.0f}, 1.0f), n), 1e-6f);
+    EXPECT_LT(distance(tangent_space_normal(n, {2, 0, 0}, {0, 2, 0}, {1.0f, 0.5f, 0.2f}, 1.0f), n), 1e-6f);
+    EXPECT_LT(distance(tangent_space_normal(n, {0, 0, 3}, {0, 2, 0}, texel, 1.0f), n), 1e-6f);
+}
+
+TEST(NormalMap, HeightGradientsBendTheNormalAsTheDisplacedSurface) {
+    const Vec3 n{0, 0, 1};
+    // z = h(u, v) over the plane x = 2u, y = 4v: the surface z = hu x / 2 + hv y / 4, whose
+    // normal is (-hu / 2, -hv / 4, 1).
+    const float hu = 0.6f, hv = -1.2f;
+    EXPECT_LT(distance(height_normal(n, {2, 0, 0}, {0, 4, 0}, hu, hv), normalize(Vec3{-hu / 2, -hv / 4, 1})), 1e-6f);
+    // Mirrored v: dpdv along -y, so the same hv tilts the other way.
+    EXPECT_LT(distance(height_normal(n, {2, 0, 0}, {0, -4, 0}, hu, hv), normalize(Vec3{-hu / 2, hv / 4, 1})), 1e-6f);
+    // With n the other way round the heights rise along -z: the surface z = -h, whose normal on
+    // n's side is (-hu / 2, -hv / 4, -1).
+    EXPECT_LT(distance(height_normal(n * -1.0f, {2, 0, 0}, {0, 4, 0}, hu, hv), normalize(Vec3{-hu / 2, -hv / 4, -1})),
+              1e-6f);
+    EXPECT_LT(distance(height_normal(n, {2, 0, 0}, {4, 0, 0}, hu, hv), n), 1e-6f);  // parallel: n
+    EXPECT_LT(distance(height_normal(n, {2, 0, 0}, {0, 4, 0}, 0.0f, 0.0f), n), 1e-6f);
+    // Central differences of a linear ramp of heights are exact between the edge texels.
+    Image ramp(64, 2);
+    for (uint32_t y = 0; y < 2; ++y)
+        for (uint32_t x = 0; x < 64; ++x) ramp.at(x, y) = splat((float(x) + 0.5f) / 64.0f);
+    const TextureInfo info{0, 64, 2, 0};
+    for (float u : {0.1f, 0.37f, 0.5f, 0.9f}) {
+        float du, dv;
+        height_derivatives(ramp.pixels.data(), info, u, 0.3f, 0.25f, du, dv);
+        EXPECT_NEAR(du, 0.25f, 1e-4f) << "u " << u;
+        EXPECT_NEAR(dv, 0.0f, 1e-6f) << "u " << u;
+    }
+}
+
+/// A constant texel `c` as a 4 x 4 PFM.
+void write_constant(const fs::path& path, Vec3 c) {
+    Image img(4, 4);
+    for (Vec3& p : img.pixels) p = c;
+    write_image(img, path.string());
+}
+
+/// The quad's renders: every pixel's normal buffer equals `normal`, and its radiance is a
+/// Lambertian Kd 0.5 plane's with that shading normal under the white sky, clipped at the
+/// plane: 0.5 (1 + cos theta) / 2 (the isotropic sky on a tilted plane).
+void expect_bent_quad(const RenderResult& r, Vec3 normal, const std::vector<uint32_t>& columns) {
+    const float want = 0.5f * (1.0f + normal.z) / 2.0f;
+    for (uint32_t y = 0; y < 8; ++y)
+        for (uint32_t x : columns) {
+            EXPECT_LT(distance(r.normal.at(x, y), normal), 1e-4f) << "normal of pixel " << x << "," << y;
+            const float sd = std::sqrt(r.variance_of_mean.at(x, y).x);
+            EXPECT_NEAR(r.mean.at(x, y).x, want, 5.0f * sd + 2e-3f) << "pixel " << x << "," << y;
+        }
+}
+
+TEST(NormalMap, ATangentSpaceMapBendsTheQuadsNormalAndShading) {
+    const Vec3 t = normalize(Vec3{0.5f, -0.3f, 0.6f});
+    for (const char* line : {"norm maps/n.pfm", "map_Bump maps/n.pfm", "bump -bm 1 maps/n.pfm"}) {
+        SCOPED_TRACE(line);
+        TexturedQuad q(line);
+        write_constant(q.dir / "maps" / "n.pfm", (t + splat(1.0f)) * 0.5f);
+        const scene::TriangleMesh mesh = q.mesh();
+        ASSERT_EQ(mesh.materials.size(), 2u);
+        const RenderScene scene(mesh, {}, {q.dir.string(), false, nullptr});
+        ASSERT_EQ(scene.textures().size(), 1u);  // two materials, one file: loaded once
+        EXPECT_EQ(scene.materials()[1].normal_kind, NormalMapKind::kTangentSpace);
+        expect_bent_quad(render_quad(scene, 64), t, {0, 1, 2, 3, 4, 5, 6, 7});
+    }
+    // -bm 0.5 halves the tangent-plane part.
+    TexturedQuad q("norm -bm 0.5 maps/n.pfm");
+    write_constant(q.dir / "maps" / "n.pfm", (t + splat(1.0f)) * 0.5f);
+    const scene::TriangleMesh mesh = q.mesh();
+    EXPECT_FLOAT_EQ(mesh.materials[0].bump_multiplier, 0.5f);
+    const RenderScene scene(mesh, {}, {q.dir.string(), false, nullptr});
+    expect_bent_quad(render_quad(scene, 64), normalize(Vec3{0.5f * t.x, 0.5f * t.y, t.z}), {0, 3, 7});
+}
+
+TEST(NormalMap, AGreyBumpMapIsAHeightMap) {
+    // Heights rising with u over 64 texels: h = u, so -bm 0.8 on the quad (x = 2u - 1) is the
+    // surface z = 0.8 (x + 1) / 2, of normal (-0.4, 0, 1). Columns 1-6 lie clear of the
+    // repeat's jump at u = 0.
+    TexturedQuad q("map_Bump -bm 0.8 maps/h.pfm");
+    Image ramp(64, 4);
+    for (uint32_t y = 0; y < 4; ++y)
+        for (uint32_t x = 0; x < 64; ++x) ramp.at(x, y) = splat((float(x) + 0.5f) / 64.0f);
+    write_image(ramp, (q.dir / "maps" / "h.pfm").string());
+    const scene::TriangleMesh mesh = q.mesh();
+    EXPECT_EQ(mesh.materials[0].bump_texture, "maps/h.pfm");
+    EXPECT_FLOAT_EQ(mesh.materials[0].bump_multiplier, 0.8f);
+    const RenderScene scene(mesh, {}, {q.dir.string(), false, nullptr});
+    EXPECT_EQ(scene.materials()[1].normal_kind, NormalMapKind::kHeight);
+    EXPECT_FLOAT_EQ(scene.materials()[1].bump_scale, 0.8f);
+    expect_bent_quad(render_quad(scene, 64), normalize(Vec3{-0.4f, 0.0f, 1.0f}), {1, 2, 3, 4, 5, 6});
+}
+
+TEST(NormalMap, BadMapsAreErrorsAndMissingOnesWarnings) {
+    {
+        TexturedQuad q("norm maps/n.pfm");
+        write_constant(q.dir / "maps" / "n.pfm", {0.5f, 0.5f, 1.5f});
+        const scene::TriangleMesh mesh = q.mesh();
+        try {
+            RenderScene scene(mesh, {}, {q.dir.string(), false, nullptr});
+            FAIL() << "a normal map above 1 must be an error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("(norm of material 'a') has a texel above 1"), std::string::npos)
+                << e.what();
+        }
+    }
+    {
+        TexturedQuad q("map_Bump maps/h.pfm");
+        write_constant(q.dir / "maps" / "h.pfm", splat(NAN));
+        const scene::TriangleMesh mesh = q.mesh();
+        EXPECT_THROW(RenderScene(mesh, {}, {q.dir.string(), false, nullptr}), Error);
+    }
+    TexturedQuad q("norm maps/gone.pfm");
+    const scene::TriangleMesh mesh = q.mesh();
+    EXPECT_THROW(RenderScene(mesh, {}, {q.dir.string(), false, nullptr}), Error);
+    std::vector<std::string> warnings;
+    const RenderScene scene(mesh, {}, {q.dir.string(), true, &warnings});
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("renders without its norm"), std::string::npos) << warnings[0];
+    EXPECT_EQ(scene.materials()[1].normal_kind, NormalMapKind::kNone);
+    expect_bent_quad(render_quad(scene, 16), {0, 0, 1}, {2, 5});
 }
 
 }  // namespace

@@ -34,7 +34,7 @@ struct Fixture {
         cache = dir / "cache";
         write(mtl,
               "newmtl red\nKd 0.9 0.1 0.1\nKe 1 2 3\nKs 0.5 0.4 0.3\nKa 0.1 0.2 0.3\nNs 250\nNi 1.33\nd 0.75\n"
-              "illum 7\nmap_Kd tex\\red.png\n");
+              "illum 7\nmap_Kd tex\\red.png\nnorm tex/n.png\nbump -bm 0.25 tex/h.png\n");
         write(obj,
               "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 2\nv nan 0 0\nvt 0.25 0.5\nvt 1 0\n"
               "vn 0 0.6 0.8\nusemtl red\nf 1/1/1 2/2/1 3/1/1\nf 2 4 3\nf 1 5 6\nf 1 2 2\n");
@@ -75,6 +75,9 @@ void expect_same(const SceneLoad& a, const SceneLoad& b) {
         EXPECT_EQ(x.dissolve, y.dissolve);
         EXPECT_EQ(x.illum, y.illum);
         EXPECT_EQ(x.diffuse_texture, y.diffuse_texture);
+        EXPECT_EQ(x.normal_texture, y.normal_texture);
+        EXPECT_EQ(x.bump_texture, y.bump_texture);
+        EXPECT_EQ(x.bump_multiplier, y.bump_multiplier);
     }
     EXPECT_EQ(a.mesh.dropped.non_finite, b.mesh.dropped.non_finite);
     EXPECT_EQ(a.mesh.dropped.zero_area, b.mesh.dropped.zero_area);

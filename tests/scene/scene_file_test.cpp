@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "accel/core/check.h"
 #include "scene/io/procedural.h"
@@ -393,6 +394,29 @@ TEST(SceneFile, BadFilesGetOneLineNamingTheFile) {
     bright.replace(at, 4, "2.5,");
     TempFile too_bright("bright.gltf", bright);
     expect_error(too_bright.path(), "material 'red-plastic': Kd 2.5");
+}
+
+// glTF's normalTexture is the material's tangent-space normal map, its scale the multiplier.
+TEST(SceneFile, GltfNormalTextureIsTheNormalMap) {
+    nlohmann::json doc = nlohmann::json::parse(test::read_file_bytes(test::data_dir() + "/instances.gltf"));
+    doc["images"] = {{{"uri", "maps/bumps.png"}}};
+    doc["textures"] = {{{"source", 0}}};
+    doc["materials"][0]["normalTexture"] = {{"index", 0}, {"scale", 0.5}};
+    doc["materials"][1]["normalTexture"] = {{"index", 0}};
+    TempFile file("normal_texture.gltf", doc.dump());  // the buffer is a data: URI
+    const InstancedScene s = load_assimp(file.path());
+    auto named = [&](const std::string& name) {  // Assimp orders the materials its own way
+        for (const Material& m : s.materials)
+            if (m.name == name) return m;
+        ADD_FAILURE() << "no material " << name;
+        return Material{};
+    };
+    EXPECT_EQ(named("red-plastic").normal_texture, "maps/bumps.png");
+    EXPECT_FLOAT_EQ(named("red-plastic").bump_multiplier, 0.5f);
+    EXPECT_EQ(named("red-plastic").bump_texture, "");
+    EXPECT_EQ(named("gold").normal_texture, "maps/bumps.png");
+    EXPECT_FLOAT_EQ(named("gold").bump_multiplier, 1.0f);
+    EXPECT_EQ(named("glass").normal_texture, "");
 }
 
 TEST(SceneFile, LoadSceneFileDispatchesOnTheExtension) {

@@ -612,6 +612,25 @@ printf 'newmtl t\nKd 0.5 0.5 0.5\nmap_Kd broken.pfm\n' >"$tmp/texq/b.mtl"
 printf 'mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl t\nf 1/1 2/1 3/1\n' >"$tmp/texq/b.obj"
 printf 'PF\n2 2\n-1.0\nshort' >"$tmp/texq/broken.pfm"
 expect_error render-truncated-texture "broken[.]pfm is truncated" render "$tmp/texq/b.obj" --missing-textures warn -o "$tmp/x.pfm"
+# Normal and height maps: texels a normal map cannot hold, a bad -bm, one that does not exist,
+# and the output over one.
+printf 'newmtl t\nKd 0.5 0.5 0.5\nnorm n.pfm\n' >"$tmp/texq/n.mtl"
+printf 'mtllib n.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl t\nf 1/1 2/2 3/3\n' >"$tmp/texq/n.obj"
+python3 -c "
+import struct, sys
+sys.stdout.buffer.write(b'PF\\n2 1\\n-1.0\\n' + struct.pack('<6f', 0.5, 0.5, 1.0, 0.5, 0.5, 2.0))" >"$tmp/texq/n.pfm"
+expect_error render-normal-map-above-one "texture .*n[.]pfm [(]norm of material 't'[)] has a texel above 1" render "$tmp/texq/n.obj" -o "$tmp/x.pfm"
+expect_error render-normal-map-is-output "n[.]pfm' is this command's input [(]the normal map of material 't'[)]" render "$tmp/texq/n.obj" -o "$tmp/texq/n.pfm"
+printf 'newmtl t\nKd 0.5 0.5 0.5\nbump -bm nan h.pfm\n' >"$tmp/texq/bm.mtl"
+sed 's/n[.]mtl/bm.mtl/' "$tmp/texq/n.obj" >"$tmp/texq/bm.obj"
+printf 'newmtl t\nKd 0.5 0.5 0.5\nbump -bm 1e9 h.pfm\n' >"$tmp/texq/big.mtl"
+sed 's/n[.]mtl/big.mtl/' "$tmp/texq/n.obj" >"$tmp/texq/big.obj"
+expect_error render-bump-multiplier-huge "material 't': -bm 1e[+]09 is not in" render "$tmp/texq/big.obj" -o "$tmp/x.pfm"
+expect_error render-bump-multiplier-nan "bm[.]mtl' line 3: bump -bm value 'nan' is not a finite number" render "$tmp/texq/bm.obj" -o "$tmp/x.pfm"
+printf 'newmtl t\nKd 0.5 0.5 0.5\nmap_Bump gone.png\n' >"$tmp/texq/g.mtl"
+sed 's/n[.]mtl/g.mtl/' "$tmp/texq/n.obj" >"$tmp/texq/g.obj"
+expect_error render-missing-bump-map "texture .*gone[.]png [(]map_Bump of material 't'[)] does not exist" render "$tmp/texq/g.obj" -o "$tmp/x.pfm"
+expect_warned_render render-missing-bump-map-warn "renders without its map_Bump" "$tmp/texq/g.obj" "$tmp/warn.pfm"
 # A truncated PNG: one line naming it (libpng and OpenImageIO print their own copies; without
 # OpenImageIO the build reads .pfm only and says so, also in one line).
 python3 -c "

@@ -183,9 +183,12 @@ std::vector<scene::NamedFile> Scene::input_files() const {
     for (const std::string& m : material_files) files.push_back({kind, m});
     const std::string dir = std::filesystem::path(file).parent_path().string();
     for (const scene::Material& m : mesh.materials)
-        if (!m.diffuse_texture.empty())
-            files.push_back(
-                {"the texture of material '" + m.name + "'", render::resolve_texture_path(dir, m.diffuse_texture)});
+        for (const auto& [role, name] : {std::pair<const char*, const std::string*>{"texture", &m.diffuse_texture},
+                                         {"normal map", &m.normal_texture},
+                                         {"bump map", &m.bump_texture}})
+            if (!name->empty())
+                files.push_back({std::string("the ") + role + " of material '" + m.name + "'",
+                                 render::resolve_texture_path(dir, *name)});
     return files;
 }
 
