@@ -8,7 +8,8 @@ set -euo pipefail
 
 pkgs=(build-essential cmake git python3 libembree-dev libtinyobjloader-dev libassimp-dev libglm-dev libtbb-dev
       libcli11-dev nlohmann-json3-dev libbenchmark-dev libgtest-dev clang-format-14 libopenimageio-dev pkg-config
-      python3-venv python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib slurm-wlm munge unzip)
+      python3-venv python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib slurm-wlm munge unzip
+      libcpp-httplib-dev libstb-dev chromium)
 for arg in "$@"; do
     case "$arg" in
         --with-oiio) ;;  # installed by default

@@ -159,8 +159,16 @@ expect_error denoise-oidn-path "--denoise: --oidn '.*nowhere' holds no libOpenIm
     render "$data/cornell_box.obj" --denoise --oidn "$tmp/nowhere" --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
 expect_error oidn-without-denoise "--oidn requires --denoise" \
     render "$data/cornell_box.obj" --oidn "$tmp/nowhere" --width 4 --height 4 --spp 1 -o "$tmp/dn.pfm"
-expect_error preview-every-alone "--preview-every requires --preview" \
+expect_error preview-every-alone "--preview-every applies to --preview or --serve" \
     render "$data/cornell_box.obj" --preview-every 2 --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
+expect_error serve-port-range "--serve: .*70000.*not in range|--serve" \
+    render "$data/cornell_box.obj" --serve 70000 --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
+expect_error serve-bind-alone "--serve-bind requires --serve" \
+    render "$data/cornell_box.obj" --serve-bind 0.0.0.0 --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
+expect_error serve-bind-foreign "--serve: cannot listen on 192.0.2.1:0 .*not one of this machine's" \
+    render "$data/cornell_box.obj" --serve 0 --serve-bind 192.0.2.1 --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
+expect_error serve-bind-garbage "--serve: cannot listen on no.such.host.invalid:0" \
+    render "$data/cornell_box.obj" --serve 0 --serve-bind no.such.host.invalid --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
 expect_error preview-is-out "--preview .* and --out are the same file|is also" \
     render "$data/cornell_box.obj" --preview "$tmp/pv.pfm" --width 4 --height 4 --spp 1 -o "$tmp/pv.pfm"
 if "$bin" -q render "$data/cornell_box.obj" --width 8 --height 8 --spp 4 --preview "$tmp/preview.pfm" --preview-every 0.05 \

@@ -12,6 +12,7 @@
 #include "renderer/denoise.h"
 #include "renderer/gpu/gpu_render.h"
 #include "renderer/image.h"
+#include "renderer/preview_server.h"
 #include "renderer/wavefront.h"
 #include "scene/domain.h"
 #include "scene/io/atomic_file.h"
@@ -25,8 +26,9 @@ namespace {
 struct RenderOpts {
     std::string scene, out, dump_rays, strategy = "mis", cost_image, missing = "error";
     bool aov = false, pixel_centres = false, no_compaction = false, denoise = false;
-    std::string oidn, denoise_device = "auto", preview;
+    std::string oidn, denoise_device = "auto", preview, serve_bind = "127.0.0.1";
     double preview_every = 1.0;
+    int serve = -1;  // --serve PORT; -1: no server
     BuildOptions build;
     TraceOptions trace;
     uint32_t width = 640, height = 480;
@@ -149,9 +151,18 @@ void register_render(CLI::App& app, Globals& g) {
     auto* preview = sub->add_option("--preview", o->preview,
                                     "rewrite this image with the running mean while the render runs (atomically; "
                                     "PNG, EXR, HDR or PFM), and with the final mean at the end");
-    sub->add_option("--preview-every", o->preview_every, "--preview: seconds between rewrites (default 1)")
-        ->check(FiniteRange(0.05, 3600.0))
-        ->needs(preview);
+    auto* serve = sub->add_option("--serve", o->serve,
+                                  "serve a page on http://127.0.0.1:PORT/ that shows the image as it converges, with "
+                                  "spp, Mrays/s and the time left (0: any free port; the URL is printed); it stops "
+                                  "with the render")
+                      ->check(CLI::Range(0, 65535));
+    sub->add_option("--serve-bind", o->serve_bind,
+                    "--serve: the address to listen on (default 127.0.0.1, this machine only; 0.0.0.0 opens it to "
+                    "every interface)")
+        ->needs(serve);
+    auto* every =
+        sub->add_option("--preview-every", o->preview_every, "--preview, --serve: seconds between updates (default 1)")
+            ->check(FiniteRange(0.05, 3600.0));
     sub->add_flag("--aov", o->aov,
                   "also write the first hits' albedo and normal (for denoisers) beside --out, as NAME-albedo.EXT and "
                   "NAME-normal.EXT (normals in [-1, 1]: use .exr or .pfm)");
@@ -175,7 +186,9 @@ void register_render(CLI::App& app, Globals& g) {
                     "how emitters are reached: mis (default), bsdf or light alone (for checking the estimators)")
         ->check(CLI::IsMember({"mis", "bsdf", "light"}))
         ->capture_default_str();
-    sub->callback([o, &g] {
+    sub->callback([o, &g, every, preview, serve] {
+        if (every->count() && !preview->count() && !serve->count())
+            throw Error("--preview-every applies to --preview or --serve");
         // --device cpu without --kernel is the reference integrator: Embree traces every ray.
         const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
         if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
@@ -318,15 +331,28 @@ void register_render(CLI::App& app, Globals& g) {
         render::RenderResult res;
         // The preview is written on another thread, so the render does not wait for the disk; an
         // update that comes while the last one is still being written is skipped.
+        // --serve encodes its PNG on that thread too.
+        // (The server outlives the writer, which may still be updating it.)
         size_t previews = 0;
+        std::unique_ptr<render::PreviewServer> server;
         std::future<void> writing;
-        if (!o->preview.empty()) {
+        if (o->serve >= 0) {
+            render::PreviewServerOptions sopts;
+            sopts.bind = o->serve_bind;
+            sopts.port = o->serve;
+            sopts.title = s.name + ": " + std::to_string(o->width) + "x" + std::to_string(o->height) + ", " +
+                          std::to_string(o->rs.spp) + " spp on the " + o->trace.device + " -> " + o->out;
+            server = std::make_unique<render::PreviewServer>(sopts);
+            std::fprintf(stderr, "[bvhlab] serving the render's progress at %s\n", server->url().c_str());
+        }
+        if (!o->preview.empty() || server) {
             o->rs.preview_every_s = o->preview_every;
-            o->rs.preview = [&](const render::Image& mean, uint32_t) {
+            o->rs.preview = [&](const render::Image& mean, uint32_t spp) {
                 if (writing.valid() && writing.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
                 if (writing.valid()) writing.get();  // a failed write ends the render with its error
-                writing = std::async(std::launch::async, [&o, img = mean] {
-                    render::write_images({{&img, o->preview}});
+                writing = std::async(std::launch::async, [&o, &server, img = mean, spp] {
+                    if (!o->preview.empty()) render::write_images({{&img, o->preview}});
+                    if (server) server->update_image(img, spp);
                 });
                 ++previews;
             };
@@ -340,6 +366,7 @@ void register_render(CLI::App& app, Globals& g) {
                 std::snprintf(detail, sizeof detail, "%u of %u spp, %.1f spp/s, %.1f Mrays/s", done, total,
                               double(done) / sec, double(r.rays()) / (sec * 1e6));
                 st.progress(done, total, detail);
+                if (server) server->update_progress(done, total, double(r.rays()) / (sec * 1e6), sec);
             };
             if (o->trace.device == "gpu") {
                 trav::GpuTraceOptions gopts;
@@ -376,6 +403,7 @@ void register_render(CLI::App& app, Globals& g) {
         }
         if (writing.valid()) writing.get();
         o->rs.preview = nullptr;
+        if (server) server->finish(res.mean, res.spp);
         if (!o->preview.empty()) images.push_back({&res.mean, o->preview});  // the preview ends as the image
         render::write_images(images);
 
@@ -430,6 +458,11 @@ void register_render(CLI::App& app, Globals& g) {
         if (!cost.is_null()) j["primary_cost"] = cost;
         if (!o->preview.empty())
             j["preview"] = {{"out", o->preview}, {"every_s", o->preview_every}, {"updates", previews}};
+        if (server)
+            j["serve"] = {{"url", server->url()},
+                          {"every_s", o->preview_every},
+                          {"updates", server->image_updates()},
+                          {"requests", server->page_requests()}};
         if (g.json)
             emit(j);
         else {
