@@ -65,12 +65,40 @@ BVHLAB_HD inline float map_height(const Vec3* texels, const TextureInfo& t, floa
     return (c.x + c.y + c.z) * (1.0f / 3.0f);
 }
 
-/// The derivatives of scale * height at (u, v), by central differences one texel either side.
+/// The derivatives of scale * height at (u, v), by central differences one texel either side:
+/// (h(u + du) - h(u - du)) / 2du with du one texel, the same along v, each h the bilinear
+/// lookup of map_height. The four lookups share their weights, so they read 12 texels of the
+/// 4 x 4 block around (u, v), each once (16 reads and their wrapping otherwise).
 BVHLAB_HD inline void height_derivatives(const Vec3* texels, const TextureInfo& t, float u, float v, float scale,
                                          float& hu, float& hv) {
-    const float du = 1.0f / float(t.width), dv = 1.0f / float(t.height);
-    hu = scale * (map_height(texels, t, u + du, v) - map_height(texels, t, u - du, v)) / (2.0f * du);
-    hv = scale * (map_height(texels, t, u, v + dv) - map_height(texels, t, u, v - dv)) / (2.0f * dv);
+    if (!(u - u == 0.0f)) u = 0.0f;  // NaN or inf, as sample_texture
+    if (!(v - v == 0.0f)) v = 0.0f;
+    u -= floorf(u);
+    v -= floorf(v);
+    const int w = int(t.width), h = int(t.height);
+    const float x = u * float(w) - 0.5f, y = (1.0f - v) * float(h) - 0.5f;
+    const float fx = floorf(x), fy = floorf(y);
+    const float ax = x - fx, ay = y - fy;
+    int col[4], row[4];  // columns x0 - 1 .. x0 + 2, rows y0 - 1 .. y0 + 2 (rows run down: -v)
+    for (int k = 0; k < 4; ++k) {
+        col[k] = wrap_index(int(fx) - 1 + k, w);
+        row[k] = wrap_index(int(fy) - 1 + k, h);
+    }
+    float hs[4][4] = {};  // [row][column]; the block's corners are not needed
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            if ((i == 0 || i == 3) && (j == 0 || j == 3)) continue;
+            const Vec3 c = texels[t.offset + uint32_t(row[j]) * t.width + uint32_t(col[i])];
+            hs[j][i] = (c.x + c.y + c.z) * (1.0f / 3.0f);
+        }
+    // The bilinear lookup whose top-left texel is (col[i], row[j]).
+    auto lerp2 = [&](int i, int j) {
+        const float top = hs[j][i] * (1.0f - ax) + hs[j][i + 1] * ax;
+        const float bottom = hs[j + 1][i] * (1.0f - ax) + hs[j + 1][i + 1] * ax;
+        return top * (1.0f - ay) + bottom * ay;
+    };
+    hu = scale * (lerp2(2, 1) - lerp2(0, 1)) * (0.5f * float(w));  // u + du: one column right
+    hv = scale * (lerp2(1, 0) - lerp2(1, 2)) * (0.5f * float(h));  // v + dv: one row up
 }
 
 }  // namespace bvhlab::render

@@ -25,13 +25,18 @@ struct TextureView {
     const float* texcoords;   ///< 6 per triangle (TriangleMesh::texcoords), or null: no texture applies
 };
 
+/// i wrapped into [0, n) (repeat): a comparison for the indices a lookup usually asks for, an
+/// integer division (slow on the GPU) only for the others.
+BVHLAB_HD inline int wrap_index(int i, int n) {
+    if (i >= 0 && i < n) return i;
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
 /// The texel (x, y) with repeat wrapping of any integer coordinate.
 BVHLAB_HD inline Vec3 texel_wrapped(const Vec3* texels, const TextureInfo& t, int x, int y) {
-    const int w = int(t.width), h = int(t.height);
-    x %= w;
-    y %= h;
-    if (x < 0) x += w;
-    if (y < 0) y += h;
+    x = wrap_index(x, int(t.width));
+    y = wrap_index(y, int(t.height));
     return texels[t.offset + uint32_t(y) * t.width + uint32_t(x)];
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 
 #include "accel/core/check.h"
 #include "renderer/gpu/extend.h"
@@ -14,6 +15,91 @@
 #include "traversal/gpu/device_buffer.h"
 
 namespace bvhlab::render {
+
+namespace {
+
+/// The preview's copies of the pixel sums: each an asynchronous copy into pinned host memory,
+/// queued behind the passes enqueued so far, so the GPU never waits for the host (a
+/// synchronous download stalled the stream for about 20 ms per 1920x1080 update). Finished
+/// copies are handed to the preview in order; at most two are in flight (a third waits for the
+/// oldest), so an update every pass still shows every pass.
+class PreviewCopies {
+public:
+    PreviewCopies(const std::function<void(const Image&, uint32_t)>& preview, uint32_t width, uint32_t height)
+        : preview_(preview), width_(width), height_(height) {}
+    ~PreviewCopies() {
+        for (Slot& s : slots_) {
+            if (s.event) cudaEventDestroy(s.event);
+            if (s.host) cudaFreeHost(s.host);
+        }
+    }
+    PreviewCopies(const PreviewCopies&) = delete;
+    PreviewCopies& operator=(const PreviewCopies&) = delete;
+
+    /// Queues a copy of `sum` (the sums after `spp` samples) on `stream`.
+    void snapshot(const Vec3* sum, uint32_t spp, void* stream) {
+        Slot& s = slots_[next_ % 2];
+        if (s.pending) deliver(s, true);  // the oldest of two in flight
+        const size_t n = size_t(width_) * height_;
+        if (!s.host) {
+            BVHLAB_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&s.host), n * sizeof(Vec3)));
+            BVHLAB_CUDA_CHECK(cudaEventCreateWithFlags(&s.event, cudaEventDisableTiming));
+        }
+        const auto st = static_cast<cudaStream_t>(stream);
+        BVHLAB_CUDA_CHECK(cudaMemcpyAsync(s.host, sum, n * sizeof(Vec3), cudaMemcpyDeviceToHost, st));
+        BVHLAB_CUDA_CHECK(cudaEventRecord(s.event, st));
+        s.spp = spp;
+        s.pending = true;
+        s.order = next_++;
+    }
+    /// Hands over the finished copies, oldest first, without waiting.
+    void deliver_ready() {
+        for (Slot* s = oldest(); s && deliver(*s, false); s = oldest()) {
+        }
+    }
+    /// Hands over every copy, waiting for those still running.
+    void deliver_all() {
+        for (Slot* s = oldest(); s; s = oldest()) deliver(*s, true);
+    }
+
+private:
+    struct Slot {
+        Vec3* host = nullptr;
+        cudaEvent_t event = nullptr;
+        uint32_t spp = 0;
+        uint64_t order = 0;
+        bool pending = false;
+    };
+    Slot* oldest() {
+        Slot* o = nullptr;
+        for (Slot& s : slots_)
+            if (s.pending && (!o || s.order < o->order)) o = &s;
+        return o;
+    }
+    /// Hands `s` over if its copy has finished (or after waiting for it); false if it has not.
+    bool deliver(Slot& s, bool wait) {
+        if (wait) {
+            BVHLAB_CUDA_CHECK(cudaEventSynchronize(s.event));
+        } else {
+            const cudaError_t e = cudaEventQuery(s.event);
+            if (e == cudaErrorNotReady) return false;
+            BVHLAB_CUDA_CHECK(e);
+        }
+        s.pending = false;
+        Image img(width_, height_);
+        const float inv = s.spp ? 1.0f / float(s.spp) : 0.0f;
+        for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = s.host[i] * inv;
+        preview_(img, s.spp);
+        return true;
+    }
+
+    const std::function<void(const Image&, uint32_t)>& preview_;
+    uint32_t width_, height_;
+    Slot slots_[2];
+    uint64_t next_ = 0;
+};
+
+}  // namespace
 namespace {
 
 using trav::DeviceBuffer;
@@ -196,6 +282,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
     uint32_t enqueued = 0, in_flight = 0;  // samples enqueued; those of the pass not yet collected
     uint32_t pass = 0;
     auto last_report = Clock::now(), last_preview = Clock::now();
+    PreviewCopies previews(settings.preview, camera.width, camera.height);
     for (; enqueued < settings.spp; ++pass) {
         Timeline& t = tl[pass % 2];
         pp.first_sample = enqueued;
@@ -268,14 +355,12 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
             last_report = Clock::now();
             progress(res.spp, settings.spp, res);
         }
-        if (settings.preview &&
-            std::chrono::duration<double>(Clock::now() - last_preview).count() >= settings.preview_every_s) {
-            // Every pass enqueued so far is in the sums once the stream has run it.
-            BVHLAB_CUDA_CHECK(cudaStreamSynchronize(static_cast<cudaStream_t>(stream)));
-            std::vector<Vec3> host_sum;
-            sum.download(host_sum);
-            settings.preview(mean_image(host_sum, enqueued, camera.width, camera.height), enqueued);
-            last_preview = Clock::now();
+        if (settings.preview) {
+            previews.deliver_ready();
+            if (std::chrono::duration<double>(Clock::now() - last_preview).count() >= settings.preview_every_s) {
+                previews.snapshot(sum.data(), enqueued, stream);
+                last_preview = Clock::now();
+            }
         }
         if (settings.time_limit_s > 0.0 &&
             std::chrono::duration<double>(Clock::now() - t_start).count() >= settings.time_limit_s) {
@@ -284,6 +369,7 @@ RenderResult render_gpu(const RenderScene& scene, const CameraData& camera, cons
         }
     }
     if (pass > 0) collect(tl[(pass - 1) % 2], in_flight);
+    previews.deliver_all();
     read_bounces();
     PixelTotals totals;
     sum.download(totals.sum);

@@ -230,6 +230,36 @@ TEST(NormalMap, HeightGradientsBendTheNormalAsTheDisplacedSurface) {
     }
 }
 
+TEST(NormalMap, HeightDerivativesAreCentralDifferencesOfTheLookup) {
+    // The shared-weights form against its definition, on a small random texture (so that the
+    // block around most points wraps), at coordinates inside, outside and on texel edges.
+    const uint32_t w = 5, h = 3;
+    std::vector<Vec3> texels(w * h);
+    uint32_t state = 12345;
+    auto rnd = [&] { return float((state = state * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
+    for (Vec3& c : texels) c = {rnd(), rnd(), rnd()};
+    const TextureInfo t{0, w, h, 0};
+    const float du = 1.0f / float(w), dv = 1.0f / float(h);
+    for (int k = 0; k < 200; ++k) {
+        const float u = k < 4 ? float(k) / float(w) : 6.0f * rnd() - 3.0f, v = k < 4 ? 0.5f : 6.0f * rnd() - 3.0f;
+        float hu, hv;
+        height_derivatives(texels.data(), t, u, v, 0.7f, hu, hv);
+        const float want_u =
+            0.7f * (map_height(texels.data(), t, u + du, v) - map_height(texels.data(), t, u - du, v)) / (2.0f * du);
+        const float want_v =
+            0.7f * (map_height(texels.data(), t, u, v + dv) - map_height(texels.data(), t, u, v - dv)) / (2.0f * dv);
+        EXPECT_NEAR(hu, want_u, 2e-4f * (1.0f + std::fabs(want_u))) << "u " << u << " v " << v;
+        EXPECT_NEAR(hv, want_v, 2e-4f * (1.0f + std::fabs(want_v))) << "u " << u << " v " << v;
+    }
+    // wrap_index: in range as it is, any other integer into [0, n).
+    EXPECT_EQ(wrap_index(3, 5), 3);
+    EXPECT_EQ(wrap_index(-1, 5), 4);
+    EXPECT_EQ(wrap_index(-11, 5), 4);
+    EXPECT_EQ(wrap_index(5, 5), 0);
+    EXPECT_EQ(wrap_index(17, 5), 2);
+    EXPECT_EQ(wrap_index(-3, 1), 0);
+}
+
 /// A constant texel `c` as a 4 x 4 PFM.
 void write_constant(const fs::path& path, Vec3 c) {
     Image img(4, 4);
