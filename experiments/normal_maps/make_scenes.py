@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Writes the normal-mapping cost scenes into OUT: the glass-and-mirror Cornell box
-(data/glass_mirror.obj) with box-projected texture coordinates (1 unit of u or v per 100 mm) and
-a checker map_Kd on its diffuse walls and blocks, in three variants sharing that geometry:
+(data/glass_mirror.obj, 672 triangles: shading outweighs tracing, the worst case for the maps'
+cost) with box-projected texture coordinates (1 unit of u or v per 100 mm) and a checker map_Kd
+on its diffuse walls and blocks, in three variants sharing that geometry:
 
   textured  map_Kd only
   normal    map_Kd and a tangent-space normal map (norm) of round bumps on every non-glass material
   height    map_Kd and the same bumps as a grey height map (map_Bump -bm 5: 5 mm bumps)
 
-and OUT/scenes.json (the Cornell camera), so that BVHLAB_SCENES=OUT bvhlab render NAME works.
-Textures are PFM, which every build reads. Usage: make_scenes.py OUT"""
+and, when SIBENIK (the shared sibenik.obj, 75,275 triangles) is given, the same three as
+sibenik-textured, sibenik-normal and sibenik-height (one stone material, 1 unit of u or v per
+metre, -bm 0.05); OUT/scenes.json has their cameras, so that BVHLAB_SCENES=OUT bvhlab render NAME
+works. Textures are PFM, which every build reads. Usage: make_scenes.py OUT [SIBENIK]"""
 import json
 import math
 import os
@@ -79,7 +82,7 @@ def read_obj(path):
     return verts, lines
 
 
-def write_obj(out, name, mtl, verts, lines):
+def write_obj(out, name, mtl, verts, lines, uv_per_unit):
     with open(os.path.join(out, name + ".obj"), "w") as f:
         f.write("# %s: the glass-and-mirror box with box-projected texture coordinates (make_scenes.py)\n" % name)
         f.write("mtllib %s\n" % mtl)
@@ -97,19 +100,18 @@ def write_obj(out, name, mtl, verts, lines):
             axis = n.index(max(n))  # project along the dominant axis
             u_axis, v_axis = [(2, 1), (0, 2), (0, 1)][axis]
             for p in (a, b, c):
-                f.write("vt %g %g\n" % (p[u_axis] / 100.0, p[v_axis] / 100.0))
+                f.write("vt %g %g\n" % (p[u_axis] * uv_per_unit, p[v_axis] * uv_per_unit))
             f.write("f %d/%d %d/%d %d/%d\n" % (data[0], t + 1, data[1], t + 2, data[2], t + 3))
             t += 3
 
 
-def write_mtl(out, name, extra):
-    base = open(os.path.join(ROOT, "data", "glass_mirror.mtl")).read()
+def write_mtl(out, name, base, extra):
     blocks = base.split("newmtl ")
     text = blocks[0]
     for b in blocks[1:]:
         mat = b.split()[0]
         body = b.rstrip("\n") + "\n"
-        if mat in ("white", "plastic"):
+        if mat in ("white", "plastic", "stone"):
             body += "map_Kd checker.pfm\n"
         if mat not in ("glass", "light") and extra:
             body += extra + "\n"
@@ -118,18 +120,27 @@ def write_mtl(out, name, extra):
 
 
 def main():
-    if len(sys.argv) != 2:
+    if len(sys.argv) not in (2, 3):
         sys.exit(__doc__)
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
     write_textures(out)
-    verts, lines = read_obj(os.path.join(ROOT, "data", "glass_mirror.obj"))
-    camera = json.load(open(os.path.join(ROOT, "data", "scenes.json")))["scenes"]["glass-mirror"]["camera"]
+    sources = [("", os.path.join(ROOT, "data", "glass_mirror.obj"), open(os.path.join(ROOT, "data", "glass_mirror.mtl")).read(),
+                json.load(open(os.path.join(ROOT, "data", "scenes.json")))["scenes"]["glass-mirror"]["camera"], 0.01, 5)]
+    if len(sys.argv) > 2:
+        # The shared scene's camera (scenes.json beside its folder).
+        shared = json.load(open(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[2]))), "scenes.json")))
+        sources.append(("sibenik-", sys.argv[2], "newmtl stone\nKd 0.7 0.7 0.7\n", shared["scenes"]["sibenik"]["camera"],
+                        1.0, 0.05))
     scenes = {}
-    for name, extra in (("textured", ""), ("normal", "norm bumps.pfm"), ("height", "map_Bump -bm 5 heights.pfm")):
-        write_mtl(out, name, extra)
-        write_obj(out, name, name + ".mtl", verts, lines)
-        scenes[name] = {"file": name + ".obj", "camera": camera}
+    for prefix, obj, base, camera, uv_per_unit, bm in sources:
+        verts, lines = read_obj(obj)
+        if not any(kind == "usemtl" for kind, _ in lines):
+            lines.insert(0, ("usemtl", "stone"))
+        for name, extra in (("textured", ""), ("normal", "norm bumps.pfm"), ("height", "map_Bump -bm %g heights.pfm" % bm)):
+            write_mtl(out, prefix + name, base, extra)
+            write_obj(out, prefix + name, prefix + name + ".mtl", verts, lines, uv_per_unit)
+            scenes[prefix + name] = {"file": prefix + name + ".obj", "camera": camera}
     json.dump({"scenes": scenes}, open(os.path.join(out, "scenes.json"), "w"), indent=1)
 
 
