@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "accel/core/check.h"
+#include "renderer/core/normal_map.h"
 #include "scene/domain.h"
 #include "scene/io/atomic_file.h"
 
@@ -119,25 +120,31 @@ bool grey(const Vec3* p, size_t n) {
 
 }  // namespace
 
-int32_t RenderScene::load_texture(const TextureOptions& opts, const scene::Material& m, const std::string& name,
-                                  const char* role, std::map<std::string, int32_t>& loaded) {
-    const bool data = std::string(role) != "map_Kd";
+RenderScene::LoadedTexture RenderScene::load_texture(const TextureOptions& opts, const scene::Material& m,
+                                                     const std::string& name, const char* role,
+                                                     std::map<std::string, LoadedTexture>& loaded) {
+    const std::string r = role;
     const std::string path = resolve_texture_path(opts.base_dir, name);
-    const std::string key = std::string(data ? "data:" : "colour:") + path;
-    const std::string what = "texture " + path + " (" + role + " of material '" + m.name + "')";
+    const std::string key = r + ":" + path;  // one file in two roles is loaded once for each
+    const std::string what = "texture " + path + " (" + r + " of material '" + m.name + "')";
     auto it = loaded.find(key);
     if (it == loaded.end()) {
-        int32_t index = -1;
+        LoadedTexture t{-1, false};
         const std::string problem = scene::regular_file_problem(path);
         if (problem.empty()) {
-            const Image img = read_image(path, data ? ImageValues::kData : ImageValues::kColour);
-            // A map_Bump image is a height map or a normal map: checked for what it is.
-            const bool normals = std::string(role) == "map_Bump" && !grey(img.pixels.data(), img.pixels.size());
-            const char* check = normals ? "norm" : role;
+            Image img = read_image(path, r == "map_Kd" ? ImageValues::kColour : ImageValues::kData);
+            // A map_Bump image is a height map (grey) or a normal map, checked for what it is.
+            t.height = r == "map_Bump" && grey(img.pixels.data(), img.pixels.size());
+            const char* check = r == "map_Bump" && !t.height ? "norm" : role;
             if (const std::string p = texel_problem(img, check); !p.empty()) throw Error(what + " " + p);
+            if (t.height) {  // rendering reads the heights' slopes (renderer/core/normal_map.h)
+                std::vector<Vec3> slopes(img.pixels.size());
+                height_slopes(img.pixels.data(), img.width, img.height, slopes.data());
+                img.pixels = std::move(slopes);
+            }
             BVHLAB_CHECK(texels_.size() + img.pixels.size() < (size_t(1) << 32),
                          "the textures hold 2^32 texels or more");
-            index = int32_t(textures_.size());
+            t.index = int32_t(textures_.size());
             textures_.push_back({uint32_t(texels_.size()), img.width, img.height, 0});
             texels_.insert(texels_.end(), img.pixels.begin(), img.pixels.end());
         } else if (problem != scene::kDoesNotExist) {  // a folder or a device: an error either way
@@ -146,30 +153,28 @@ int32_t RenderScene::load_texture(const TextureOptions& opts, const scene::Mater
             throw Error(what + " does not exist (--missing-textures warn renders without it)");
         } else if (opts.warnings) {
             opts.warnings->push_back("texture " + path + " does not exist: material '" + m.name +
-                                     "' renders without its " + role);
+                                     "' renders without its " + r);
         }
-        it = loaded.emplace(key, index).first;
+        it = loaded.emplace(key, t).first;
     }
     return it->second;
 }
 
 void RenderScene::load_textures(const TextureOptions& opts) {
-    std::map<std::string, int32_t> loaded;  // kind and resolved path -> texture index, or -1 when missing
+    std::map<std::string, LoadedTexture> loaded;  // role and resolved path -> texture (index -1: missing)
     bool maps = false;
     for (size_t i = 0; i < mesh_.materials.size(); ++i) {
         const scene::Material& m = mesh_.materials[i];
         RenderMaterial& r = materials_[i + 1];
-        if (!m.diffuse_texture.empty()) r.texture = load_texture(opts, m, m.diffuse_texture, "map_Kd", loaded);
+        if (!m.diffuse_texture.empty()) r.texture = load_texture(opts, m, m.diffuse_texture, "map_Kd", loaded).index;
         // norm before map_Bump: one map per material.
         const bool norm = !m.normal_texture.empty();
         if (!norm && m.bump_texture.empty()) continue;
-        const int32_t index =
+        const LoadedTexture t =
             load_texture(opts, m, norm ? m.normal_texture : m.bump_texture, norm ? "norm" : "map_Bump", loaded);
-        if (index < 0) continue;
-        const TextureInfo& t = textures_[size_t(index)];
-        const bool height = !norm && grey(texels_.data() + t.offset, size_t(t.width) * t.height);
-        r.normal_map = index;
-        r.normal_kind = height ? NormalMapKind::kHeight : NormalMapKind::kTangentSpace;
+        if (t.index < 0) continue;
+        r.normal_map = t.index;
+        r.normal_kind = t.height ? NormalMapKind::kHeight : NormalMapKind::kTangentSpace;
         r.bump_scale = m.bump_multiplier;
         maps = true;
     }

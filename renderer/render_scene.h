@@ -71,10 +71,14 @@ public:
 private:
     void build_env_tables();
     void load_textures(const TextureOptions& opts);
-    /// The index of the texture `name` (as material m writes it for `role`: "map_Kd", "norm" or
-    /// "map_Bump"), loading it unless `loaded` has it; -1 for a missing file that opts allows.
-    int32_t load_texture(const TextureOptions& opts, const scene::Material& m, const std::string& name,
-                         const char* role, std::map<std::string, int32_t>& loaded);
+    struct LoadedTexture {
+        int32_t index;  ///< -1 for a missing file that the options allow
+        bool height;    ///< a map_Bump height map, stored as its slopes (height_slopes)
+    };
+    /// The texture `name` as material m writes it for `role` ("map_Kd", "norm" or "map_Bump"),
+    /// loading it unless `loaded` has it.
+    LoadedTexture load_texture(const TextureOptions& opts, const scene::Material& m, const std::string& name,
+                               const char* role, std::map<std::string, LoadedTexture>& loaded);
 
     const scene::TriangleMesh& mesh_;
     std::vector<RenderMaterial> materials_;  // [0] default

@@ -221,29 +221,32 @@ TEST(NormalMap, HeightGradientsBendTheNormalAsTheDisplacedSurface) {
     Image ramp(64, 2);
     for (uint32_t y = 0; y < 2; ++y)
         for (uint32_t x = 0; x < 64; ++x) ramp.at(x, y) = splat((float(x) + 0.5f) / 64.0f);
+    std::vector<Vec3> slopes(ramp.pixels.size());
+    height_slopes(ramp.pixels.data(), 64, 2, slopes.data());
     const TextureInfo info{0, 64, 2, 0};
     for (float u : {0.1f, 0.37f, 0.5f, 0.9f}) {
         float du, dv;
-        height_derivatives(ramp.pixels.data(), info, u, 0.3f, 0.25f, du, dv);
+        height_derivatives(slopes.data(), info, u, 0.3f, 0.25f, du, dv);
         EXPECT_NEAR(du, 0.25f, 1e-4f) << "u " << u;
         EXPECT_NEAR(dv, 0.0f, 1e-6f) << "u " << u;
     }
 }
 
 TEST(NormalMap, HeightDerivativesAreCentralDifferencesOfTheLookup) {
-    // The shared-weights form against its definition, on a small random texture (so that the
+    // The slope texture's lookup against its definition, on a small random texture (so that the
     // block around most points wraps), at coordinates inside, outside and on texel edges.
     const uint32_t w = 5, h = 3;
-    std::vector<Vec3> texels(w * h);
+    std::vector<Vec3> texels(w * h), slopes(w * h);
     uint32_t state = 12345;
     auto rnd = [&] { return float((state = state * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
     for (Vec3& c : texels) c = {rnd(), rnd(), rnd()};
+    height_slopes(texels.data(), w, h, slopes.data());
     const TextureInfo t{0, w, h, 0};
     const float du = 1.0f / float(w), dv = 1.0f / float(h);
     for (int k = 0; k < 200; ++k) {
         const float u = k < 4 ? float(k) / float(w) : 6.0f * rnd() - 3.0f, v = k < 4 ? 0.5f : 6.0f * rnd() - 3.0f;
         float hu, hv;
-        height_derivatives(texels.data(), t, u, v, 0.7f, hu, hv);
+        height_derivatives(slopes.data(), t, u, v, 0.7f, hu, hv);
         const float want_u =
             0.7f * (map_height(texels.data(), t, u + du, v) - map_height(texels.data(), t, u - du, v)) / (2.0f * du);
         const float want_v =
@@ -315,7 +318,9 @@ TEST(NormalMap, AGreyBumpMapIsAHeightMap) {
     EXPECT_EQ(mesh.materials[0].bump_texture, "maps/h.pfm");
     EXPECT_FLOAT_EQ(mesh.materials[0].bump_multiplier, 0.8f);
     const RenderScene scene(mesh, {}, {q.dir.string(), false, nullptr});
+    ASSERT_EQ(scene.textures().size(), 1u);  // two materials, one file: loaded (and made slopes) once
     EXPECT_EQ(scene.materials()[1].normal_kind, NormalMapKind::kHeight);
+    EXPECT_EQ(scene.materials()[2].normal_kind, NormalMapKind::kHeight);
     EXPECT_FLOAT_EQ(scene.materials()[1].bump_scale, 0.8f);
     expect_bent_quad(render_quad(scene, 64), normalize(Vec3{-0.4f, 0.0f, 1.0f}), {1, 2, 3, 4, 5, 6});
 }
