@@ -234,6 +234,22 @@ TEST(GpuRender, SortingCompactionAndTheFirstHitCacheLeaveTheImageUnchanged) {
     EXPECT_THROW(gpu_render(scene_named("cornell-box"), w, h, rs, "dynamic-speculative-fma"), Error);
 }
 
+/// A 2 x 2 quad facing +z of material m, u = (x + 1) / 2 and v = (y + 1) / 2, framed exactly
+/// by its camera, under the default (white) sky.
+Scene quad_of(const scene::Material& m) {
+    Scene s;
+    s.name = "quad of " + m.name;
+    s.mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+    s.mesh.indices = {0, 1, 2, 0, 2, 3};
+    s.mesh.texcoords = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
+    s.mesh.material_ids = {0, 0};
+    s.mesh.materials = {m};
+    s.camera.eye = {0.0f, 0.0f, 3.0f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_y_deg = float(2.0 * std::atan(1.0 / 3.0) * 180.0 / M_PI);
+    return s;
+}
+
 // A map_Kd texture on the GPU: the same albedo buffer as the CPU's and the same image within
 // noise (a quad with a 4 x 1 texture, framed exactly, under the white sky).
 TEST(GpuRender, TexturesAgreeWithTheCpu) {
@@ -242,19 +258,10 @@ TEST(GpuRender, TexturesAgreeWithTheCpu) {
     Image img(4, 1);
     img.pixels = {{0.8f, 0.1f, 0.1f}, {0.6f, 0.3f, 0.1f}, {0.1f, 0.8f, 0.1f}, {0.1f, 0.3f, 0.9f}};
     write_image(img, tex.path());
-    Scene s;
-    s.name = "textured quad";
-    s.mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
-    s.mesh.indices = {0, 1, 2, 0, 2, 3};
-    s.mesh.texcoords = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
-    s.mesh.material_ids = {0, 0};
     scene::Material m;
     m.name = "striped";
     m.diffuse_texture = tex.path();
-    s.mesh.materials = {m};
-    s.camera.eye = {0.0f, 0.0f, 3.0f};
-    s.camera.target = {0.0f, 0.0f, 0.0f};
-    s.camera.fov_y_deg = float(2.0 * std::atan(1.0 / 3.0) * 180.0 / M_PI);
+    const Scene s = quad_of(m);
     RenderSettings rs;
     rs.spp = 256;
     rs.max_depth = 3;
@@ -288,21 +295,12 @@ TEST(GpuRender, NormalAndHeightMapsAgreeWithTheCpuAndTheAnalyticNormal) {
     const std::pair<bool, Vec3> cases[] = {{false, t}, {true, normalize(Vec3{-0.4f, 0.0f, 1.0f})}};
     for (const auto& [height, want] : cases) {
         SCOPED_TRACE(height ? "height map" : "normal map");
-        Scene s;
-        s.name = "mapped quad";
-        s.mesh.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
-        s.mesh.indices = {0, 1, 2, 0, 2, 3};
-        s.mesh.texcoords = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
-        s.mesh.material_ids = {0, 0};
         scene::Material m;
         m.name = "bumpy";
         m.diffuse = splat(0.5f);
         (height ? m.bump_texture : m.normal_texture) = height ? heights.path() : normals.path();
         m.bump_multiplier = height ? 0.8f : 1.0f;
-        s.mesh.materials = {m};
-        s.camera.eye = {0.0f, 0.0f, 3.0f};
-        s.camera.target = {0.0f, 0.0f, 0.0f};
-        s.camera.fov_y_deg = float(2.0 * std::atan(1.0 / 3.0) * 180.0 / M_PI);
+        const Scene s = quad_of(m);
         RenderSettings rs;
         rs.spp = 256;
         rs.max_depth = 3;
