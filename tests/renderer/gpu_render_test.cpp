@@ -250,6 +250,17 @@ Scene quad_of(const scene::Material& m) {
     return s;
 }
 
+/// The quad at 16 x 16, 256 spp, with AOVs: the CPU reference (seed 1) and the GPU (seed 2).
+std::pair<RenderResult, RenderResult> quad_on_both_devices(const Scene& s) {
+    RenderSettings rs;
+    rs.spp = 256;
+    rs.max_depth = 3;
+    rs.aovs = true;
+    RenderResult cpu = cpu_reference(s, 16, 16, rs);
+    rs.seed = 2;
+    return {std::move(cpu), gpu_render(s, 16, 16, rs, "dynamic-speculative-fma")};
+}
+
 // A map_Kd texture on the GPU: the same albedo buffer as the CPU's and the same image within
 // noise (a quad with a 4 x 1 texture, framed exactly, under the white sky).
 TEST(GpuRender, TexturesAgreeWithTheCpu) {
@@ -261,14 +272,7 @@ TEST(GpuRender, TexturesAgreeWithTheCpu) {
     scene::Material m;
     m.name = "striped";
     m.diffuse_texture = tex.path();
-    const Scene s = quad_of(m);
-    RenderSettings rs;
-    rs.spp = 256;
-    rs.max_depth = 3;
-    rs.aovs = true;
-    const RenderResult cpu = cpu_reference(s, 16, 16, rs);
-    rs.seed = 2;
-    const RenderResult gpu = gpu_render(s, 16, 16, rs, "dynamic-speculative-fma");
+    const auto [cpu, gpu] = quad_on_both_devices(quad_of(m));
     double diff = 0.0;
     for (size_t i = 0; i < cpu.albedo.pixels.size(); ++i)
         for (int c = 0; c < 3; ++c) diff += std::fabs(gpu.albedo.pixels[i][c] - cpu.albedo.pixels[i][c]);
@@ -300,14 +304,7 @@ TEST(GpuRender, NormalAndHeightMapsAgreeWithTheCpuAndTheAnalyticNormal) {
         m.diffuse = splat(0.5f);
         (height ? m.bump_texture : m.normal_texture) = height ? heights.path() : normals.path();
         m.bump_multiplier = height ? 0.8f : 1.0f;
-        const Scene s = quad_of(m);
-        RenderSettings rs;
-        rs.spp = 256;
-        rs.max_depth = 3;
-        rs.aovs = true;
-        const RenderResult cpu = cpu_reference(s, 16, 16, rs);
-        rs.seed = 2;
-        const RenderResult gpu = gpu_render(s, 16, 16, rs, "dynamic-speculative-fma");
+        const auto [cpu, gpu] = quad_on_both_devices(quad_of(m));
         for (uint32_t y = 0; y < 16; ++y)
             for (uint32_t x = 2; x < 14; ++x)  // clear of the heights' repeat at u = 0
                 EXPECT_LT(length(gpu.normal.at(x, y) - want), 1e-4f) << "pixel " << x << "," << y;
