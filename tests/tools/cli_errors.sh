@@ -489,10 +489,22 @@ expect_error ao-rays-without-ao "--ao-rays applies to ao rays; --types primary h
     --types primary --ao-rays 4 --width 4 --height 4
 expect_error diffuse-rays-without-diffuse "--diffuse-rays applies to diffuse rays; --types primary,ao has none" \
     quality "$tmp/cb_in.obj" --types primary,ao --diffuse-rays 4 --width 4 --height 4
-for f in "--structure $tmp/nope.bvh" "--bins 8" "--kd-stack 4" "--fetch-threshold 4" "--layout cwbvh"; do
-    expect_error "reference-render-${f%% *}" "${f%% *} does not apply to render --device cpu without --kernel" render \
+for f in "--structure $tmp/nope.bvh" "--bins 8" "--kd-stack 4" "--fetch-threshold 4" "--layout cwbvh" "--kernel plain"; do
+    expect_error "reference-render-${f%% *}" "${f%% *} does not apply to render --device embree" render \
         "$tmp/cb_in.obj" $f --width 4 --height 4 --spp 1 -o "$tmp/ref.pfm"
 done
+expect_error verify-device-embree "verify checks a tracer against Embree; --device embree would check Embree against itself" \
+    verify "$tmp/cb_in.obj" --device embree --width 4 --height 4
+# One vocabulary: render's default (and --device embree) is the reference integrator, --device
+# cpu bvhlab's CPU traversal of the structure, as in bench.
+if r1=$("$bin" -q render "$data/cornell_box.obj" --width 4 --height 4 --spp 1 -o "$tmp/dev1.pfm" --json 2>"$tmp/err") &&
+    r2=$("$bin" -q render "$data/cornell_box.obj" --device cpu --width 4 --height 4 --spp 1 -o "$tmp/dev2.pfm" --json 2>>"$tmp/err") &&
+    r3=$("$bin" -q bench "$tmp/cb_in.obj" --device embree --width 4 --height 4 --json 2>>"$tmp/err") &&
+    python3 -c 'import json,sys; a,b=json.loads(sys.argv[1]),json.loads(sys.argv[2]); c=[json.loads(l) for l in sys.argv[3].splitlines()]; assert a["device"]=="embree" and a["kernel"].startswith("embree") and b["device"]=="cpu" and b["kernel"].startswith("cpu-") and b["structure"]=="bvh2/binned" and all(x["device"]=="embree" for x in c), (a,b,c)' "$r1" "$r2" "$r3"; then
+    pass=$((pass + 1))
+else
+    fail=$((fail + 1)); echo "FAIL device-vocabulary: render/bench --device records:"; sed 's/^/    /' "$tmp/err" | head -5
+fi
 # ... but with --cost-image the reference renderer builds a structure, and its options apply.
 if "$bin" -q render "$data/cornell_box.obj" --bins 8 --builder binned --width 4 --height 4 --spp 1 \
     -o "$tmp/ref-ok.pfm" --cost-image "$tmp/ref-cost.pfm" >/dev/null 2>"$tmp/err" && [ -s "$tmp/ref-cost.pfm" ]; then

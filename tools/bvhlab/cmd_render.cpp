@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// `bvhlab render`: the wavefront path tracer (issue 19). --device cpu is the reference
-// integrator: the shared stages on the host with Embree tracing every ray.
+// `bvhlab render`: the wavefront path tracer (issue 19). --device embree (the default) is the
+// reference integrator: the shared stages on the host with Embree tracing every ray; --device
+// cpu traces with bvhlab's CPU traversal of the structure, --device gpu with a kernel.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -104,7 +105,13 @@ void register_render(CLI::App& app, Globals& g) {
                     "samples of every pixel traced together per pass (default: about 2M paths on the gpu, 1 on the "
                     "cpu); the image does not depend on it")
         ->check(CLI::Range(1, 1 << 20));
-    o->trace.add_to(*sub);
+    o->trace.device = "embree";  // the reference integrator unless told
+    o->trace.add_to(*sub, true);
+    sub->get_option("--device")
+        ->description(
+            "embree (the reference integrator: the stages on every core, Embree 3 tracing every ray), cpu (the "
+            "same stages, bvhlab's CPU traversal of the structure) or gpu (the wavefront path tracer on the GPU, "
+            "tracing with --kernel)");
     o->build.add_to(*sub);
     sub->add_option("--sky", o->sky,
                     "constant sky radiance R G B (default: white 1 when the scene has no emitters, else black)")
@@ -189,18 +196,19 @@ void register_render(CLI::App& app, Globals& g) {
     sub->callback([o, &g, every, preview, serve] {
         if (every->count() && !preview->count() && !serve->count())
             throw Error("--preview-every applies to --preview or --serve");
-        // --device cpu without --kernel is the reference integrator: Embree traces every ray.
-        const bool reference = o->trace.device == "cpu" && !o->trace.kernel_flag->count();
+        // --device embree is the reference integrator: Embree traces every ray.
+        const bool reference = o->trace.device == "embree";
         if (o->trace.kernel == "all") throw Error("render traces with one kernel; name it with --kernel, not all");
         if (!reference) o->trace.validate(o->build);
         if (reference) {  // Embree traces every ray: no kernel runs, and a structure only for --cost-image
             const CLI::Option* f = o->cost_image.empty() ? given_structure_flag(o->build) : nullptr;
-            for (const CLI::Option* g : {o->trace.block_flag, o->trace.fetch_flag})
+            for (const CLI::Option* g : {o->trace.kernel_flag, o->trace.block_flag, o->trace.fetch_flag})
                 if (!f && g && g->count()) f = g;
             if (f)
                 throw Error(f->get_name() +
-                            " does not apply to render --device cpu without --kernel (the reference integrator: Embree "
-                            "traces every ray; structure options apply to its --cost-image)");
+                            " does not apply to render --device embree (the reference integrator: Embree traces "
+                            "every ray; structure options apply to its --cost-image; --device cpu or gpu trace "
+                            "with bvhlab's structures)");
         }
         std::vector<scene::NamedFile> outputs{{"--out", o->out}};
         if (o->aov) {
@@ -341,7 +349,8 @@ void register_render(CLI::App& app, Globals& g) {
             sopts.bind = o->serve_bind;
             sopts.port = o->serve;
             sopts.title = s.name + ": " + std::to_string(o->width) + "x" + std::to_string(o->height) + ", " +
-                          std::to_string(o->rs.spp) + " spp on the " + o->trace.device + " -> " + o->out;
+                          std::to_string(o->rs.spp) + " spp on the " + (o->trace.device == "gpu" ? "gpu" : "cpu") +
+                          " -> " + o->out;
             server = std::make_unique<render::PreviewServer>(sopts);
             std::fprintf(stderr, "[bvhlab] serving the render's progress at %s\n", server->url().c_str());
         }
@@ -359,7 +368,8 @@ void register_render(CLI::App& app, Globals& g) {
         }
         {
             Stage st(g, "rendering " + std::to_string(o->width) + "x" + std::to_string(o->height) + " at " +
-                            std::to_string(o->rs.spp) + " spp on the " + o->trace.device + " (" + tracer->name() + ")");
+                            std::to_string(o->rs.spp) + " spp on the " + (o->trace.device == "gpu" ? "gpu" : "cpu") +
+                            " (" + tracer->name() + ")");
             auto progress = [&](uint32_t done, uint32_t total, const render::RenderResult& r) {
                 const double sec = st.seconds();
                 char detail[96];
@@ -414,7 +424,7 @@ void register_render(CLI::App& app, Globals& g) {
                                {"queue_entries", b.queue_entries}});
         nlohmann::json j = base_record("render", s);
         if (reference) {
-            j["device"] = "cpu";
+            j["device"] = "embree";
             j["kernel"] = tracer->name();
         } else {
             j.update(tracer_fields(built, *tracer));

@@ -77,8 +77,14 @@ void register_verify(CLI::App& app, Globals& g) {
     o->rays.add_to(*sub);
     o->rays.excluded_by(file);  // a ray file's rays are fixed: no protocol option applies
     add_compare_options(*sub, o->cc);
-    o->trace.add_to(*sub);
+    o->trace.add_to(*sub, true);
+    sub->get_option("--device")
+        ->description("cpu (TBB over the shared traversal) or gpu (a CUDA kernel, see --kernel)");
     sub->callback([o, &g, file, hits] {
+        if (o->trace.device == "embree")
+            throw Error(
+                "verify checks a tracer against Embree; --device embree would check Embree against itself "
+                "(give --device cpu or gpu)");
         if (o->rays_file.empty()) o->rays.check_types(parse_ray_types(o->types), o->types);
         if (o->build.structure == "all") {
             // Every structure: options that choose one are refused, not silently ignored.
