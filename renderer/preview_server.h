@@ -20,7 +20,7 @@ struct PreviewServerOptions {
     std::string bind = "127.0.0.1";  ///< the address to listen on: loopback only unless told
     int port = 0;                    ///< 0: any free port (PreviewServer::port says which)
     std::string title;               ///< the page's title: the scene and the command
-    double grace_s = 2.0;            ///< after the render, how long a connected page may take to fetch the last image
+    double grace_s = 10.0;           ///< after the render, how long a watching page may take to fetch the last image
 };
 
 class PreviewServer {

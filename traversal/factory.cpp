@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "accel/core/check.h"
+#include "accel/core/progress.h"
 #include "accel/core/validate.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/cwbvh_convert.h"
@@ -18,7 +19,15 @@ namespace bvhlab::trav {
 
 namespace {
 
-std::shared_ptr<void> begin(const StageHook& stage, const std::string& what) { return stage ? stage(what) : nullptr; }
+std::shared_ptr<StageProgress> begin(const StageHook& stage, const std::string& what) {
+    return stage ? stage(what) : nullptr;
+}
+
+/// The stage's report() as a progress function (none without a stage).
+accel::ProgressFn progress_of(const std::shared_ptr<StageProgress>& st) {
+    if (!st) return {};
+    return [st](uint64_t done, uint64_t total) { st->report(done, total); };
+}
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -37,9 +46,13 @@ AccelStructure make_kdtree(const scene::TriangleMesh& mesh, const StructureSpec&
         tree.bounds = mesh.bounds();  // not stored: the scene hash guarantees the same box
     } else {
         auto st = begin(stage, "building SAH kd-tree over " + std::to_string(mesh.triangle_count()) + " triangles");
+        accel::ProgressCounter progress(progress_of(st), mesh.triangle_count());
+        accel::KdTreeBuilder::Config c = spec.kd;
+        c.progress = &progress;
         const auto t0 = std::chrono::steady_clock::now();
-        tree = builder.build(mesh);
+        tree = accel::KdTreeBuilder(c).build(mesh);
         b.result.build_ms = ms_since(t0);
+        progress.finish();
     }
     const std::string err = accel::validate_kd(tree, mesh.triangle_count());
     if (!err.empty())
@@ -132,7 +145,7 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
                     " an invalid tree: " + err);
     {
         auto st = begin(stage, spec.epo ? "computing SAH and EPO" : "computing SAH");
-        b.stats = accel::compute_stats(b.result.tree, mesh, spec.options.config, spec.epo);
+        b.stats = accel::compute_stats(b.result.tree, mesh, spec.options.config, spec.epo, 0, progress_of(st));
     }
     const accel::TreeStats& s = b.stats;
     nlohmann::json& f = b.figures;
@@ -268,7 +281,9 @@ AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureS
     {
         auto st = begin(stage, "building " + spec.builder + " SAH BVH over " + std::to_string(mesh.triangle_count()) +
                                    " triangles");
-        b.result = accel::run_builder(spec.kind(), mesh, spec.options);
+        accel::BuilderOptions o = spec.options;
+        o.progress = progress_of(st);
+        b.result = accel::run_builder(spec.kind(), mesh, o);
     }
     return finish_bvh(mesh, spec, stage, std::move(b), "");
 }

@@ -53,9 +53,22 @@ struct StructureSpec {
     void check() const;
 };
 
+/// One stage of a long call as its caller sees it: report(done, total) comes now and then while
+/// a build or EPO runs (from a worker thread, never from two at once, done < total until the
+/// last); the stage ends when the object is destroyed.
+class StageProgress {
+public:
+    virtual ~StageProgress() = default;
+    virtual void report(uint64_t done, uint64_t total) {
+        (void)done;
+        (void)total;
+    }
+};
+
 /// Progress: called when a stage starts, with what it does; the stage ends when the returned
-/// object is destroyed (null is fine). The CLI prints "[bvhlab] ... done (s)" lines with it.
-using StageHook = std::function<std::shared_ptr<void>(const std::string& what)>;
+/// object is destroyed (null is fine). The CLI prints "[bvhlab] ... done (s)" lines with it, and
+/// the percentage and time left of builds and EPO.
+using StageHook = std::function<std::shared_ptr<StageProgress>(const std::string& what)>;
 
 /// A built (or loaded) structure in its traversal layout, with everything known about it.
 class AccelStructure {

@@ -15,6 +15,7 @@
 #include "accel/builders/top_down.h"
 #include "accel/core/binning.h"
 #include "accel/core/check.h"
+#include "accel/core/progress.h"
 #include "accel/core/sah.h"
 
 namespace bvhlab::accel {
@@ -108,6 +109,7 @@ private:
     void set_leaf(const PrimRef* refs, uint32_t slot, uint32_t b, uint32_t e, const AABB& bounds) {
         tree_.set_leaf(slot, b, e, bounds);
         for (uint32_t i = b; i < e; ++i) ids_[i] = refs[i].prim_id;
+        if (c_.progress) c_.progress->add(e - b);
     }
 
     /// Exact SAH sweep for a small node: sort by centroid on each axis, sweep, recurse. Each

@@ -67,19 +67,22 @@ BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const
     if (runs_on_gpu(kind))
         throw Error(std::string("builder '") + builder_name(kind) + "' runs on the GPU (trav::build_on_gpu)");
     BuildResult r;
+    ProgressCounter progress(options.progress, mesh.triangle_count());
+    BuildConfig config = options.config;
+    if (options.progress) config.progress = &progress;
     const auto t0 = std::chrono::steady_clock::now();
     if (kind == BuilderKind::kBinned) {
         BinnedSahBuilder::Config c;
-        static_cast<BuildConfig&>(c) = options.config;
+        static_cast<BuildConfig&>(c) = config;
         c.num_bins = options.num_bins;
         r.tree = BinnedSahBuilder(c).build(mesh);
     } else if (kind == BuilderKind::kSweep) {
         SweepSahBuilder::Config c;
-        static_cast<BuildConfig&>(c) = options.config;
+        static_cast<BuildConfig&>(c) = config;
         r.tree = SweepSahBuilder(c).build(mesh);
     } else {
         SbvhBuilder::Config c;
-        static_cast<BuildConfig&>(c) = options.config;
+        static_cast<BuildConfig&>(c) = config;
         c.object_bins = options.num_bins;
         c.alpha = options.sbvh_alpha;
         c.reference_budget = options.sbvh_budget;
@@ -89,6 +92,7 @@ BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const
     }
     if (kind != BuilderKind::kSbvh) optimize_by_reinsertion(r.tree, options.config, reinsertion_passes(kind, options));
     r.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    progress.finish();
     return r;
 }
 

@@ -6,6 +6,7 @@
 
 #include "accel/builders/binned_sah.h"
 #include "accel/core/build_tree.h"
+#include "accel/core/progress.h"
 #include "scene/mesh.h"
 
 namespace bvhlab::accel {
@@ -41,6 +42,10 @@ struct BuilderOptions {
     int morton_bits = 30;
     /// H-PLOC: how many clusters to each side a cluster looks at for its nearest neighbour.
     int ploc_radius = 8;
+    /// Not part of the configuration: when set, run_builder reports the CPU builders' progress
+    /// with it (references in finished leaves of the triangle count; the reinsertion passes that
+    /// follow at 99%).
+    ProgressFn progress;
 };
 
 /// "" when every option is in its range, else one line naming the first that is not, by its

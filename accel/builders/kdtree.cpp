@@ -37,6 +37,7 @@
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/clip.h"
+#include "accel/core/progress.h"
 
 namespace bvhlab::accel::kd {
 namespace {
@@ -208,6 +209,7 @@ public:
         if (!(p.cost < c_.intersection_cost * float(w->tris.size()))) {
             node->frag.nodes.push_back(KdNode::leaf(0, uint32_t(w->tris.size())));
             node->frag.prims = w->tris;
+            if (c_.progress) c_.progress->add(w->tris.size());
             release(std::move(w));
             return node;
         }
@@ -291,6 +293,7 @@ private:
         if (!(p.cost < c_.intersection_cost * float(n))) {
             f.nodes[at] = KdNode::leaf(uint32_t(f.prims.size()), n);
             f.prims.insert(f.prims.end(), w->tris.begin(), w->tris.end());
+            if (c_.progress) c_.progress->add(n);
             release(std::move(w));
             return;
         }
@@ -367,6 +370,7 @@ private:
         if (!(p.cost < c_.intersection_cost * float(w.n))) {
             f.nodes[at] = KdNode::leaf(uint32_t(f.prims.size()), w.n);
             f.prims.insert(f.prims.end(), w.tris, w.tris + w.n);
+            if (c_.progress) c_.progress->add(w.n);
             return;
         }
         SmallWork child[2];

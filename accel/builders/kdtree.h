@@ -33,6 +33,9 @@ public:
         /// their planes are found by counting directly, which is cheaper for so few and picks
         /// the same plane.
         uint32_t small_node_size = 64;
+        /// Not part of the tree's configuration: when set, each leaf adds its reference count
+        /// here as it is made (progress of the build).
+        ProgressCounter* progress = nullptr;
         /// Let the small-node search use its AVX2 copy when the CPU has one (x86-64). Off:
         /// the portable copy, for comparison; both pick the same planes.
         bool use_avx2 = true;

@@ -17,6 +17,7 @@
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/prim_ref.h"
+#include "accel/core/progress.h"
 #include "accel/core/sah.h"
 #include "accel/core/spatial_split.h"
 
@@ -83,6 +84,7 @@ public:
         if (d == SplitDecision::kLeaf) {
             node->prims.reserve(n);
             for (const PrimRef& r : refs) node->prims.push_back(r.prim_id);
+            if (c_.progress) c_.progress->add(n);
             return node;
         }
         std::vector<PrimRef> left, right;

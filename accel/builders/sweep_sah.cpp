@@ -12,6 +12,7 @@
 #include "accel/builders/top_down.h"
 #include "accel/core/check.h"
 #include "accel/core/prim_ref.h"
+#include "accel/core/progress.h"
 #include "accel/core/sah.h"
 
 namespace bvhlab::accel {
@@ -68,6 +69,7 @@ public:
         SplitDecision d = decide_split(c_, count, depth, best_cost);
         if (d == SplitDecision::kLeaf) {
             tree_.set_leaf(slot, b, e, bounds);
+            if (c_.progress) c_.progress->add(count);
             return;
         }
         if (d == SplitDecision::kMedian) {

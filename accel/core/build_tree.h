@@ -9,6 +9,8 @@
 
 namespace bvhlab::accel {
 
+class ProgressCounter;  // accel/core/progress.h
+
 /// One node of a BuildTree, 32 bytes. An interior node has prim_count == 0 and its two
 /// children at first_index and first_index + 1 (siblings are always adjacent). A leaf
 /// references prim_indices[first_index .. first_index + prim_count).
@@ -45,6 +47,9 @@ struct BuildConfig {
     uint32_t min_leaf_size = 1;          ///< nodes this small always become leaves
     uint32_t max_leaf_size = 8;          ///< nodes larger than this are always split
     uint32_t max_depth = kMaxTreeDepth;  ///< the traversal stacks are sized for this depth
+    /// Not part of the tree's configuration: when set, each leaf adds its reference count here
+    /// as it is made (run_builder reports the progress through it).
+    ProgressCounter* progress = nullptr;
 };
 
 }  // namespace bvhlab::accel

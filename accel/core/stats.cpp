@@ -35,7 +35,8 @@ std::vector<std::pair<uint32_t, uint32_t>> subtree_ranges(const BuildTree& tree)
 }
 
 /// EPO, or -1 when more than `budget` node-triangle overlap tests would be needed.
-double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs, uint64_t budget) {
+double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs, uint64_t budget,
+                   ProgressCounter& progress) {
     const auto range = subtree_ranges(tree);
     // CSR list of the positions at which each triangle is referenced (one per triangle for
     // object-split trees, several for spatial splits).
@@ -91,6 +92,7 @@ double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const
             // What is left of the batch counts too (a chunk of ordinary triangles fills none).
             if (tests.fetch_add(local, std::memory_order_relaxed) + local > budget)
                 over.store(true, std::memory_order_relaxed);
+            progress.add(r.size());
             return acc;
         },
         [](double x, double y) { return x + y; });
@@ -102,7 +104,7 @@ double compute_epo(const BuildTree& tree, const scene::TriangleMesh& mesh, const
 }  // namespace
 
 TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs, bool with_epo,
-                        uint64_t epo_budget) {
+                        uint64_t epo_budget, const ProgressFn& progress) {
     BVHLAB_CHECK(!tree.empty(), "statistics of an empty tree");
     TreeStats s;
     s.nodes = tree.nodes.size();
@@ -126,7 +128,9 @@ TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, 
     s.mean_leaf_size = s.leaves ? double(s.references) / double(s.leaves) : 0.0;
     if (with_epo) {
         const uint64_t budget = epo_budget ? epo_budget : kEpoTestsPerTriangle * mesh.triangle_count() + (1u << 24);
-        s.epo = compute_epo(tree, mesh, costs, budget);
+        ProgressCounter counter(progress, mesh.triangle_count());
+        s.epo = compute_epo(tree, mesh, costs, budget, counter);
+        counter.finish();
         if (s.epo < 0)
             s.epo_skipped = "EPO skipped: it needs more than " + std::to_string(budget) +
                             " triangle-node overlap tests here (thin triangles around one vertex overlap every "

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "accel/core/build_tree.h"
+#include "accel/core/progress.h"
 #include "accel/layouts/kd_node.h"
 #include "scene/mesh.h"
 
@@ -39,9 +40,9 @@ constexpr uint64_t kEpoTestsPerTriangle = 1024;
 /// Computes every figure. EPO clips each triangle against the nodes its bounds overlap, in
 /// parallel; pass with_epo = false to skip it on huge scenes. It stops, leaving epo = -1 and
 /// epo_skipped set, after epo_budget overlap tests (0: kEpoTestsPerTriangle per triangle plus
-/// 2^24).
+/// 2^24). `progress` gets EPO's triangles done of the triangle count.
 TreeStats compute_stats(const BuildTree& tree, const scene::TriangleMesh& mesh, const BuildConfig& costs,
-                        bool with_epo = true, uint64_t epo_budget = 0);
+                        bool with_epo = true, uint64_t epo_budget = 0, const ProgressFn& progress = {});
 
 /// Size and quality figures of a kd-tree, from one walk over it.
 struct KdTreeStats {

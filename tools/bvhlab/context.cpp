@@ -111,6 +111,15 @@ void Stage::progress_bytes(size_t done, size_t total) const {
                  double(done) / 1e6, double(total) / 1e6, left, done >= total ? "\n" : "");
 }
 
+void Stage::report(uint64_t done, uint64_t total) {
+    const double t = seconds();
+    if (g_.quiet || t < 1.0 || total == 0 || !isatty(fileno(stderr))) return;
+    const double f = double(done) / double(total);
+    char left[48] = "";
+    if (done > 0 && done < total) std::snprintf(left, sizeof left, " (about %.1f s left)", t * (1.0 - f) / f);
+    std::fprintf(stderr, "\r[bvhlab] %s: %3d%%%s   %s", what_.c_str(), int(100.0 * f), left, done >= total ? "\n" : "");
+}
+
 void Stage::progress(size_t done, size_t total, const std::string& detail) const {
     if (g_.quiet || !isatty(fileno(stderr))) return;
     std::fprintf(stderr, "\r[bvhlab] %s: %3d%%%s%s%s   %s", what_.c_str(), int(100.0 * double(done) / double(total)),

@@ -52,10 +52,13 @@ trav::RaySet read_rays_for(const std::string& path, const char* command);
 
 /// Progress on stderr: "what ..." when the stage starts, "what: done (s)" when it ends, and
 /// nothing more when it ends by an exception (the error line says why).
-class Stage {
+class Stage : public trav::StageProgress {
 public:
     Stage(const Globals& g, std::string what);
-    ~Stage();
+    ~Stage() override;
+    /// The library's progress (builds, EPO): "45% (about 1.2 s left)" once the stage has run for
+    /// a second (only on a terminal).
+    void report(uint64_t done, uint64_t total) override;
     double seconds() const;
     /// Percent updates for long loops (only on a terminal), with an optional detail in brackets.
     void progress(size_t done, size_t total, const std::string& detail = "") const;
