@@ -128,8 +128,10 @@ def device_only_lines(lines):
     return out
 
 
-def make_mutants(root, rel, out_dir):
-    """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped)."""
+def make_mutants(root, rel, out_dir, device_only_code=False):
+    """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped): those
+    of the code every build compiles, or with device_only_code those of the device-only
+    branches alone (tools/mutate_device.py)."""
     src = os.path.join(root, rel)
     d = os.path.join(out_dir, rel.replace("/", "__"))
     os.makedirs(d, exist_ok=True)
@@ -152,8 +154,8 @@ def make_mutants(root, rel, out_dir):
         text = " ".join(x.strip() for x in original[i1:i2])
         if text.startswith(("//", "/*", "*", "#")):
             continue  # comments and preprocessor lines: nothing a test could see
-        if any(k in device_only for k in range(i1, max(i2, i1 + 1))):
-            continue  # device-only code: the CPU build does not compile it
+        if any(k in device_only for k in range(i1, max(i2, i1 + 1))) != device_only_code:
+            continue  # device-only code: the CPU build does not compile it (and the reverse)
         mutants.append({
             "file": rel,
             "path": os.path.join(d, name),

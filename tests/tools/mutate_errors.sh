@@ -68,5 +68,27 @@ then
     echo "FAIL: device-only lines"
     fails=$((fails + 1))
 fi
+# tools/mutate_device.py: a step without its folder is refused (exit 2), and the report counts
+# what the GPU machine's run wrote.
+if python3 "$src/tools/mutate_device.py" build --sample 2 >/dev/null 2>&1; then
+    echo "FAIL: mutate_device.py build without --build-dir and --out"
+    fails=$((fails + 1))
+fi
+tmp=$(mktemp -d)
+cat >"$tmp/mutants.json" <<'JSON'
+{"seed": 3, "sample": 2, "tried": 3, "mutants": [
+ {"file": "traversal/device/ray.h", "line": 50, "original": "a", "mutant": "b", "status": "built", "name": "m00"},
+ {"file": "accel/core/bits.h", "line": 24, "original": "c", "mutant": "d|e", "status": "built", "name": "m01"}]}
+JSON
+printf '%s
+' '{"file": "traversal/device/ray.h", "line": 50, "mutant": "b", "status": "killed", "killed_by": "GpuTrace.X"}' \
+    '{"file": "accel/core/bits.h", "line": 24, "mutant": "d|e", "status": "survived", "killed_by": ""}' >"$tmp/results.jsonl"
+if ! python3 "$src/tools/mutate_device.py" report "$tmp" >/dev/null ||
+    ! grep -q "3 tried, 1 stillborn, 2 built; of those run: 1 killed, 1 survived" "$tmp/report.md" ||
+    ! grep -q 'accel/core/bits.h:24 | `d\\|e` | survived' "$tmp/report.md"; then
+    echo "FAIL: mutate_device.py report"; cat "$tmp/report.md"
+    fails=$((fails + 1))
+fi
+rm -rf "$tmp"
 [ $fails -eq 0 ] && echo "mutate_errors.sh: all cases passed"
 exit $((fails > 0))
