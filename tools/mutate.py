@@ -128,6 +128,22 @@ def device_only_lines(lines):
     return out
 
 
+def mutator_input(src, tmp):
+    """The file universalmutator reads for `src`: the file itself, or a copy with each `{-`
+    written `{ -` (the same C++). universalmutator takes `{-` for the start of a Haskell block
+    comment and mutates nothing after it until a `-}`: a brace initialiser such as `{-1, 0.0f}`
+    left the rest of accel/core/aabb.h, binning.h, binned_sah.cpp and traversal/device/ray.h
+    without mutants. Its mutants are then whole copies of that text, which compile the same."""
+    with open(src) as f:
+        text = f.read()
+    if "{-" not in text:
+        return src
+    path = os.path.join(tmp, os.path.basename(src))
+    with open(path, "w") as f:
+        f.write(text.replace("{-", "{ -"))
+    return path
+
+
 def make_mutants(root, rel, out_dir, device_only_code=False):
     """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped): those
     of the code every build compiles, or with device_only_code those of the device-only
@@ -136,11 +152,12 @@ def make_mutants(root, rel, out_dir, device_only_code=False):
     d = os.path.join(out_dir, rel.replace("/", "__"))
     os.makedirs(d, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:  # universalmutator leaves files in its cwd
-        rc, out = sh(["mutate", src, "cpp", "--noCheck", "--mutantDir", d], tmp)
+        read = mutator_input(src, tmp)
+        rc, out = sh(["mutate", read, "cpp", "--noCheck", "--mutantDir", d], tmp)
+        with open(read) as f:
+            original = f.read().splitlines()
     if rc != 0:
         die(f"universalmutator failed on {rel}: {out.strip()[-300:]}")
-    with open(src) as f:
-        original = f.read().splitlines()
     device_only = device_only_lines(original)
     mutants = []
     for name in sorted(os.listdir(d), key=lambda n: int(n.split(".mutant.")[1].split(".")[0])):

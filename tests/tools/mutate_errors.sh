@@ -68,6 +68,26 @@ then
     echo "FAIL: device-only lines"
     fails=$((fails + 1))
 fi
+# universalmutator reads `{-` as a Haskell comment and mutates nothing after it: it is given a
+# copy with `{ -` (the same C++); a file without `{-` is read as it is.
+if ! python3 - "$src/tools/mutate.py" <<'PY'
+import importlib.util, os, sys, tempfile
+spec = importlib.util.spec_from_file_location("mutate", sys.argv[1])
+m = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(m)
+with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as tmp:
+    a, b = os.path.join(d, "a.h"), os.path.join(d, "b.h")
+    open(a, "w").write("Hit miss() { return {-1, 0.0f}; }\nint x = y + 1;\n")
+    open(b, "w").write("int x = y + 1;\n")
+    got = m.mutator_input(a, tmp)
+    assert got != a and os.path.basename(got) == "a.h", got
+    assert open(got).read() == "Hit miss() { return { -1, 0.0f}; }\nint x = y + 1;\n", open(got).read()
+    assert m.mutator_input(b, tmp) == b
+PY
+then
+    echo "FAIL: mutator_input"
+    fails=$((fails + 1))
+fi
 # tools/mutate_device.py: a step without its folder is refused (exit 2), and the report counts
 # what the GPU machine's run wrote.
 if python3 "$src/tools/mutate_device.py" build --sample 2 >/dev/null 2>&1; then
