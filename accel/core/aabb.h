@@ -15,6 +15,7 @@ struct AABB {
     Vec3 hi;  // 12 bytes: total 24 bytes
 
     BVHLAB_HD static AABB empty() { return {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}}; }
+    BVHLAB_HD static AABB of_point(Vec3 p) { return {p, p}; }
 
     BVHLAB_HD bool is_empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
     BVHLAB_HD void extend(Vec3 p) {
