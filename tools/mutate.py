@@ -24,6 +24,7 @@ import difflib
 import json
 import os
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -144,6 +145,15 @@ def mutator_input(src, tmp):
     return path
 
 
+def same_code(a, b):
+    """Whether two lines differ only in spaces next to brackets, braces, commas or semicolons,
+    which never change C++ (some of universalmutator's mutants move such a space: equivalent
+    by construction, so they are not run)."""
+    def norm(t):
+        return re.sub(r"\s*([{}()\[\],;])\s*", r"\1", t.strip())
+    return norm(a) == norm(b)
+
+
 def make_mutants(root, rel, out_dir, device_only_code=False):
     """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped): those
     of the code every build compiles, or with device_only_code those of the device-only
@@ -173,6 +183,8 @@ def make_mutants(root, rel, out_dir, device_only_code=False):
             continue  # comments and preprocessor lines: nothing a test could see
         if any(k in device_only for k in range(i1, max(i2, i1 + 1))) != device_only_code:
             continue  # device-only code: the CPU build does not compile it (and the reverse)
+        if same_code(" ".join(original[i1:i2]), " ".join(lines[j1:j2])):
+            continue  # only spacing moved
         mutants.append({
             "file": rel,
             "path": os.path.join(d, name),

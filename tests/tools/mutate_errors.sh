@@ -83,6 +83,10 @@ with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as tmp:
     assert got != a and os.path.basename(got) == "a.h", got
     assert open(got).read() == "Hit miss() { return { -1, 0.0f}; }\nint x = y + 1;\n", open(got).read()
     assert m.mutator_input(b, tmp) == b
+# A mutant that only moves spaces next to brackets and commas is the same code; others are not.
+assert m.same_code("return {{FLT_MAX, FLT_MAX}, { -FLT_MAX}};", "return { { FLT_MAX,FLT_MAX}, { -FLT_MAX}};")
+assert not m.same_code("return a - -b;", "return a --b;")
+assert not m.same_code("x = a < b;", "x = a <= b;")
 PY
 then
     echo "FAIL: mutator_input"
