@@ -61,10 +61,7 @@ scene::TemporaryFile write_oiio(const Image& img, const std::string& path, const
     std::vector<uint8_t> bytes;
     const void* data = img.pixels.data();
     if (!fl) {
-        bytes.resize(img.pixels.size() * 3);
-        for (size_t i = 0; i < img.pixels.size(); ++i)
-            for (int c = 0; c < 3; ++c)
-                bytes[3 * i + size_t(c)] = uint8_t(std::lround(255.0f * srgb_encode(img.pixels[i][c])));
+        bytes = srgb_bytes(img);
         data = bytes.data();
     }
     const bool ok = out->open(tmp.string(), spec) &&
@@ -80,6 +77,14 @@ scene::TemporaryFile write_oiio(const Image& img, const std::string& path, const
 #endif
 
 }  // namespace
+
+std::vector<uint8_t> srgb_bytes(const Image& img) {
+    std::vector<uint8_t> bytes(img.pixels.size() * 3);
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            bytes[3 * i + size_t(c)] = uint8_t(std::lround(255.0f * srgb_encode(img.pixels[i][c])));
+    return bytes;
+}
 
 float srgb_encode(float x) {
     if (!(x > 0.0f)) return 0.0f;

@@ -50,4 +50,7 @@ Image read_image(const std::string& path, ImageValues values = ImageValues::kCol
 /// Linear to sRGB-encoded, for 8-bit output.
 float srgb_encode(float linear);
 
+/// The image as 8-bit sRGB, RGB interleaved, rows top first (what PNG output holds).
+std::vector<uint8_t> srgb_bytes(const Image& img);
+
 }  // namespace bvhlab::render

@@ -131,12 +131,7 @@ std::string page(const std::string& title) {
 
 /// The running mean as an 8-bit sRGB PNG (clamped, as write_image writes PNGs).
 std::string encode_png(const Image& img) {
-    std::vector<uint8_t> bytes(size_t(img.width) * img.height * 3);
-    for (size_t i = 0; i < img.pixels.size(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const float v = img.pixels[i][c];
-            bytes[3 * i + size_t(c)] = uint8_t(std::lround(255.0f * srgb_encode(std::isfinite(v) ? v : 0.0f)));
-        }
+    const std::vector<uint8_t> bytes = srgb_bytes(img);
     std::string out;
     auto append = [](void* ctx, void* data, int size) {
         static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), size_t(size));

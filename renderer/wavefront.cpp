@@ -67,9 +67,13 @@ struct HostPaths {
 
 Image mean_image(const std::vector<Vec3>& sum, uint32_t spp, uint32_t width, uint32_t height) {
     BVHLAB_CHECK(sum.size() == size_t(width) * height, "pixel sums do not match the image size");
+    return mean_image(sum.data(), spp, width, height);
+}
+
+Image mean_image(const Vec3* sum, uint32_t spp, uint32_t width, uint32_t height) {
     Image img(width, height);
     const float inv = spp ? 1.0f / float(spp) : 0.0f;
-    for (size_t i = 0; i < sum.size(); ++i) img.pixels[i] = sum[i] * inv;
+    for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = sum[i] * inv;
     return img;
 }
 

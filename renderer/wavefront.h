@@ -48,6 +48,8 @@ struct RenderSettings {
 
 /// The mean of `spp` samples from per-pixel sums, as an image.
 Image mean_image(const std::vector<Vec3>& sum, uint32_t spp, uint32_t width, uint32_t height);
+/// The same from width x height sums in host memory (the GPU preview's pinned copy).
+Image mean_image(const Vec3* sum, uint32_t spp, uint32_t width, uint32_t height);
 
 /// Per bounce: rays traced (extension rays = paths alive), summed over the passes.
 struct BounceStats {

@@ -86,10 +86,7 @@ private:
             BVHLAB_CUDA_CHECK(e);
         }
         s.pending = false;
-        Image img(width_, height_);
-        const float inv = s.spp ? 1.0f / float(s.spp) : 0.0f;
-        for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = s.host[i] * inv;
-        preview_(img, s.spp);
+        preview_(mean_image(s.host, s.spp, width_, height_), s.spp);
         return true;
     }
 
