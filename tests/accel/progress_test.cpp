@@ -97,13 +97,17 @@ TEST(Progress, EveryBuilderCountsItsReferencesInLeaves) {
         EXPECT_GT(t.prim_indices.size(), n);
         EXPECT_EQ(c.done(), t.prim_indices.size());
     }
-    {
-        // The kd-tree's leaves: big and small nodes (both searches), every reference.
+    // The kd-tree's leaves, every reference, wherever they are made: in one thread's subtree
+    // (small nodes, and with no small-node search the event path), and in the parallel top
+    // levels (a task threshold of 1 keeps every node there).
+    for (const auto& [small, task] : {std::pair<uint32_t, uint32_t>{64, 2048}, {0, 2048}, {64, 1}}) {
         ProgressCounter c({}, n);
         KdTreeBuilder::Config cfg;
         cfg.progress = &c;
+        cfg.small_node_size = small;
+        cfg.task_threshold = task;
         const KdTree t = KdTreeBuilder(cfg).build(mesh);
-        EXPECT_EQ(c.done(), t.prim_indices.size());
+        EXPECT_EQ(c.done(), t.prim_indices.size()) << "small " << small << " task " << task;
         EXPECT_GT(c.done(), n);
     }
     // run_builder: the last report says done; none says so before it.
