@@ -209,7 +209,7 @@ PreviewServer::PreviewServer(const PreviewServerOptions& options) : state_(std::
         res.set_header("Cache-Control", "no-store");
         res.set_content(s.status().dump(), "application/json");
     });
-    s.server.Get("/image.png", [&s](const httplib::Request&, httplib::Response& res) {
+    s.server.Get("/image.png", [&s](const httplib::Request& req, httplib::Response& res) {
         ++s.requests;
         std::lock_guard<std::mutex> lock(s.mu);
         if (!s.png) {
@@ -220,7 +220,14 @@ PreviewServer::PreviewServer(const PreviewServerOptions& options) : state_(std::
         res.set_header("Cache-Control", "no-store");
         // The final image counts as fetched once it has been sent whole (the releaser runs then),
         // so that the server does not stop in the middle of it.
-        const bool last = s.finished;
+        // Only a request for the final version counts: a page that asked for an earlier one
+        // after the end gets the final bytes but still comes back for the final status.
+        uint64_t asked = 0;
+        try {
+            asked = req.has_param("v") ? std::stoull(req.get_param_value("v")) : 0;
+        } catch (...) {
+        }
+        const bool last = s.finished && asked == s.version;
         res.set_content_provider(
             s.png->size(), "image/png",
             [png = s.png](size_t offset, size_t length, httplib::DataSink& sink) {
