@@ -67,7 +67,7 @@ BuildResult run_builder(BuilderKind kind, const scene::TriangleMesh& mesh, const
     if (runs_on_gpu(kind))
         throw Error(std::string("builder '") + builder_name(kind) + "' runs on the GPU (trav::build_on_gpu)");
     BuildResult r;
-    ProgressCounter progress(options.progress, mesh.triangle_count());
+    ProgressCounter progress(options.progress, mesh.triangle_count(), options.progress_period_s);
     BuildConfig config = options.config;
     if (options.progress) config.progress = &progress;
     const auto t0 = std::chrono::steady_clock::now();

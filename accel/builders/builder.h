@@ -46,6 +46,8 @@ struct BuilderOptions {
     /// with it (references in finished leaves of the triangle count; the reinsertion passes that
     /// follow at 99%).
     ProgressFn progress;
+    /// The least time between two of those reports, in seconds (the last one, done, always comes).
+    double progress_period_s = 0.25;
 };
 
 /// "" when every option is in its range, else one line naming the first that is not, by its
