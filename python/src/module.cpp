@@ -236,11 +236,12 @@ py::object to_py(const nlohmann::json& j) { return py::module_::import("json").a
 /// The tracer trace() asks for.
 std::unique_ptr<trav::Tracer> make_tracer(Structure& st, const std::string& device, const std::string& kernel,
                                           int block_size) {
-    if (device == "cpu") {
+    if (device == "cpu" || device == "embree") {
         if (!kernel.empty()) throw Error("kernel '" + kernel + "' chooses a GPU kernel; it needs device='gpu'");
-        return st.s.cpu_tracer();
+        // embree: Embree 3 traces the structure's scene (the reference; the structure is not used).
+        return device == "cpu" ? st.s.cpu_tracer() : trav::make_embree_tracer(st.scene->oracle(), false);
     }
-    if (device != "gpu") throw Error("device '" + device + "' is not one of cpu, gpu");
+    if (device != "gpu") throw Error("device '" + device + "' is not one of cpu, gpu, embree");
     std::string why;
     if (!trav::gpu_available(&why)) throw Error("device='gpu': " + why);
     const trav::KernelInfo& k = kernel.empty() ? st.s.default_kernel() : trav::find_kernel(kernel);
@@ -483,7 +484,8 @@ PYBIND11_MODULE(_bvhlab, m) {
         },
         py::arg("structure"), py::arg("rays"), py::arg("query") = "closest", py::arg("device") = "cpu",
         py::arg("kernel") = "", py::arg("block_size") = 0, py::arg("runs") = 1,
-        "Traces rays (a RAY_DTYPE array) on the CPU or with a GPU kernel (default: the registry's for the layout); "
+        "Traces rays (a RAY_DTYPE array) with bvhlab's CPU traversal of the structure (device='cpu'), a GPU kernel "
+        "(device='gpu'; default kernel: the registry's for the layout) or Embree 3 (device='embree', the reference); "
         "returns (hits, info) with info['ms'] the time of each run. The GIL is released while tracing");
 
     m.def(
@@ -578,7 +580,9 @@ PYBIND11_MODULE(_bvhlab, m) {
         py::arg("max_depth") = 8, py::arg("seed") = 1, py::arg("device") = "cpu", py::arg("kernel") = "",
         py::arg("eye") = py::none(), py::arg("target") = py::none(), py::arg("up") = py::none(), py::arg("fov") = 0.0f,
         py::arg("sky") = py::none(), py::arg("denoise") = false, py::arg("oidn") = "",
-        "Path-traces the structure's scene with its OBJ materials, lit by its emissive triangles and the sky (RGB "
+        "Path-traces the structure's scene (device='cpu': bvhlab's CPU traversal, 'gpu': the GPU path tracer, "
+        "'embree': the reference integrator, Embree tracing every ray) with its OBJ materials, lit by its emissive "
+        "triangles and the sky (RGB "
         "radiance; default: white without emitters, black with them); returns "
         "a float32 (height, width, 3) image of linear radiance. denoise=True also runs Intel Open Image Denoise "
         "(the pyoidn wheel's library, or oidn= a library path) with the albedo and normal, and returns (image, "

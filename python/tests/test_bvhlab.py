@@ -95,6 +95,18 @@ def test_every_structure_traces_like_embree_on_the_cpu(cornell, builder, layout,
         assert report["agree"] + report["ties"] == len(rays)
 
 
+def test_embree_device_traces_the_reference(cornell):
+    s = bvhlab.build(cornell, builder="sweep")
+    for kind in ("primary", "shadow"):
+        rays, query = bvhlab.rays(cornell, kind, width=40, height=30)
+        hits, info = bvhlab.trace(s, rays, query, device="embree", runs=2)
+        assert info["device"] == "embree" and info["kernel"] != s.name and len(info["ms"]) == 2
+        report = bvhlab.verify(cornell, rays, hits, query)
+        assert report["agree"] == len(rays) and report["ties"] == 0  # Embree's own hits
+    with pytest.raises(bvhlab.Error, match="needs device='gpu'"):
+        bvhlab.trace(s, rays, device="embree", kernel="plain")
+
+
 def test_verify_catches_a_wrong_hit(cornell):
     s = bvhlab.build(cornell)
     rays, query = bvhlab.rays(cornell, "primary", width=40, height=30)
@@ -226,6 +238,11 @@ def test_render_and_trace_equal_the_command_line_tool(cornell, tmp_path):
     s = bvhlab.build(cornell)
     img = bvhlab.render(s, width=32, height=24, spp=4, **CORNELL_CAMERA)
     assert np.array_equal(img, read_pfm(out)), "the module's render differs from `bvhlab render`"
+    subprocess.run([cli, "render", CORNELL, "-o", str(out), "--width", "32", "--height", "24", "--spp", "4",
+                    "--device", "embree", "--quiet"], check=True)
+    ref = bvhlab.render(s, width=32, height=24, spp=4, device="embree", **CORNELL_CAMERA)
+    assert np.array_equal(ref, read_pfm(out)), "the module's reference render differs from `bvhlab render`"
+    assert np.abs(ref - img).mean() < 0.01 * img.mean()  # the same integrator, traced by Embree
     rays, query = bvhlab.rays(cornell, "diffuse", width=40, height=30, **CORNELL_CAMERA)
     bvhlab.write_rays(str(tmp_path / "d.rays"), rays, query)
     subprocess.run([cli, "bench", CORNELL, "--rays", str(tmp_path / "d.rays"), "--hits-out", str(tmp_path / "d.hits"),
