@@ -254,6 +254,8 @@ void StructureSpec::check() const {
     if (kd_stack != kKdFullStack && (kd_stack < 1 || kd_stack > 8))
         throw Error("kd_stack " + std::to_string(kd_stack) + " is neither 64 (full stack) nor in [1, 8] (short stack)");
     if (const std::string p = accel::options_problem(options); !p.empty()) throw Error(p);
+    if (!is_kdtree() && (layout == "bvh2" || on_gpu()))  // a GPU builder writes the BVH2 layout first
+        if (const std::string p = accel::bvh2_leaf_problem(options.config); !p.empty()) throw Error(p);
     if (const std::string p = accel::kd_config_problem(kd); !p.empty()) throw Error(p);
     if (build_device != "auto" && build_device != "cpu" && build_device != "gpu")
         throw Error("build_device '" + build_device + "' is not one of auto, cpu, gpu");

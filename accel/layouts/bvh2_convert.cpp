@@ -18,6 +18,13 @@ WoopTriangle make_woop_triangle(Vec3 v0, Vec3 v1, Vec3 v2) {
     return w;
 }
 
+std::string bvh2_leaf_problem(const BuildConfig& config) {
+    if (config.max_leaf_size <= Bvh2Node::kMaxLeafCount) return "";
+    return "max_leaf " + std::to_string(config.max_leaf_size) +
+           " does not fit the bvh2 layout, whose leaves hold at most " + std::to_string(Bvh2Node::kMaxLeafCount) +
+           " triangles (the cwbvh layout takes up to 64)";
+}
+
 Bvh2 convert_to_bvh2(const BuildTree& tree, const scene::TriangleMesh& mesh) {
     Bvh2 out = convert_bvh2_nodes(tree);
     out.tris.resize(tree.prim_indices.size());
@@ -49,8 +56,8 @@ Bvh2 convert_bvh2_nodes(const BuildTree& tree) {
                             " triangles does not fit the BVH2 layout (at most " +
                             std::to_string(Bvh2Node::kMaxLeafCount) + ")");
             if (c.first_index > Bvh2Node::kMaxLeafFirst)
-                throw Error("the BVH2 layout holds at most 2^25 triangle references; this tree has " +
-                            std::to_string(tree.prim_indices.size()));
+                throw Error("the BVH2 layout holds at most " + std::to_string(Bvh2Node::kMaxLeafFirst + 1) +
+                            " triangle references; this tree has " + std::to_string(tree.prim_indices.size()));
             n.child[slot] = Bvh2Node::leaf_ref(c.first_index, c.prim_count);
         } else {
             n.child[slot] = index[ci];

@@ -2,11 +2,17 @@
 // BuildTree -> Bvh2: folds leaves into their parents' child slots and builds Woop triangles.
 #pragma once
 
+#include <string>
+
 #include "accel/core/build_tree.h"
 #include "accel/layouts/bvh2_node.h"
 #include "scene/mesh.h"
 
 namespace bvhlab::accel {
+
+/// "" when leaves of at most `config.max_leaf_size` triangles fit the BVH2 layout, else one line
+/// saying they do not (the layout's leaf holds at most Bvh2Node::kMaxLeafCount).
+std::string bvh2_leaf_problem(const BuildConfig& config);
 
 /// Converts any BuildTree over `mesh`. A tree whose root is a leaf gets a root node with that
 /// leaf as child 0 and an empty child 1. Node 0 of the result is the root.

@@ -14,9 +14,10 @@
 namespace bvhlab::accel {
 
 /// 64 bytes. child[i] >= 0 is the index of an interior node; child[i] < 0 is a leaf, packed
-/// as ~(first << 6 | (count - 1)): its triangles are tris[first .. first + count). Packing the
+/// as ~(first << 4 | (count - 1)): its triangles are tris[first .. first + count). Packing the
 /// count into the reference lets the GPU kernels keep a leaf in one stack word, as Aila &
-/// Laine's kernels do (they end each leaf with a sentinel triangle instead).
+/// Laine's kernels do (they end each leaf with a sentinel triangle instead). Four bits of count
+/// (leaves of up to 16 triangles) leave 27 for `first`: 2^27 (134 million) triangle references.
 struct alignas(16) Bvh2Node {
     float c0_lo_x, c0_hi_x, c0_lo_y, c0_hi_y;  // 16 bytes: child 0, x and y slabs
     float c1_lo_x, c1_hi_x, c1_lo_y, c1_hi_y;  // 16 bytes: child 1, x and y slabs
@@ -24,9 +25,9 @@ struct alignas(16) Bvh2Node {
     int32_t child[2];                          // 8 bytes: node index, or packed leaf
     uint32_t reserved[2];                      // 8 bytes: zero; total 64 bytes
 
-    static constexpr uint32_t kLeafCountBits = 6;
-    static constexpr uint32_t kMaxLeafCount = 1u << kLeafCountBits;               ///< 64
-    static constexpr uint32_t kMaxLeafFirst = (1u << (31 - kLeafCountBits)) - 1;  ///< 2^25 - 1
+    static constexpr uint32_t kLeafCountBits = 4;
+    static constexpr uint32_t kMaxLeafCount = 1u << kLeafCountBits;               ///< 16
+    static constexpr uint32_t kMaxLeafFirst = (1u << (31 - kLeafCountBits)) - 1;  ///< 2^27 - 1
 
     /// A leaf reference; count in 1..kMaxLeafCount, first <= kMaxLeafFirst.
     BVHLAB_HD static int32_t leaf_ref(uint32_t first, uint32_t count) {

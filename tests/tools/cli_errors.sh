@@ -277,6 +277,7 @@ expect_error cpu-kernel-no-cpu-form "no CPU form" verify "$data/cornell_box.obj"
 expect_error embree-not-for-verify "device" verify "$data/cornell_box.obj" --device embree
 expect_error kd-stack-on-bvh "--kd-stack applies to kd-trees" bench "$data/cornell_box.obj" --kd-stack 4
 expect_error bins-on-kdtree "--bins applies to BVH builders, not --structure kdtree" verify "$data/cornell_box.obj" --structure kdtree --bins 4
+expect_error max-leaf-beyond-bvh2 "max_leaf 17 does not fit the bvh2 layout, whose leaves hold at most 16" build "$data/cornell_box.obj" --max-leaf 17
 expect_error max-leaf-on-kdtree "--max-leaf applies to BVH builders" build "$data/cornell_box.obj" --structure kdtree --max-leaf 4
 expect_error kd-ct-on-bvh "--kd-ct applies to --structure kdtree" build "$data/cornell_box.obj" --kd-ct 10
 expect_error alpha-on-binned "--alpha applies to --builder sbvh, not binned" build "$data/cornell_box.obj" --alpha 0.5

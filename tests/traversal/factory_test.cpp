@@ -136,6 +136,16 @@ TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
     // Every range at both ends, as options_problem() and kd_config_problem() state them.
     refused([](StructureSpec& s) { s.options.num_bins = 257; }, "bins 257 is not in [2, 256]");
     refused([](StructureSpec& s) { s.options.config.max_leaf_size = 65; }, "max_leaf 65 is not in [1, 64]");
+    // The BVH2 layout's leaves hold 16 triangles; the CWBVH layout collapses larger BVH leaves.
+    refused([](StructureSpec& s) { s.options.config.max_leaf_size = 17; },
+            "max_leaf 17 does not fit the bvh2 layout, whose leaves hold at most 16 triangles");
+    refused(
+        [](StructureSpec& s) {
+            s.builder = "hploc";
+            s.layout = "cwbvh";
+            s.options.config.max_leaf_size = 32;
+        },
+        "max_leaf 32 does not fit the bvh2 layout");
     refused([](StructureSpec& s) { s.options.config.min_leaf_size = 0; }, "min_leaf 0 is not in [1, 64]");
     refused([](StructureSpec& s) { s.options.config.max_depth = 0; }, "max_depth 0 is not in [1, 64]");
     refused([](StructureSpec& s) { s.options.config.max_depth = 65; }, "max_depth 65");
@@ -155,6 +165,7 @@ TEST(StructureFactory, RefusesBadSpecsWithOneLineNamingTheValue) {
     edge.builder = "sbvh";
     edge.epo = false;
     edge.options.num_bins = 256;
+    edge.layout = "cwbvh";  // the BVH2 layout's leaves end at 16 (tested above)
     edge.options.config.min_leaf_size = edge.options.config.max_leaf_size = 64;
     edge.options.config.max_depth = 64;
     edge.options.sbvh_alpha = 1.0f;

@@ -84,8 +84,10 @@ TEST(KernelRegistry, RefusesWhatAKernelCannotTrace) {
 }
 
 TEST(Bvh2Layout, PacksLeavesAndRecordsDepth) {
-    for (uint32_t first : {0u, 1u, 12345u, accel::Bvh2Node::kMaxLeafFirst})
-        for (uint32_t count : {1u, 2u, 8u, 64u}) {
+    // 2^27 references (100M-triangle meshes), leaves of up to 16.
+    static_assert(accel::Bvh2Node::kMaxLeafFirst == (1u << 27) - 1 && accel::Bvh2Node::kMaxLeafCount == 16, "");
+    for (uint32_t first : {0u, 1u, 12345u, (1u << 25) + 3u, 100000000u, accel::Bvh2Node::kMaxLeafFirst})
+        for (uint32_t count : {1u, 2u, 8u, 15u, 16u}) {
             const int32_t ref = accel::Bvh2Node::leaf_ref(first, count);
             EXPECT_LT(ref, 0);
             EXPECT_EQ(accel::Bvh2Node::leaf_first(ref), first);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "accel/core/check.h"
+#include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/two_level.h"
 #include "scene/domain.h"
 
@@ -19,8 +20,10 @@ GpuBuild build_on_gpu(const scene::TriangleMesh& mesh, accel::BuilderKind kind, 
     if (const std::string p = accel::options_problem(options); !p.empty()) throw Error(p);
     const size_t n = mesh.triangle_count();
     if (n == 0) throw Error("the mesh has no triangles to build a structure over");
+    if (const std::string p = accel::bvh2_leaf_problem(options.config); !p.empty()) throw Error(p);
     if (n - 1 > accel::Bvh2Node::kMaxLeafFirst)
-        throw Error("the BVH2 layout holds at most 2^25 triangle references; the mesh has " + std::to_string(n));
+        throw Error("the BVH2 layout holds at most " + std::to_string(accel::Bvh2Node::kMaxLeafFirst + 1) +
+                    " triangle references; the mesh has " + std::to_string(n));
     return detail::gpu_build(mesh, kind, options, keep_raw);
 }
 
