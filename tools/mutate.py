@@ -154,6 +154,12 @@ def same_code(a, b):
     return norm(a) == norm(b)
 
 
+def compiler_hint(text):
+    """Whether a line is only an unrolling hint (BVHLAB_UNROLL, `#pragma unroll`): dropping or
+    changing it can move speed, never a result a test could see, so its mutants are not run."""
+    return re.fullmatch(r"BVHLAB_UNROLL|_Pragma\(.*\)", text.strip()) is not None
+
+
 def make_mutants(root, rel, out_dir, device_only_code=False):
     """Mutants of one file as dicts: file, path, line, original, mutant (texts stripped): those
     of the code every build compiles, or with device_only_code those of the device-only
@@ -179,8 +185,8 @@ def make_mutants(root, rel, out_dir, device_only_code=False):
             continue
         tag, i1, i2, j1, j2 = ops[0]
         text = " ".join(x.strip() for x in original[i1:i2])
-        if text.startswith(("//", "/*", "*", "#")):
-            continue  # comments and preprocessor lines: nothing a test could see
+        if text.startswith(("//", "/*", "*", "#")) or compiler_hint(text):
+            continue  # comments, preprocessor lines and unrolling hints: nothing a test could see
         if any(k in device_only for k in range(i1, max(i2, i1 + 1))) != device_only_code:
             continue  # device-only code: the CPU build does not compile it (and the reverse)
         if same_code(" ".join(original[i1:i2]), " ".join(lines[j1:j2])):

@@ -48,6 +48,8 @@ def build_step(a, root):
     mutants = []
     for rel in a.files or DEVICE_FILES:
         mutants += mutate.make_mutants(root, rel, gen, device_only_code=True)
+    equivalents = mutate.load_equivalents(os.path.join(root, "tests/mutation/equivalent.txt"))
+    mutants = [m for m in mutants if (m["file"], m["original"], m["mutant"]) not in equivalents]
     if not mutants:
         mutate.die("no device-only mutants in the files given")
     rng = random.Random(a.seed)
@@ -104,7 +106,8 @@ def run_step(a):
             exe = os.path.join(out, m["name"], "bvhlab_gpu_tests")
             t0 = time.time()
             rc, log = mutate.sh([exe, "--gtest_fail_fast", "--gtest_brief=1"], None, timeout=a.timeout)
-            failed = [l.split("]", 1)[1].strip().split(" ")[0] for l in log.splitlines() if l.startswith("[  FAILED  ]")]
+            failed = [l.split("]", 1)[1].strip().split(" ")[0].rstrip(",") for l in log.splitlines()
+                  if l.startswith("[  FAILED  ]")]
             status = "killed" if rc != 0 else "survived"
             r = dict(m, status=status, killed_by=(failed[0] if failed else ("timeout" if rc is None else "")),
                      seconds=round(time.time() - t0, 1))

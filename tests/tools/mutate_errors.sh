@@ -87,6 +87,9 @@ with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as tmp:
 assert m.same_code("return {{FLT_MAX, FLT_MAX}, { -FLT_MAX}};", "return { { FLT_MAX,FLT_MAX}, { -FLT_MAX}};")
 assert not m.same_code("return a - -b;", "return a --b;")
 assert not m.same_code("x = a < b;", "x = a <= b;")
+# An unrolling hint alone on its line is not mutated (a device campaign's survivor, m00 of seed 35).
+assert m.compiler_hint("        BVHLAB_UNROLL") and m.compiler_hint('_Pragma("unroll")')
+assert not m.compiler_hint("BVHLAB_UNROLL for (int i = 0; i < 9; ++i) f[i] = p[i];") and not m.compiler_hint("x = 1;")
 PY
 then
     echo "FAIL: mutator_input"
