@@ -379,7 +379,8 @@ void BuildOptions::add_to(CLI::App& app) {
         app.add_option("--bins", opts.num_bins, "bins per axis (binned builder, SBVH object splits)")
             ->check(CLI::Range(2, 256))
             ->capture_default_str(),
-        app.add_option("--max-leaf", opts.config.max_leaf_size, "largest leaf (triangles)")
+        app.add_option("--max-leaf", opts.config.max_leaf_size,
+                       "largest leaf (triangles; at most 16 for the bvh2 layout and the GPU builders)")
             ->check(CLI::Range(1, 64))
             ->capture_default_str(),
         app.add_option("--min-leaf", opts.config.min_leaf_size, "nodes this small always become leaves")
