@@ -17,6 +17,7 @@ from ._bvhlab import render as _render
 from ._bvhlab import (  # noqa: F401
     HIT_DTYPE,
     RAY_DTYPE,
+    Refitter,
     Error,
     Scene,
     Structure,

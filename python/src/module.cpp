@@ -22,6 +22,8 @@
 #include "scene/io/scene_file.h"
 #include "scene/scene.h"
 #include "traversal/factory.h"
+#include "traversal/gpu/gpu_builder.h"
+#include "traversal/gpu/gpu_tracer.h"
 #include "traversal/oracle/compare.h"
 #include "traversal/oracle/embree_oracle.h"
 #include "traversal/rays/protocol.h"
@@ -56,6 +58,13 @@ struct Scene {
 struct Structure {
     std::shared_ptr<Scene> scene;
     trav::AccelStructure s;
+};
+
+/// A BVH2 structure on the GPU whose boxes and triangles follow the scene's vertices as they
+/// move (trav::GpuRefitter); holds the structure alive.
+struct Refit {
+    std::shared_ptr<Structure> st;
+    std::unique_ptr<trav::GpuRefitter> gpu;
 };
 
 /// The numpy dtype of trav::Ray (32 bytes) and trav::Hit (16 bytes): the file records' bytes.
@@ -587,6 +596,71 @@ PYBIND11_MODULE(_bvhlab, m) {
         "a float32 (height, width, 3) image of linear radiance. denoise=True also runs Intel Open Image Denoise "
         "(the pyoidn wheel's library, or oidn= a library path) with the albedo and normal, and returns (image, "
         "denoised)");
+
+    py::class_<Refit>(m, "Refitter",
+                      "A BVH2 structure on the GPU refitted to moved vertices (same triangles): refit() then trace()")
+        .def(py::init([](std::shared_ptr<Structure> st) {
+                 auto r = std::make_unique<Refit>();
+                 r->gpu = std::make_unique<trav::GpuRefitter>(st->s.structure, st->scene->mesh);
+                 r->st = std::move(st);
+                 return r;
+             }),
+             py::arg("structure"), "Uploads a structure of the bvh2 layout and its scene's triangles (a GPU is needed)")
+        .def(
+            "refit",
+            [](Refit& r, py::array_t<float, py::array::c_style | py::array::forcecast> vertices) {
+                if (vertices.ndim() != 2 || vertices.shape(1) != 3)
+                    throw Error("vertices must be an (N, 3) array of floats");
+                const size_t n = size_t(vertices.shape(0));
+                if (n != r.st->scene->mesh.vertices.size())
+                    throw Error(std::to_string(n) + " vertices for a scene of " +
+                                std::to_string(r.st->scene->mesh.vertices.size()));
+                std::vector<Vec3> v(n);
+                const float* p = vertices.data();
+                for (size_t i = 0; i < n; ++i)
+                    v[i] = scene::flush_denormals(Vec3{p[3 * i], p[3 * i + 1], p[3 * i + 2]});
+                trav::GpuBuildTimes t;
+                {
+                    py::gil_scoped_release release;
+                    t = r.gpu->refit(v);
+                }
+                py::dict d;
+                d["ms"] = t.total_ms;
+                d["upload_ms"] = t.upload_ms;
+                d["timing"] = "device time of the refit (CUDA events); upload_ms: the vertices";
+                return d;
+            },
+            py::arg("vertices"),
+            "Refits to (N, 3) vertices, as many as the scene has; a vertex outside bvhlab's numeric domain raises "
+            "bvhlab.Error and leaves the structure as it was. Returns {'ms', 'upload_ms', 'timing'}")
+        .def(
+            "trace",
+            [](Refit& r, const py::array& rays, const std::string& query, const std::string& kernel, int runs) {
+                if (runs < 1 || runs > 1000) throw Error("runs " + std::to_string(runs) + " is not in [1, 1000]");
+                const trav::Query q = parse_query(query);
+                std::vector<trav::Ray> rv = ray_vector(rays);
+                const trav::KernelInfo& k = kernel.empty() ? r.st->s.default_kernel() : trav::find_kernel(kernel);
+                std::unique_ptr<trav::Tracer> tracer =
+                    trav::make_gpu_tracer(r.gpu->device(), k, r.st->s.gpu_options(k));
+                std::vector<trav::Hit> hits;
+                std::vector<double> ms;
+                {
+                    py::gil_scoped_release release;
+                    tracer->set_rays(rv, q);
+                    for (int i = 0; i < runs; ++i) ms.push_back(tracer->run());
+                    tracer->hits(hits);
+                }
+                py::dict info;
+                info["kernel"] = tracer->name();
+                info["device"] = tracer->device();
+                info["ms"] = ms;
+                info["block_size"] = tracer->block_size();
+                info["timing"] = "kernel only (CUDA events)";
+                return py::make_tuple(to_numpy(std::move(hits), hit_dtype()), info);
+            },
+            py::arg("rays"), py::arg("query") = "closest", py::arg("kernel") = "", py::arg("runs") = 1,
+            "Traces rays through the refitted structure with a GPU kernel of the bvh2 layout (default: the "
+            "registry's); returns (hits, info) as trace() does");
 
     m.def(
         "kernels",

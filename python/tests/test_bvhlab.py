@@ -262,6 +262,50 @@ def test_kernels_name_one_default_per_layout():
                                        ("two-level", False), ("two-level-cwbvh", False)})
 
 
+def test_refitter_needs_a_bvh2_structure_and_a_gpu(cornell):
+    with pytest.raises(bvhlab.Error, match="single-level BVH2"):
+        bvhlab.Refitter(bvhlab.build(cornell, layout="cwbvh", epo=False))
+    if not HAVE_GPU:
+        with pytest.raises(bvhlab.Error, match="refit runs on the GPU, and there is none"):
+            bvhlab.Refitter(bvhlab.build(cornell, epo=False))
+
+
+@needs_gpu
+def test_refit_follows_moving_vertices():
+    scene = bvhlab.generate("structured", 6000, 3)
+    v = scene.vertices
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    diag = float(np.linalg.norm(hi - lo))
+    for builder in ("sbvh", "hploc"):
+        s = bvhlab.build(scene, builder=builder, epo=False)
+        r = bvhlab.Refitter(s)
+        for frame in range(3):
+            # A travelling wave, and the whole mesh carried away from its old boxes.
+            moved = v + np.stack([0.05 * diag * np.sin(8.0 * v[:, 1] / diag + frame),
+                                  np.zeros(len(v)), np.full(len(v), 2.0 * diag * (frame + 1))], axis=1)
+            moved = moved.astype(np.float32)
+            moved_scene = bvhlab.Scene(moved, scene.indices)
+            rays, query = bvhlab.rays(moved_scene, "primary", width=64, height=48)
+            if frame == 0:  # before the refit the old boxes miss the moved mesh
+                stale, _ = r.trace(rays, query)
+                assert bvhlab.verify(moved_scene, rays, stale, query)["mismatches"] > 0
+            info = r.refit(moved)
+            assert info["ms"] > 0
+            for k in [k["name"] for k in bvhlab.kernels() if k["layout"] == "bvh2"]:
+                hits, tinfo = r.trace(rays, query, kernel=k)
+                assert tinfo["kernel"] == k and (hits["tri"] >= 0).sum() > len(rays) // 4
+                report = bvhlab.verify(moved_scene, rays, hits, query)
+                assert report["mismatches"] == 0, (builder, frame, k, report["first_mismatches"])
+        bad = v.copy()
+        bad[7, 1] = np.nan
+        with pytest.raises(bvhlab.Error):
+            r.refit(bad)
+        with pytest.raises(bvhlab.Error, match="vertices for a scene of"):
+            r.refit(v[:-1])
+        hits, _ = r.trace(rays, query)  # the failed refits left the last frame in place
+        assert bvhlab.verify(moved_scene, rays, hits, query)["mismatches"] == 0
+
+
 @needs_gpu
 def test_every_gpu_kernel_agrees_with_embree(cornell):
     for builder, layout in (("sbvh", "bvh2"), ("binned", "cwbvh"), ("kdtree", "bvh2")):
