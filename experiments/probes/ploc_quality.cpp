@@ -2,7 +2,9 @@
 // Probe: SAH and EPO of the CPU references of the GPU builders' hierarchies (LBVH, PLOC with
 // several radii), with the GPU builders' leaf choice, beside the binned SAH build of the same
 // scene, and the CPU tracer's node visits and triangle tests per ray (framing camera, primary
-// and diffuse rays). Usage: [MAX_LEAF=n] [BITS=30|60] ploc_quality SCENE.obj|soup [radius ...]
+// and diffuse rays); with REINSERT=n also each tree after n passes of subtree reinsertion
+// (accel::optimize_by_reinsertion), the lead for an optimiser after the GPU builds.
+// Usage: [MAX_LEAF=n] [BITS=30|60] [REINSERT=n] ploc_quality SCENE.obj|soup [radius ...]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -10,6 +12,7 @@
 
 #include "accel/builders/builder.h"
 #include "accel/builders/lbvh_reference.h"
+#include "accel/builders/reinsertion.h"
 #include "accel/core/stats.h"
 #include "accel/layouts/bvh2_convert.h"
 #include "scene/io/obj_loader.h"
@@ -24,8 +27,19 @@ using namespace bvhlab;
 
 static std::vector<std::pair<std::string, trav::RaySet>> g_rays;
 
-static void report(const char* name, const accel::BuildTree& t, const scene::TriangleMesh& m,
-                   const accel::BuildConfig& c) {
+static void report_one(const char* name, const accel::BuildTree& t, const scene::TriangleMesh& m,
+                       const accel::BuildConfig& c);
+
+static void report(const char* name, accel::BuildTree t, const scene::TriangleMesh& m, const accel::BuildConfig& c) {
+    report_one(name, t, m, c);
+    if (const char* e = std::getenv("REINSERT")) {
+        accel::optimize_by_reinsertion(t, c, std::atoi(e));
+        report_one((std::string(name) + " +reins").c_str(), t, m, c);
+    }
+}
+
+static void report_one(const char* name, const accel::BuildTree& t, const scene::TriangleMesh& m,
+                       const accel::BuildConfig& c) {
     const accel::TreeStats s = accel::compute_stats(t, m, c);
     std::printf("%-12s SAH %8.3f EPO %7.3f nodes %6zu", name, s.sah, s.epo, t.nodes.size());
     const accel::Bvh2 bvh = accel::convert_to_bvh2(t, m);
