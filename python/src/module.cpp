@@ -259,6 +259,27 @@ std::unique_ptr<trav::Tracer> make_tracer(Structure& st, const std::string& devi
     return st.s.gpu_tracer(k.name, o);
 }
 
+/// trace(): the rays (checked) set once, `runs` timed runs, the hits; the GIL released meanwhile.
+py::tuple timed_trace(trav::Tracer& tracer, const py::array& rays, const std::string& query, int runs) {
+    const trav::Query q = parse_query(query);
+    std::vector<trav::Ray> rv = ray_vector(rays);
+    std::vector<trav::Hit> hits;
+    std::vector<double> ms;
+    {
+        py::gil_scoped_release release;
+        tracer.set_rays(rv, q);
+        for (int i = 0; i < runs; ++i) ms.push_back(tracer.run());
+        tracer.hits(hits);
+    }
+    py::dict info;
+    info["kernel"] = tracer.name();
+    info["device"] = tracer.device();
+    info["ms"] = ms;
+    info["block_size"] = tracer.block_size();
+    info["timing"] = tracer.device() == "gpu" ? "kernel only (CUDA events)" : "wall clock of the parallel trace";
+    return py::make_tuple(to_numpy(std::move(hits), hit_dtype()), info);
+}
+
 py::dict report_dict(const trav::CompareReport& rep, const trav::CompareConfig& cc) {
     py::dict d = to_py(trav::report_json(rep, cc));
     py::list first;
@@ -472,24 +493,7 @@ PYBIND11_MODULE(_bvhlab, m) {
             if (runs < 1 || runs > 1000) throw Error("runs " + std::to_string(runs) + " is not in [1, 1000]");
             if (block_size != 0 && (block_size < 32 || block_size > 1024))
                 throw Error("block_size " + std::to_string(block_size) + " is not in [32, 1024]");
-            const trav::Query q = parse_query(query);
-            std::vector<trav::Ray> rv = ray_vector(rays);
-            std::unique_ptr<trav::Tracer> tracer = make_tracer(*st, device, kernel, block_size);
-            std::vector<trav::Hit> hits;
-            std::vector<double> ms;
-            {
-                py::gil_scoped_release release;
-                tracer->set_rays(rv, q);
-                for (int i = 0; i < runs; ++i) ms.push_back(tracer->run());
-                tracer->hits(hits);
-            }
-            py::dict info;
-            info["kernel"] = tracer->name();
-            info["device"] = tracer->device();
-            info["ms"] = ms;
-            info["block_size"] = tracer->block_size();
-            info["timing"] = device == "gpu" ? "kernel only (CUDA events)" : "wall clock of the parallel trace";
-            return py::make_tuple(to_numpy(std::move(hits), hit_dtype()), info);
+            return timed_trace(*make_tracer(*st, device, kernel, block_size), rays, query, runs);
         },
         py::arg("structure"), py::arg("rays"), py::arg("query") = "closest", py::arg("device") = "cpu",
         py::arg("kernel") = "", py::arg("block_size") = 0, py::arg("runs") = 1,
@@ -637,26 +641,9 @@ PYBIND11_MODULE(_bvhlab, m) {
             "trace",
             [](Refit& r, const py::array& rays, const std::string& query, const std::string& kernel, int runs) {
                 if (runs < 1 || runs > 1000) throw Error("runs " + std::to_string(runs) + " is not in [1, 1000]");
-                const trav::Query q = parse_query(query);
-                std::vector<trav::Ray> rv = ray_vector(rays);
                 const trav::KernelInfo& k = kernel.empty() ? r.st->s.default_kernel() : trav::find_kernel(kernel);
-                std::unique_ptr<trav::Tracer> tracer =
-                    trav::make_gpu_tracer(r.gpu->device(), k, r.st->s.gpu_options(k));
-                std::vector<trav::Hit> hits;
-                std::vector<double> ms;
-                {
-                    py::gil_scoped_release release;
-                    tracer->set_rays(rv, q);
-                    for (int i = 0; i < runs; ++i) ms.push_back(tracer->run());
-                    tracer->hits(hits);
-                }
-                py::dict info;
-                info["kernel"] = tracer->name();
-                info["device"] = tracer->device();
-                info["ms"] = ms;
-                info["block_size"] = tracer->block_size();
-                info["timing"] = "kernel only (CUDA events)";
-                return py::make_tuple(to_numpy(std::move(hits), hit_dtype()), info);
+                return timed_trace(*trav::make_gpu_tracer(r.gpu->device(), k, r.st->s.gpu_options(k)), rays, query,
+                                   runs);
             },
             py::arg("rays"), py::arg("query") = "closest", py::arg("kernel") = "", py::arg("runs") = 1,
             "Traces rays through the refitted structure with a GPU kernel of the bvh2 layout (default: the "
