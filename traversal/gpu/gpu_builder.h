@@ -59,8 +59,8 @@ struct GpuBuild {
 /// costs, Morton bits and (H-)PLOC search radius. `keep_raw` also downloads the hierarchy before
 /// the leaves are chosen (the LBVH's and PLOC's are comparable bit for bit with
 /// accel::lbvh_reference and accel::ploc_reference).
-/// Throws bvhlab::Error without a GPU, for a CPU builder, or for a mesh past the BVH2 layout's
-/// 2^25 triangle references.
+/// Throws bvhlab::Error without a GPU, for a CPU builder, for leaves larger than the BVH2
+/// layout's 16 triangles, or for a mesh past its 2^27 triangle references.
 GpuBuild build_on_gpu(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
                       bool keep_raw = false);
 
