@@ -62,6 +62,7 @@ struct TwoLevelBvh {
     /// Interior nodes on the longest TLAS path, and the deepest BLAS: the two stacks' entries.
     uint32_t tlas_depth() const { return tlas.depth; }
     uint32_t blas_depth() const;
+    /// Every stored BLAS once (BVH2 or CWBVH), the TLAS (both forms) and one record per instance.
     size_t bytes() const;
     /// The instance whose id range holds scene-wide triangle id `id` (binary search).
     uint32_t instance_of_id(uint32_t id) const;

@@ -8,6 +8,7 @@
 
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
+#include "accel/layouts/bvh2_convert.h"
 #include "accel/layouts/two_level.h"
 #include "scene/io/procedural.h"
 #include "scene/io/scene_file.h"
@@ -106,6 +107,16 @@ TEST(TwoLevel, SeveralMeshesAndSceneWideIds) {
     EXPECT_EQ(bvh.instance_of_id(800), 2u);
     EXPECT_EQ(bvh.instance_of_id(uint32_t(bvh.world_triangles - 1)), 10u);
     EXPECT_EQ(bvh.tlas.tri_ids.size(), 11u) << "one TLAS entry per instance";
+    // Bytes: each placed mesh's BLAS once, the TLAS and a record per instance; far less than the
+    // flattened scene's BVH2 (4,300 triangles against the BLASes' 800).
+    size_t blas_bytes = 0;
+    for (const accel::Bvh2& b : bvh.blas) blas_bytes += b.bytes();
+    EXPECT_EQ(bvh.bytes(), blas_bytes + bvh.tlas.bytes() + 11 * sizeof(accel::InstanceRecord));
+    const scene::TriangleMesh world = scene::flatten(placed, true);
+    const size_t flat_bytes =
+        accel::convert_to_bvh2(accel::run_builder(accel::BuilderKind::kBinned, world, {}).tree, world).bytes();
+    EXPECT_GT(bvh.bytes(), blas_bytes);
+    EXPECT_LT(bvh.bytes(), flat_bytes / 3);
     expect_two_level_agreement(placed, accel::BuilderKind::kBinned);
     const accel::TwoLevelBvh wide = accel::build_two_level(placed, builder_of(accel::BuilderKind::kBinned), {true});
     EXPECT_TRUE(wide.blas.empty());
@@ -114,6 +125,9 @@ TEST(TwoLevel, SeveralMeshesAndSceneWideIds) {
     EXPECT_EQ(wide.tlas.nodes.size(), bvh.tlas.nodes.size()) << "the same TLAS over the same boxes";
     EXPECT_TRUE(bvh.cw_tlas.nodes.empty());
     ASSERT_FALSE(wide.cw_tlas.nodes.empty()) << "and its 8-wide form";
+    size_t cw_bytes = 0;
+    for (const accel::Cwbvh& b : wide.cw_blas) cw_bytes += b.bytes();
+    EXPECT_EQ(wide.bytes(), cw_bytes + wide.tlas.bytes() + wide.cw_tlas.bytes() + 11 * sizeof(accel::InstanceRecord));
     std::vector<uint32_t> entered = wide.cw_tlas.tri_ids;
     std::sort(entered.begin(), entered.end());
     for (uint32_t i = 0; i < 11; ++i) EXPECT_EQ(entered[i], i) << "each instance in one leaf entry";
