@@ -780,6 +780,8 @@ assert abs(r["bytes_per_triangle"] * r["triangles"] - r["layout_bytes"]) < 1e-6 
 # Device memory: null without a GPU; with one, the upload is the layout or more, the peak no less.
 d, p = r["device_structure_bytes"], r["device_peak_bytes"]
 assert (d is None and p is None) or (d >= r["layout_bytes"] and p >= d), r
+# ... and the GPU and driver they were measured on (null without a GPU).
+assert (d is None) == (r["gpu"] is None) == (r["driver"] is None), r
 '; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL build memory figures: $args"; fi
 done
 

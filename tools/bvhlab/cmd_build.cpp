@@ -176,11 +176,16 @@ void register_build(CLI::App& app, Globals& g) {
         }
         // Device memory, where there is a GPU: the structure uploaded as a kernel reads it, and
         // the most device memory the process held for it (null without a GPU).
+        // The GPU and driver those figures (and a GPU build's times) come from.
         b.record["device_structure_bytes"] = nullptr;
         b.record["device_peak_bytes"] = nullptr;
+        b.record["gpu"] = nullptr;
+        b.record["driver"] = nullptr;
         if (trav::gpu_available()) {
             b.record["device_structure_bytes"] = b.device()->bytes();
             b.record["device_peak_bytes"] = trav::gpu_memory_use().peak;
+            b.record["gpu"] = trav::gpu_description();
+            b.record["driver"] = trav::gpu_driver();
         }
         if (g.json)
             emit(b.record);
