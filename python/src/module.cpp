@@ -123,20 +123,27 @@ trav::Query parse_query(const std::string& q) {
     throw Error("query '" + q + "' is not one of closest, any");
 }
 
-std::shared_ptr<Scene> scene_from_arrays(py::array_t<float, py::array::c_style | py::array::forcecast> vertices,
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+/// An (N, 3) float array as vertices, denormals as 0 (as every loader reads them).
+std::vector<Vec3> vertex_vector(const FloatArray& vertices) {
+    if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw Error("vertices must be an (N, 3) array of floats");
+    std::vector<Vec3> out(size_t(vertices.shape(0)));
+    const float* v = vertices.data();
+    for (size_t i = 0; i < out.size(); ++i) out[i] = scene::flush_denormals(Vec3{v[3 * i], v[3 * i + 1], v[3 * i + 2]});
+    return out;
+}
+
+std::shared_ptr<Scene> scene_from_arrays(FloatArray vertices,
                                          py::array_t<int64_t, py::array::c_style | py::array::forcecast> indices,
                                          bool drop_degenerate) {
-    if (vertices.ndim() != 2 || vertices.shape(1) != 3) throw Error("vertices must be an (N, 3) array of floats");
-    if (indices.ndim() != 2 || indices.shape(1) != 3) throw Error("indices must be an (M, 3) array of integers");
     auto s = std::make_shared<Scene>();
-    const size_t nv = size_t(vertices.shape(0)), nt = size_t(indices.shape(0));
-    const float* v = vertices.data();
-    const int64_t* ix = indices.data();
     // The caller's vertices and indices as they are (denormals as 0, as every loader does), so
     // that a triangle's id is its row, unless drop_degenerate removes some (Scene.kept).
-    s->mesh.vertices.resize(nv);
-    for (size_t i = 0; i < nv; ++i)
-        s->mesh.vertices[i] = scene::flush_denormals(Vec3{v[3 * i], v[3 * i + 1], v[3 * i + 2]});
+    s->mesh.vertices = vertex_vector(vertices);
+    if (indices.ndim() != 2 || indices.shape(1) != 3) throw Error("indices must be an (M, 3) array of integers");
+    const size_t nv = s->mesh.vertices.size(), nt = size_t(indices.shape(0));
+    const int64_t* ix = indices.data();
     for (size_t t = 0; t < nt; ++t) {
         for (int c = 0; c < 3; ++c)
             if (ix[3 * t + c] < 0 || size_t(ix[3 * t + c]) >= nv)
@@ -612,17 +619,11 @@ PYBIND11_MODULE(_bvhlab, m) {
              py::arg("structure"), "Uploads a structure of the bvh2 layout and its scene's triangles (a GPU is needed)")
         .def(
             "refit",
-            [](Refit& r, py::array_t<float, py::array::c_style | py::array::forcecast> vertices) {
-                if (vertices.ndim() != 2 || vertices.shape(1) != 3)
-                    throw Error("vertices must be an (N, 3) array of floats");
-                const size_t n = size_t(vertices.shape(0));
-                if (n != r.st->scene->mesh.vertices.size())
-                    throw Error(std::to_string(n) + " vertices for a scene of " +
+            [](Refit& r, const FloatArray& vertices) {
+                const std::vector<Vec3> v = vertex_vector(vertices);
+                if (v.size() != r.st->scene->mesh.vertices.size())
+                    throw Error(std::to_string(v.size()) + " vertices for a scene of " +
                                 std::to_string(r.st->scene->mesh.vertices.size()));
-                std::vector<Vec3> v(n);
-                const float* p = vertices.data();
-                for (size_t i = 0; i < n; ++i)
-                    v[i] = scene::flush_denormals(Vec3{p[3 * i], p[3 * i + 1], p[3 * i + 2]});
                 trav::GpuBuildTimes t;
                 {
                     py::gil_scoped_release release;
