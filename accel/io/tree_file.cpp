@@ -77,6 +77,7 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
     if (runs_on_gpu(kind)) {
         s << " morton=" << o.morton_bits;
         if (uses_radius(kind)) s << " radius=" << o.ploc_radius;
+        if (const int r = reinsertion_passes(kind, o); r > 0) s << " reinsert=" << r;  // older records have none
         return s.str();
     }
     if (kind != BuilderKind::kSweep) s << " bins=" << o.num_bins;

@@ -268,6 +268,8 @@ TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
     EXPECT_EQ(describe_config(BuilderKind::kHploc, o), "hploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
     EXPECT_EQ(describe_config(BuilderKind::kPloc, o), "ploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16");
     EXPECT_EQ(describe_config(BuilderKind::kLbvh, o), "lbvh leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60");
+    o.reinsertion_passes = 2;  // named only when run, as records before GPU reinsertion read
+    EXPECT_EQ(describe_config(BuilderKind::kLbvh, o), "lbvh leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 reinsert=2");
 }
 
 TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
@@ -281,7 +283,9 @@ TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
     EXPECT_THROW(s.check(), Error);
     s.build_device = "gpu";
     s.check();
-    s.options.reinsertion_passes = 2;
+    s.options.reinsertion_passes = 2;  // parallel reinsertion on the device
+    s.check();
+    s.options.reinsertion_passes = 17;
     EXPECT_THROW(s.check(), Error);
     trav::StructureSpec c;
     c.build_device = "gpu";

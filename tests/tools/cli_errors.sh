@@ -228,7 +228,7 @@ expect_error morton-cpu-builder "--morton-bits applies to the GPU builders [(]lb
     --builder sbvh --morton-bits 60
 expect_error radius-lbvh "--radius applies to --builder ploc or hploc, not lbvh" build "$cb" --builder lbvh --radius 4
 expect_error bins-gpu "--bins does not apply to the GPU builders" build "$cb" --builder hploc --bins 8
-expect_error reinsert-gpu "--reinsert applies to the CPU builders, not lbvh" build "$cb" --builder lbvh --reinsert 2
+expect_error reinsert-17-gpu "--reinsert" build "$cb" --builder lbvh --reinsert 17
 expect_error morton-bits-31 "--morton-bits" build "$cb" --builder lbvh --morton-bits 31
 expect_error radius-0 "--radius" build "$cb" --builder hploc --radius 0
 expect_error radius-17-ploc "--radius" build "$cb" --builder ploc --radius 17

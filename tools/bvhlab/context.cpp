@@ -398,8 +398,9 @@ void BuildOptions::add_to(CLI::App& app) {
             ->capture_default_str(),
         app.add_option(
                "--reinsert", opts.reinsertion_passes,
-               "at most this many passes of SAH-lowering subtree reinsertion after the BVH build (it stops "
-               "after a pass that gains under 1%); -1 = the builder's default (3 for sbvh, 0 for binned and sweep)")
+               "at most this many passes of SAH-lowering subtree reinsertion after the BVH build (CPU builders: "
+               "it stops after a pass that gains under 1%; GPU builders: parallel reinsertion on the device, "
+               "every pass run); -1 = the builder's default (3 for sbvh, 0 for the others)")
             ->check(CLI::Range(-1, 16))
             ->capture_default_str(),
         app.add_option("--morton-bits", opts.morton_bits, "GPU builders: bits of the Morton codes (30 or 60)")
@@ -516,7 +517,6 @@ void BuildOptions::check_applicable() const {
     const bool gpu = accel::runs_on_gpu(k);
     if (gpu) {
         refuse(config_flags[0], "does not apply to the GPU builders (they have no bins)");
-        refuse(config_flags[6], "applies to the CPU builders, not " + builder);
         if (build_device == "cpu")
             throw Error("--build-device cpu does not apply: builder " + builder + " runs on the GPU");
     } else {

@@ -184,11 +184,9 @@ __global__ void karras_hierarchy(uint32_t n, const Key* __restrict__ keys, uint2
     parent[r] = n + i;
 }
 
-/// From each leaf upwards; the second child to arrive at a node boxes it and goes on.
-__global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
-                          uint32_t* __restrict__ visits, LeafRule rule) {
-    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-    if (k >= n) return;
+/// From node k upwards; the second child to arrive at a node boxes it and goes on.
+__device__ void climb(uint32_t k, uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes,
+                      NodeMeta* meta, uint32_t* __restrict__ visits, const LeafRule& rule) {
     uint32_t p = parent[k];
     while (p != kInvalid) {
         __threadfence();  // this thread's node before the counter
@@ -198,6 +196,13 @@ __global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2
         make_node(p, c.x, c.y, merge(load_box(boxes + c.x), load_box(boxes + c.y)), boxes, children, meta, rule);
         p = parent[p];
     }
+}
+
+/// From each leaf upwards (climb).
+__global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
+                          uint32_t* __restrict__ visits, LeafRule rule) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k < n) climb(k, n, parent, children, boxes, meta, visits, rule);
 }
 
 // --- PLOC (Meister & Bittner 2018): rounds over the whole cluster list, as
@@ -457,6 +462,238 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
+// --- Parallel reinsertion (Meister & Bittner 2018) between the hierarchy and the layout. Each
+// pass, every node of the tree (its leaves, as the SAH chose them, and the interior nodes above
+// them) searches for the node X whose sibling it should become: the most interior area saved,
+// as accel::ReinsertionOptimizer counts it, with the boxes as they are. Moves that change the
+// same nodes' links are resolved by priority (the larger gain wins), the winners move at once,
+// and boxes and leaf choices are fitted again bottom-up from the tree's leaves.
+
+constexpr int kReinsertStack = 48;
+/// The search's reach: ancestors up to this many levels above the node's parent, and this many
+/// nodes visited in all (experiments/NOTES.md: against an unbounded search, the same trace speed
+/// within the noise and 10% less time on furball; 8 levels lose 2-3% of it).
+constexpr uint32_t kReinsertLevels = 16;
+constexpr int kReinsertSteps = 64;
+
+/// A node's part in a pass.
+enum Role : uint8_t {
+    kInsideLeaf = 0,  // below a leaf: stays with it
+    kFixed = 1,       // the root and its children: stay
+    kInterior = 2,
+    kLeaf = 3,  // a leaf of the tree: the refit starts here
+};
+
+/// Whether node x lies inside a leaf (an ancestor chose to be one; only ancestors of at most
+/// max_leaf triangles can).
+__device__ bool inside_leaf(uint32_t x, uint32_t max_leaf, const uint32_t* parent, const NodeMeta* meta) {
+    for (uint32_t p = parent[x]; p != kInvalid; p = parent[p]) {
+        const NodeMeta pm = meta[p];
+        if (pm.count > max_leaf) return false;
+        if (pm.leaf()) return true;
+    }
+    return false;
+}
+
+__global__ void reinsert_roles(uint32_t total, uint32_t max_leaf, const uint32_t* __restrict__ parent,
+                               const NodeMeta* __restrict__ meta, uint8_t* __restrict__ role) {
+    const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
+    if (x >= total) return;
+    const uint32_t p = parent[x];
+    Role r;
+    if (inside_leaf(x, max_leaf, parent, meta))
+        r = kInsideLeaf;
+    else if (meta[x].leaf())
+        r = kLeaf;
+    else
+        r = kInterior;
+    if (r != kInsideLeaf && (p == kInvalid || parent[p] == kInvalid)) r = r == kLeaf ? kLeaf : kFixed;
+    role[x] = r;
+}
+
+__device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? c.y : c.x; }
+
+/// The best place for node `node`: `to` (kInvalid: none saves area), the area saved and `top`,
+/// the lowest common ancestor of the node and X. Cutting the node out frees its parent p (its
+/// area saved) and shrinks p's ancestors below `top`; putting it beside X adds A(X u node) and
+/// grows X's ancestors below `top`. X runs over the subtree of the sibling of each node on the
+/// path to the root (depth-first branch and bound: a subtree whose growth already costs what the
+/// best saves is skipped; leaves are not entered), and over the ancestors themselves; p and the
+/// root are not candidates.
+__global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role, const uint32_t* __restrict__ parent,
+                                const uint2* __restrict__ children, const NodeMeta* __restrict__ meta,
+                                const AABB* __restrict__ boxes, float* __restrict__ gain, uint32_t* __restrict__ to,
+                                uint32_t* __restrict__ top) {
+    const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
+    if (node >= total) return;
+    float best = 0.0f;
+    uint32_t best_x = kInvalid, best_top = kInvalid;
+    const Role r = Role(role[node]);
+    const uint32_t p = parent[node];
+    // Leaves that are children of the root or of its children stay too (p or its parent is
+    // the root's).
+    if ((r == kInterior || r == kLeaf) && p != kInvalid && parent[p] != kInvalid) {
+        const AABB nb = boxes[node];
+        const float an = nb.half_area();
+        float budget = boxes[p].half_area();  // what the move saves before X's cost
+        const uint32_t s = other_child(children[p], node);
+        AABB shrunk = boxes[s];  // the current ancestor without the node
+        float stack_budget[kReinsertStack];
+        uint32_t stack_node[kReinsertStack];
+        int steps = kReinsertSteps;
+        auto explore = [&](uint32_t from, uint32_t under) {
+            int sp = 0;
+            stack_budget[sp] = budget;
+            stack_node[sp++] = from;
+            while (sp && steps > 0) {
+                --sp;
+                --steps;  // shared by every subtree of the search
+                const float b = stack_budget[sp];
+                const uint32_t x = stack_node[sp];
+                if (b - an <= best) continue;
+                const AABB xb = boxes[x];
+                const float r = b - merge(xb, nb).half_area();
+                if (r > best) {
+                    best = r;
+                    best_x = x;
+                    best_top = under;
+                }
+                if (meta[x].leaf()) continue;            // a leaf's triangles stay together
+                const float below = r + xb.half_area();  // X's own growth is paid by its children
+                if (below - an <= best || sp + 2 > kReinsertStack) continue;
+                const uint2 c = children[x];
+                stack_budget[sp] = below;
+                stack_node[sp++] = c.y;
+                stack_budget[sp] = below;
+                stack_node[sp++] = c.x;
+            }
+        };
+        explore(s, p);
+        for (uint32_t below = p, level = 0; level < kReinsertLevels; ++level) {
+            const uint32_t up = parent[below];
+            if (up == kInvalid) break;
+            const uint32_t other = other_child(children[up], below);
+            explore(other, up);  // `up` keeps its box: the node stays below it
+            shrunk = merge(shrunk, boxes[other]);
+            budget += boxes[up].half_area() - shrunk.half_area();  // `up` shrinks from here on
+            if (parent[up] != kInvalid) {                          // X = up: a new node over it has its old box
+                const float r = budget - boxes[up].half_area();
+                if (r > best) {
+                    best = r;
+                    best_x = up;
+                    best_top = up;
+                }
+            }
+            below = up;
+        }
+    }
+    gain[node] = best;
+    to[node] = best_x;
+    top[node] = best_top;
+}
+
+/// Calls f on every node whose links candidate `node`'s move to X = `to` changes: the node, its
+/// parent, sibling and grandparent, X and X's parent.
+template <typename F>
+__device__ void each_touched(uint32_t node, uint32_t to, const uint32_t* parent, const uint2* children, F&& f) {
+    const uint32_t p = parent[node];
+    f(node);
+    f(p);
+    f(other_child(children[p], node));
+    f(parent[p]);
+    f(to);
+    f(parent[to]);
+}
+
+__device__ unsigned long long reinsert_priority(float gain, uint32_t i) {
+    return static_cast<unsigned long long>(__float_as_uint(gain)) << 32 | (0xffffffffu - i);
+}
+
+__global__ void reinsert_lock(uint32_t total, const float* __restrict__ gain, const uint32_t* __restrict__ to,
+                              const uint32_t* __restrict__ parent, const uint2* __restrict__ children,
+                              unsigned long long* locks) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= total || to[i] == kInvalid) return;
+    const unsigned long long key = reinsert_priority(gain[i], i);
+    each_touched(i, to[i], parent, children, [&](uint32_t y) { atomicMax(locks + y, key); });
+}
+
+/// A move that holds every node it touches goes ahead and marks its node as moving; the others
+/// are dropped (to = kInvalid).
+__global__ void reinsert_claim(uint32_t total, const float* __restrict__ gain, uint32_t* __restrict__ to,
+                               const uint32_t* __restrict__ parent, const uint2* __restrict__ children,
+                               const unsigned long long* __restrict__ locks, uint8_t* __restrict__ moving) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= total || to[i] == kInvalid) return;
+    const unsigned long long key = reinsert_priority(gain[i], i);
+    bool mine = true;
+    each_touched(i, to[i], parent, children, [&](uint32_t y) { mine &= locks[y] == key; });
+    if (mine)
+        moving[i] = 1;
+    else
+        to[i] = kInvalid;
+}
+
+/// Drops a claimed move whose X lies below another claimed move's node (on X's path up to `top`,
+/// the common ancestor): that node could carry X into this move's own subtree, a cycle.
+__global__ void reinsert_uncross(uint32_t total, uint32_t* __restrict__ to, const uint32_t* __restrict__ top,
+                                 const uint32_t* __restrict__ parent, const uint8_t* __restrict__ moving) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= total || to[i] == kInvalid) return;
+    for (uint32_t y = to[i]; y != top[i];) {
+        y = parent[y];
+        if (moving[y]) {
+            to[i] = kInvalid;
+            return;
+        }
+    }
+}
+
+__device__ void replace_child(uint2* children, uint32_t at, uint32_t old_child, uint32_t new_child) {
+    uint2 c = children[at];
+    if (c.x == old_child)
+        c.x = new_child;
+    else
+        c.y = new_child;
+    children[at] = c;
+}
+
+/// The claimed moves: the node's parent p leaves (its sibling takes its place) and comes back
+/// over X and the node, in X's place. Moves that were claimed touch disjoint nodes.
+__global__ void reinsert_apply(uint32_t total, const uint32_t* __restrict__ to, uint32_t* parent, uint2* children) {
+    const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
+    if (node >= total || to[node] == kInvalid) return;
+    const uint32_t x = to[node];
+    const uint32_t p = parent[node], g = parent[p];
+    const uint32_t s = other_child(children[p], node);
+
+    replace_child(children, g, p, s);
+    parent[s] = g;
+    const uint32_t q = parent[x];
+    replace_child(children, q, x, p);
+    children[p] = make_uint2(x, node);
+    parent[x] = p;
+    parent[p] = q;
+}
+
+/// Copies the root's meta (the root's id in *root) to *out.
+__global__ void root_meta(const uint32_t* root, const NodeMeta* meta, NodeMeta* out) { *out = meta[*root]; }
+
+/// Zeroes the root's triangle count before a refit, which counts them again only if every leaf
+/// reaches the root.
+__global__ void clear_root_count(const uint32_t* root, NodeMeta* meta) {
+    if (!meta[*root].leaf()) meta[*root].count = 0;  // a root leaf: nothing moves
+}
+
+/// fit_boxes from the tree's leaves (their subtrees are as they were) after a pass.
+__global__ void refit_from_leaves(uint32_t total, uint32_t n, const uint8_t* __restrict__ role,
+                                  const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
+                                  uint32_t* __restrict__ visits, LeafRule rule) {
+    const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
+    if (x >= total || role[x] != kLeaf) return;
+    climb(x, n, parent, children, boxes, meta, visits, rule);
+}
+
 // --- The BVH2 layout, flat: one scan over every node places them all.
 
 /// The triangle ids of leaf subtree `node` to tri_ids[first, ...), left to right (their Woop maps
@@ -518,6 +755,7 @@ __global__ void parents_of(uint32_t n, const uint2* __restrict__ children, uint3
 struct LayoutOrder {
     uint32_t total;  // 2n - 1 hierarchy nodes
     bool reverse;
+    bool id_ranges;  // subtrees are ranges of the sorted triangles (the LBVH's, unless reinsertion moved them)
     __device__ uint32_t operator()(uint32_t x) const { return reverse ? total - 1 - x : x; }
 };
 
@@ -559,7 +797,7 @@ __global__ void layout_write(LayoutOrder order, LayoutInput in, const uint32_t* 
     // A leaf's first triangle: the LBVH's subtrees are ranges of the sorted triangles, so its
     // leftmost leaf (tri_ids are then the sorted ids, in Morton order); else the scan's count.
     auto first_of = [&](uint32_t node, unsigned long long scanned) {
-        if (order.reverse) return uint32_t(scanned);
+        if (!order.id_ranges) return uint32_t(scanned);
         while (node >= in.n) node = in.children[node].x;
         return node;
     };
@@ -665,11 +903,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const uint32_t n = prims.n;
     const int bits = options.morton_bits;
     const bool lbvh = kind == accel::BuilderKind::kLbvh, ploc = kind == accel::BuilderKind::kPloc;
+    const int passes = n >= 3 ? accel::reinsertion_passes(kind, options) : 0;
     const LeafRule rule{options.config.traversal_cost, options.config.intersection_cost, options.config.min_leaf_size,
                         options.config.max_leaf_size};
     const size_t base = gpu_memory_use().current;
     GpuBuild g;
-    Events ev(8);
+    Events ev(9);
     ev.record(0);
     DeviceBuffer<Vec3> verts;
     DeviceBuffer<uint32_t> idx;
@@ -686,7 +925,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
-    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh ? inner : 0), clusters(lbvh ? 0 : n);
+    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || passes ? inner : 0), clusters(lbvh ? 0 : n);
     DeviceBuffer<int32_t> parent_ids(kind == accel::BuilderKind::kHploc ? inner : 0);
     // PLOC's second cluster list, nearest neighbours, flags and their scan.
     DeviceBuffer<uint32_t> clusters_alt(ploc ? n : 0), nn(ploc ? n : 0);
@@ -694,6 +933,16 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, (unused), PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
+    // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
+    // per node, the hierarchy before the passes (restored if they are undone) and the root's
+    // meta before and after.
+    const size_t r_nodes = passes ? nodes : 0;
+    DeviceBuffer<uint8_t> r_role(r_nodes), r_moving(r_nodes);
+    DeviceBuffer<float> r_gain(r_nodes);
+    DeviceBuffer<uint32_t> r_to(r_nodes), r_top(r_nodes), r_parent(r_nodes);
+    DeviceBuffer<unsigned long long> r_locks(r_nodes);
+    DeviceBuffer<uint2> r_children(r_nodes);
+    DeviceBuffer<NodeMeta> r_root(passes ? 2 : 0);
     g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
     size_t reduce_bytes = 0, sort_bytes = 0, scan_bytes = 0;
@@ -711,7 +960,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     detail::fill_device_bytes(parent.data(), 0xff, parent.bytes());
     if (lbvh) {
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-    } else if (!ploc) {
+    }
+    if (kind == accel::BuilderKind::kHploc) {
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
@@ -774,27 +1024,85 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                             rule);
         BVHLAB_CHECK_LAUNCH();
     }
-    ev.record(6);
-    // The layout, flat: each node's place from a scan over every node's flag (no round trip).
-    const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
-    const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
-    const LayoutOrder order{uint32_t(nodes), !lbvh};
-    if (!lbvh && n > 1) {
+    if (!lbvh && n > 1) {  // PLOC and H-PLOC record no parents while they merge
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
     }
-    layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(), layout_flags_.data());
-    BVHLAB_CHECK_LAUNCH();
-    BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, layout_flags_.data(),
-                                                    layout_scan.data(), int(nodes)));
-    layout_write<<<grid_for(nodes), kBlock>>>(order, in, parent.data(), out, layout_flags_.data(), layout_scan.data());
-    BVHLAB_CHECK_LAUNCH();
-    if (prims.mesh) {
-        woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
+    ev.record(6);
+    if (passes) {
+        BVHLAB_CUDA_CHECK(
+            cudaMemcpyAsync(r_children.data(), children.data(), children.bytes(), cudaMemcpyDeviceToDevice));
+        BVHLAB_CUDA_CHECK(cudaMemcpyAsync(r_parent.data(), parent.data(), parent.bytes(), cudaMemcpyDeviceToDevice));
+        root_meta<<<1, 1>>>(root, meta.data(), r_root.data());
+        const uint32_t total = uint32_t(nodes);
+        for (int pass = 0; pass < passes; ++pass) {
+            reinsert_roles<<<grid_for(total), kBlock>>>(total, rule.max_leaf, parent.data(), meta.data(),
+                                                        r_role.data());
+            BVHLAB_CHECK_LAUNCH();
+            reinsert_search<<<grid_for(total), kBlock>>>(total, r_role.data(), parent.data(), children.data(),
+                                                         meta.data(), boxes.data(), r_gain.data(), r_to.data(),
+                                                         r_top.data());
+            BVHLAB_CHECK_LAUNCH();
+            detail::fill_device_bytes(r_locks.data(), 0, r_locks.bytes());
+            detail::fill_device_bytes(r_moving.data(), 0, r_moving.bytes());
+            reinsert_lock<<<grid_for(total), kBlock>>>(total, r_gain.data(), r_to.data(), parent.data(),
+                                                       children.data(), r_locks.data());
+            BVHLAB_CHECK_LAUNCH();
+            reinsert_claim<<<grid_for(total), kBlock>>>(total, r_gain.data(), r_to.data(), parent.data(),
+                                                        children.data(), r_locks.data(), r_moving.data());
+            BVHLAB_CHECK_LAUNCH();
+            reinsert_uncross<<<grid_for(total), kBlock>>>(total, r_to.data(), r_top.data(), parent.data(),
+                                                          r_moving.data());
+            BVHLAB_CHECK_LAUNCH();
+            reinsert_apply<<<grid_for(total), kBlock>>>(total, r_to.data(), parent.data(), children.data());
+            BVHLAB_CHECK_LAUNCH();
+            clear_root_count<<<1, 1>>>(root, meta.data());
+            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+            refit_from_leaves<<<grid_for(total), kBlock>>>(total, n, r_role.data(), parent.data(), children.data(),
+                                                           boxes.data(), meta.data(), visits.data(), rule);
+            BVHLAB_CHECK_LAUNCH();
+        }
+        root_meta<<<1, 1>>>(root, meta.data(), r_root.data() + 1);
         BVHLAB_CHECK_LAUNCH();
+        // Passes that leave the tree as deep as max_depth (deeper than it was), or not one tree
+        // over every triangle (a safety net: the moves are made so that none is carried into its
+        // own subtree), are undone: the hierarchy as the builder made it, fitted again.
+        NodeMeta rm[2];
+        detail::copy_to_host(rm, r_root.data(), sizeof rm);
+        if ((std::max(rm[1].height, 1u) >= options.config.max_depth && rm[1].height > rm[0].height) ||
+            rm[1].count != n) {
+            BVHLAB_CUDA_CHECK(
+                cudaMemcpyAsync(children.data(), r_children.data(), children.bytes(), cudaMemcpyDeviceToDevice));
+            BVHLAB_CUDA_CHECK(
+                cudaMemcpyAsync(parent.data(), r_parent.data(), parent.bytes(), cudaMemcpyDeviceToDevice));
+            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+            fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(),
+                                               visits.data(), rule);
+            BVHLAB_CHECK_LAUNCH();
+            g.reinsertion_undone = true;
+        }
     }
     ev.record(7);
-    ev.sync(7);
+    // The layout, flat: each node's place from a scan over every node's flag (no round trip).
+    const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
+    const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
+    const LayoutOrder order{uint32_t(nodes), !lbvh, lbvh && (!passes || g.reinsertion_undone)};
+    {
+        layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(),
+                                                  layout_flags_.data());
+        BVHLAB_CHECK_LAUNCH();
+        BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, layout_flags_.data(),
+                                                        layout_scan.data(), int(nodes)));
+        layout_write<<<grid_for(nodes), kBlock>>>(order, in, parent.data(), out, layout_flags_.data(),
+                                                  layout_scan.data());
+        BVHLAB_CHECK_LAUNCH();
+        if (prims.mesh) {
+            woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
+            BVHLAB_CHECK_LAUNCH();
+        }
+    }
+    ev.record(8);
+    ev.sync(8);
 
     GpuBuildTimes& t = g.times;
     t.upload_ms = ev.ms(0, 1);
@@ -802,8 +1110,10 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     t.morton_ms = ev.ms(3, 4);
     t.sort_ms = ev.ms(4, 5);
     t.hierarchy_ms = ev.ms(5, 6);
-    t.convert_ms = ev.ms(6, 7);
-    t.total_ms = ev.ms(2, 7);
+    t.optimize_ms = ev.ms(6, 7);
+    t.convert_ms = ev.ms(7, 8);
+    t.total_ms = ev.ms(2, 8);
+    g.reinsertion_passes = passes;
 
     // The host copy, and the nodes moved to a buffer of their exact size.
     uint32_t w[3];  // root, node counter, (unused)

@@ -10,6 +10,13 @@
 //    bottom-up LBVH in which each warp, at every node with more than 16 clusters below it,
 //    merges them by PLOC's nearest-neighbour rule (Meister & Bittner 2018) within a search
 //    radius, down to 16 (to 1 at the root).
+// Any of the three may then run passes of parallel reinsertion (Meister & Bittner 2018; BuilderOptions::
+// reinsertion_passes, 0 by default): each pass every leaf and interior node of the tree searches,
+// up to 16 levels above it and 64 nodes in all, for the sibling that saves the most interior
+// area; moves that change the same nodes' links are resolved by priority (the larger gain wins),
+// a move whose X lies below another move's node is dropped (no subtree is carried into itself),
+// the rest are made at once, and boxes and leaf choices are fitted again. Passes that leave the
+// tree as deep as max_depth are undone.
 // All three end the same way on the device: each node's SAH cost decides, bottom-up, where leaves of
 // up to max_leaf triangles replace subtrees, and the BVH2 layout is written flat: every node's
 // place from one scan over all nodes' flags (nodes in the order of their ids, the LBVH's leaves
@@ -39,6 +46,7 @@ struct GpuBuildTimes {
     double morton_ms = 0.0;     ///< Morton codes
     double sort_ms = 0.0;       ///< CUB radix sort of the codes with the triangle ids
     double hierarchy_ms = 0.0;  ///< LBVH hierarchy and box fitting, or (H-)PLOC's clustering
+    double optimize_ms = 0.0;   ///< reinsertion passes (0 without them)
     double convert_ms = 0.0;    ///< leaves chosen by SAH, BVH2 nodes and Woop triangles written
     double total_ms = 0.0;      ///< bounds to convert: the build time
 };
@@ -50,9 +58,11 @@ struct GpuBuild {
     DeviceBuffer<uint32_t> tri_ids;
     accel::Bvh2 host;  ///< the same structure downloaded (with its depth)
     GpuBuildTimes times;
-    size_t peak_bytes = 0;    ///< the most device memory the build held (buffers and CUB's scratch)
-    size_t node_count = 0;    ///< layout nodes written (the first node_count of `nodes`)
-    accel::RawHierarchy raw;  ///< the hierarchy before leaves were chosen, when asked for
+    size_t peak_bytes = 0;            ///< the most device memory the build held (buffers and CUB's scratch)
+    size_t node_count = 0;            ///< layout nodes written (the first node_count of `nodes`)
+    accel::RawHierarchy raw;          ///< the hierarchy before leaves were chosen, when asked for
+    int reinsertion_passes = 0;       ///< passes of parallel reinsertion run
+    bool reinsertion_undone = false;  ///< they made the tree deeper than max_depth and were undone
 };
 
 /// Builds `mesh` (at least one triangle) with GPU builder `kind` and the options' leaf sizes,
