@@ -495,8 +495,31 @@ __device__ bool inside_leaf(uint32_t x, uint32_t max_leaf, const uint32_t* paren
     return false;
 }
 
+/// What the search reads of a node, in one 32-byte sector: its box and children (kInvalid for a
+/// leaf of the tree).
+struct alignas(32) SearchNode {
+    float lo_x, lo_y, lo_z;
+    uint32_t left;
+    float hi_x, hi_y, hi_z;
+    uint32_t right;
+
+    __device__ AABB box() const { return {{lo_x, lo_y, lo_z}, {hi_x, hi_y, hi_z}}; }
+    __device__ bool leaf() const { return left == kInvalid; }
+    __device__ uint2 children() const { return make_uint2(left, right); }
+};
+static_assert(sizeof(SearchNode) == 32, "one sector per node");
+
+__device__ SearchNode load_search_node(const SearchNode* n) {
+    const uint4 a = __ldg(reinterpret_cast<const uint4*>(n)), b = __ldg(reinterpret_cast<const uint4*>(n) + 1);
+    return {__uint_as_float(a.x), __uint_as_float(a.y), __uint_as_float(a.z), a.w,
+            __uint_as_float(b.x), __uint_as_float(b.y), __uint_as_float(b.z), b.w};
+}
+
+/// Each node's role, and for the nodes of the tree (not inside a leaf) the search's copy.
 __global__ void reinsert_roles(uint32_t total, uint32_t max_leaf, const uint32_t* __restrict__ parent,
-                               const NodeMeta* __restrict__ meta, uint8_t* __restrict__ role) {
+                               const uint2* __restrict__ children, const AABB* __restrict__ boxes,
+                               const NodeMeta* __restrict__ meta, uint8_t* __restrict__ role,
+                               SearchNode* __restrict__ search) {
     const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
     if (x >= total) return;
     const uint32_t p = parent[x];
@@ -509,6 +532,10 @@ __global__ void reinsert_roles(uint32_t total, uint32_t max_leaf, const uint32_t
         r = kInterior;
     if (r != kInsideLeaf && (p == kInvalid || parent[p] == kInvalid)) r = r == kLeaf ? kLeaf : kFixed;
     role[x] = r;
+    if (r == kInsideLeaf) return;
+    const AABB b = boxes[x];
+    const uint2 c = r == kLeaf ? make_uint2(kInvalid, kInvalid) : children[x];
+    search[x] = {b.lo.x, b.lo.y, b.lo.z, c.x, b.hi.x, b.hi.y, b.hi.z, c.y};
 }
 
 __device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? c.y : c.x; }
@@ -521,9 +548,8 @@ __device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? 
 /// best saves is skipped; leaves are not entered), and over the ancestors themselves; p and the
 /// root are not candidates.
 __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role, const uint32_t* __restrict__ parent,
-                                const uint2* __restrict__ children, const NodeMeta* __restrict__ meta,
-                                const AABB* __restrict__ boxes, float* __restrict__ gain, uint32_t* __restrict__ to,
-                                uint32_t* __restrict__ top) {
+                                const SearchNode* __restrict__ search, float* __restrict__ gain,
+                                uint32_t* __restrict__ to, uint32_t* __restrict__ top) {
     const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
     if (node >= total) return;
     float best = 0.0f;
@@ -533,11 +559,12 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
     // Leaves that are children of the root or of its children stay too (p or its parent is
     // the root's).
     if ((r == kInterior || r == kLeaf) && p != kInvalid && parent[p] != kInvalid) {
-        const AABB nb = boxes[node];
+        const AABB nb = load_search_node(search + node).box();
         const float an = nb.half_area();
-        float budget = boxes[p].half_area();  // what the move saves before X's cost
-        const uint32_t s = other_child(children[p], node);
-        AABB shrunk = boxes[s];  // the current ancestor without the node
+        const SearchNode pn = load_search_node(search + p);
+        float budget = pn.box().half_area();  // what the move saves before X's cost
+        const uint32_t s = other_child(pn.children(), node);
+        AABB shrunk = load_search_node(search + s).box();  // the current ancestor without the node
         float stack_budget[kReinsertStack];
         uint32_t stack_node[kReinsertStack];
         int steps = kReinsertSteps;
@@ -551,17 +578,18 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
                 const float b = stack_budget[sp];
                 const uint32_t x = stack_node[sp];
                 if (b - an <= best) continue;
-                const AABB xb = boxes[x];
+                const SearchNode xn = load_search_node(search + x);
+                const AABB xb = xn.box();
                 const float r = b - merge(xb, nb).half_area();
                 if (r > best) {
                     best = r;
                     best_x = x;
                     best_top = under;
                 }
-                if (meta[x].leaf()) continue;            // a leaf's triangles stay together
+                if (xn.leaf()) continue;                 // a leaf's triangles stay together
                 const float below = r + xb.half_area();  // X's own growth is paid by its children
                 if (below - an <= best || sp + 2 > kReinsertStack) continue;
-                const uint2 c = children[x];
+                const uint2 c = xn.children();
                 stack_budget[sp] = below;
                 stack_node[sp++] = c.y;
                 stack_budget[sp] = below;
@@ -572,12 +600,14 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
         for (uint32_t below = p, level = 0; level < kReinsertLevels; ++level) {
             const uint32_t up = parent[below];
             if (up == kInvalid) break;
-            const uint32_t other = other_child(children[up], below);
+            const SearchNode un = load_search_node(search + up);
+            const uint32_t other = other_child(un.children(), below);
             explore(other, up);  // `up` keeps its box: the node stays below it
-            shrunk = merge(shrunk, boxes[other]);
-            budget += boxes[up].half_area() - shrunk.half_area();  // `up` shrinks from here on
-            if (parent[up] != kInvalid) {                          // X = up: a new node over it has its old box
-                const float r = budget - boxes[up].half_area();
+            shrunk = merge(shrunk, load_search_node(search + other).box());
+            const float up_area = un.box().half_area();
+            budget += up_area - shrunk.half_area();  // `up` shrinks from here on
+            if (parent[up] != kInvalid) {            // X = up: a new node over it has its old box
+                const float r = budget - up_area;
                 if (r > best) {
                     best = r;
                     best_x = up;
@@ -938,6 +968,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // meta before and after.
     const size_t r_nodes = passes ? nodes : 0;
     DeviceBuffer<uint8_t> r_role(r_nodes), r_moving(r_nodes);
+    DeviceBuffer<SearchNode> r_search(r_nodes);
     DeviceBuffer<float> r_gain(r_nodes);
     DeviceBuffer<uint32_t> r_to(r_nodes), r_top(r_nodes), r_parent(r_nodes);
     DeviceBuffer<unsigned long long> r_locks(r_nodes);
@@ -1036,12 +1067,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         root_meta<<<1, 1>>>(root, meta.data(), r_root.data());
         const uint32_t total = uint32_t(nodes);
         for (int pass = 0; pass < passes; ++pass) {
-            reinsert_roles<<<grid_for(total), kBlock>>>(total, rule.max_leaf, parent.data(), meta.data(),
-                                                        r_role.data());
+            reinsert_roles<<<grid_for(total), kBlock>>>(total, rule.max_leaf, parent.data(), children.data(),
+                                                        boxes.data(), meta.data(), r_role.data(), r_search.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_search<<<grid_for(total), kBlock>>>(total, r_role.data(), parent.data(), children.data(),
-                                                         meta.data(), boxes.data(), r_gain.data(), r_to.data(),
-                                                         r_top.data());
+            reinsert_search<<<grid_for(total), kBlock>>>(total, r_role.data(), parent.data(), r_search.data(),
+                                                         r_gain.data(), r_to.data(), r_top.data());
             BVHLAB_CHECK_LAUNCH();
             detail::fill_device_bytes(r_locks.data(), 0, r_locks.bytes());
             detail::fill_device_bytes(r_moving.data(), 0, r_moving.bytes());
