@@ -556,8 +556,8 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
     uint32_t best_x = kInvalid, best_top = kInvalid;
     const Role r = Role(role[node]);
     const uint32_t p = parent[node];
-    // Leaves that are children of the root or of its children stay too (p or its parent is
-    // the root's).
+    // The root and its children stay (kFixed), and so do leaves among them (p or its parent is
+    // the root).
     if ((r == kInterior || r == kLeaf) && p != kInvalid && parent[p] != kInvalid) {
         const AABB nb = load_search_node(search + node).box();
         const float an = nb.half_area();
@@ -696,7 +696,6 @@ __global__ void reinsert_apply(uint32_t total, const uint32_t* __restrict__ to, 
     const uint32_t x = to[node];
     const uint32_t p = parent[node], g = parent[p];
     const uint32_t s = other_child(children[p], node);
-
     replace_child(children, g, p, s);
     parent[s] = g;
     const uint32_t q = parent[x];
