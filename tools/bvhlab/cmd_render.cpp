@@ -361,7 +361,9 @@ void register_render(CLI::App& app, Globals& g) {
                 if (writing.valid()) writing.get();  // a failed write ends the render with its error
                 writing = std::async(std::launch::async, [&o, &server, img = mean, spp] {
                     if (!o->preview.empty()) render::write_images({{&img, o->preview}});
-                    if (server) server->update_image(img, spp);
+                    // The last samples' image goes to the page once, as the final one (finish):
+                    // a preview of it as well would show the page two images of the same spp.
+                    if (server && spp < o->rs.spp) server->update_image(img, spp);
                 });
                 ++previews;
             };
