@@ -154,10 +154,7 @@ void register_build(CLI::App& app, Globals& g) {
             gt["builder"] = b.spec.builder;
             gt["instances"] = transforms.size();
             gt["runs_ms"] = ms;
-            gt["last"] = {{"upload_ms", last.upload_ms},       {"bounds_ms", last.bounds_ms},
-                          {"morton_ms", last.morton_ms},       {"sort_ms", last.sort_ms},
-                          {"hierarchy_ms", last.hierarchy_ms}, {"optimize_ms", last.optimize_ms},
-                          {"convert_ms", last.convert_ms}};
+            gt["last"] = trav::gpu_stage_times(last);
             gt["median_ms"] = median(ms);
         } else if (o->runs > 0) {
             std::vector<double> ms;
