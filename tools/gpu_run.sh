@@ -28,6 +28,8 @@
 #             sorting, the first-hit cache, no compaction; and compute-sanitizer memcheck of
 #             small renders.
 #             experiments/render_report.py turns OUT into docs/results.md's renderer section
+#             (RENDER_DATA_SCENES=0 leaves data/'s three scenes out, to split the run in two
+#             whose OUT folders the report reads together)
 # GPU_TESTS: a gtest filter for the tests phase (default: all). BENCH_KERNELS: the kernels of
 # bvhbench and cwbench (default: all).
 # Usage: tools/gpu_run.sh PREFIX SCENES_DIR OUT PHASE[,PHASE...] [SCENE ...]
@@ -195,8 +197,9 @@ if has render; then
         "$bin/bvhlab" -q render "$s" --device gpu --kernel "$kernel" --width 640 --height 480 --max-depth 8 \
             -o "$img" --json "$@" >>"$o" 2>>"$out/render.err" || status=1
     }
-    for s in "$BVHLAB_DATA/cornell_box.obj" "$BVHLAB_DATA/cornell_closed.obj" "$BVHLAB_DATA/glass_mirror.obj" \
-        "${names[@]}"; do
+    data_scenes=("$BVHLAB_DATA/cornell_box.obj" "$BVHLAB_DATA/cornell_closed.obj" "$BVHLAB_DATA/glass_mirror.obj")
+    [ "${RENDER_DATA_SCENES:-1}" = 1 ] || data_scenes=()
+    for s in "${data_scenes[@]}" "${names[@]}"; do
         n=$(basename "$s" .obj)
         log "render $n"
         d=$rays/render-$n
