@@ -14,30 +14,34 @@ namespace bvhlab::accel {
 
 namespace {
 
-template <typename Key>
-void emit_hierarchy(RawHierarchy& h, const std::vector<Key>& keys) {
-    const int64_t n = int64_t(keys.size());
-    h.left.resize(size_t(n - 1));
-    h.right.resize(size_t(n - 1));
-    std::vector<uint32_t> parent(size_t(2 * n - 1), ~0u);
-    for (int64_t i = 0; i + 1 < n; ++i) {
-        morton::karras_children(keys.data(), n, i, h.left[size_t(i)], h.right[size_t(i)]);
-        parent[h.left[size_t(i)]] = uint32_t(n + i);
-        parent[h.right[size_t(i)]] = uint32_t(n + i);
-    }
-    // Boxes bottom-up as the GPU fits them: from each leaf upwards, a node is boxed by the
-    // second of its children to arrive (the GPU's atomic counters, in one thread).
-    std::vector<uint8_t> visits(size_t(n - 1), 0);
-    for (int64_t k = 0; k < n; ++k) {
-        uint32_t p = parent[size_t(k)];
-        while (p != ~0u) {
-            const size_t i = size_t(p - n);
-            if (++visits[i] < 2) break;
-            h.boxes[p] = merge(h.boxes[h.left[i]], h.boxes[h.right[i]]);
-            p = parent[p];
+/// The radix tree bottom-up, as the GPU climbs it (morton::radix_parent): from each leaf in
+/// turn, the first of two siblings to arrive at their parent leaves its outer key there and
+/// stops; the second boxes the parent (when h has boxes) and goes on (the GPU's atomic
+/// exchanges, in one thread).
+void emit_hierarchy(RawHierarchy& h) {
+    const uint32_t n = uint32_t(h.keys.size());
+    h.left.resize(n - 1);
+    h.right.resize(n - 1);
+    std::vector<uint32_t> outer(n - 1, ~0u);
+    for (uint32_t k = 0; k < n; ++k) {
+        uint32_t node = k, left = k, right = k;
+        for (;;) {
+            if (left == 0 && right == n - 1) {
+                h.root = node;
+                break;
+            }
+            const morton::RadixParent p = morton::radix_parent(h.keys.data(), n, left, right);
+            (p.left_child ? h.left : h.right)[p.split] = node;
+            uint32_t& o = outer[p.split];
+            if (o == ~0u) {
+                o = p.left_child ? left : right;
+                break;
+            }
+            (p.left_child ? right : left) = o;
+            node = n + p.split;
+            if (!h.boxes.empty()) h.boxes[node] = merge(h.boxes[h.left[p.split]], h.boxes[h.right[p.split]]);
         }
     }
-    h.root = uint32_t(n);
 }
 
 /// The leaves in Morton order: keys, sorted ids and the leaves' boxes (boxes sized for 2n - 1
@@ -80,13 +84,16 @@ RawHierarchy morton_order(const scene::TriangleMesh& mesh, int morton_bits) {
 
 RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits) {
     RawHierarchy h = morton_order(mesh, morton_bits);
-    if (h.keys.size() == 1) return h;  // the root is leaf 0
-    if (morton_bits == 60) {
-        emit_hierarchy(h, h.keys);
-    } else {
-        std::vector<uint32_t> k32(h.keys.begin(), h.keys.end());
-        emit_hierarchy(h, k32);
-    }
+    if (h.keys.size() > 1) emit_hierarchy(h);  // else the root is leaf 0
+    return h;
+}
+
+RawHierarchy radix_tree(const std::vector<uint64_t>& keys) {
+    if (keys.size() < 2 || !std::is_sorted(keys.begin(), keys.end()))
+        throw Error("a radix tree needs at least two sorted keys");
+    RawHierarchy h;
+    h.keys = keys;
+    emit_hierarchy(h);
     return h;
 }
 

@@ -2,7 +2,8 @@
 // The GPU builders' hierarchies on the CPU, step by step as the GPU makes them: the references
 // that the GPU's LBVH and PLOC are compared with bit for bit, and the leaf choice that turns any
 // such hierarchy into a BuildTree. Not builders of their own: one thread, single-triangle leaves.
-//  - LBVH: Morton codes, a stable sort, Karras's hierarchy, bottom-up boxes.
+//  - LBVH: Morton codes, a stable sort, the keys' radix tree (Karras 2012) bottom-up with its
+//    boxes (Apetrei 2014).
 //  - PLOC (Meister & Bittner, "Parallel Locally-Ordered Clustering for Bounding Volume
 //    Hierarchy Construction", TVCG 2018): from the sorted leaves, rounds in which every cluster
 //    finds its nearest neighbour within `radius` places (the smallest merged box; on equal
@@ -21,7 +22,8 @@ namespace bvhlab::accel {
 
 /// A binary hierarchy with one triangle per leaf, as the GPU builders emit it before their leaves
 /// are collapsed. Node ids: leaf k (0 <= k < n) holds triangle sorted_ids[k]; interior nodes
-/// are n .. 2n - 2 (Karras's interior node i is n + i, so the root of an LBVH is n).
+/// are n .. 2n - 2 (an LBVH's interior node n + i splits its keys between i and i + 1, so its
+/// root is n + the place of the root's split).
 struct RawHierarchy {
     uint32_t root = 0;
     std::vector<uint64_t> keys;         ///< the Morton codes in sorted order
@@ -35,6 +37,10 @@ struct RawHierarchy {
 /// The LBVH of `mesh` with `morton_bits` (30 or 60) bit codes of the triangle boxes' centres in
 /// the centres' bounding box. Throws bvhlab::Error for an empty mesh or other bit counts.
 RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits);
+
+/// The LBVH's hierarchy over sorted keys alone (at least two): left, right and root, no boxes,
+/// sorted ids or leaves. Throws bvhlab::Error for fewer keys or keys out of order.
+RawHierarchy radix_tree(const std::vector<uint64_t>& keys);
 
 /// PLOC's hierarchy of `mesh` over the same sorted leaves, with search radius `radius` (1 to 16).
 /// Interior nodes are numbered from n in the order they are made: round by round, and within a

@@ -2,11 +2,14 @@
 // Morton codes and the rules of the linear BVH's hierarchy, written once for the GPU builders
 // (traversal/gpu/gpu_builder.cu) and their CPU reference (accel/builders/lbvh_reference.h), so
 // that both order and split the same triangles bit for bit.
-//  - Karras, "Maximizing Parallelism in the Construction of BVHs, Octrees, and k-d Trees"
-//    (HPG 2012): each interior node finds its key range and split from the sorted keys alone.
-//  - Apetrei, "Fast and Simple Agglomerative LBVH Construction" (CGVC 2014), as H-PLOC
-//    (Benthin et al., HPG 2024) uses it: a node joins the neighbour range whose boundary keys
-//    differ less.
+//  - The hierarchy is the binary radix tree of the sorted keys (Karras, "Maximizing Parallelism
+//    in the Construction of BVHs, Octrees, and k-d Trees", HPG 2012), with the index appended to
+//    equal keys.
+//  - It is built bottom-up as Apetrei does ("Fast and Simple Agglomerative LBVH Construction",
+//    CGVC 2014), and H-PLOC (Benthin et al., HPG 2024) after him: a node joins the neighbour
+//    range whose boundary keys differ less; the second of two siblings to arrive goes on with
+//    their parent. Interior node `split` (id n + split) is the one that splits its keys between
+//    split and split + 1, so a node's id follows from its range alone.
 #pragma once
 
 #include <cstdint>
@@ -15,23 +18,6 @@
 #include "accel/core/vec3.h"
 
 namespace bvhlab::accel::morton {
-
-/// Leading zero bits of a 32- or 64-bit key (its width for 0).
-BVHLAB_HD inline int clz(uint32_t x) {
-#if defined(__CUDA_ARCH__)
-    return __clz(x);
-#else
-    return x ? __builtin_clz(x) : 32;
-#endif
-}
-
-BVHLAB_HD inline int clz(uint64_t x) {
-#if defined(__CUDA_ARCH__)
-    return __clzll(x);
-#else
-    return x ? __builtin_clzll(x) : 64;
-#endif
-}
 
 /// The low 10 bits of x spread to every third bit.
 BVHLAB_HD inline uint32_t spread10(uint32_t x) {
@@ -86,47 +72,27 @@ BVHLAB_HD inline uint64_t code60(Vec3 c, Vec3 lo, Vec3 scale) {
            spread20(cell(c.z, lo.z, scale.z, n));
 }
 
-/// Karras's delta: the length of the common prefix of sorted keys i and j, with the index
-/// appended to equal keys so that every key is distinct; -1 for j outside [0, n).
-template <typename Key>
-BVHLAB_HD inline int karras_delta(const Key* keys, int64_t n, int64_t i, int64_t j) {
-    if (j < 0 || j >= n) return -1;
-    const Key x = keys[i] ^ keys[j];
-    if (x) return clz(x);
-    return int(8 * sizeof(Key)) + clz(uint32_t(i) ^ uint32_t(j));
-}
-
-/// The children of Karras's interior node i (0 <= i < n - 1) over n >= 2 sorted keys, as node
-/// ids: leaf k is k, interior node k is n + k (so the root is n).
-template <typename Key>
-BVHLAB_HD inline void karras_children(const Key* keys, int64_t n, int64_t i, uint32_t& left, uint32_t& right) {
-    const int d = karras_delta(keys, n, i, i + 1) - karras_delta(keys, n, i, i - 1) > 0 ? 1 : -1;
-    const int delta_min = karras_delta(keys, n, i, i - d);
-    int64_t l_max = 2;
-    while (karras_delta(keys, n, i, i + l_max * d) > delta_min) l_max *= 2;
-    int64_t l = 0;
-    for (int64_t t = l_max / 2; t >= 1; t /= 2)
-        if (karras_delta(keys, n, i, i + (l + t) * d) > delta_min) l += t;
-    const int64_t j = i + l * d;
-    const int delta_node = karras_delta(keys, n, i, j);
-    int64_t s = 0;
-    for (int64_t div = 2;; div *= 2) {
-        const int64_t t = (l + div - 1) / div;
-        if (karras_delta(keys, n, i, i + (s + t) * d) > delta_node) s += t;
-        if (t <= 1) break;
-    }
-    const int64_t gamma = i + s * d + (d < 0 ? -1 : 0);
-    const int64_t lo = i < j ? i : j, hi = i < j ? j : i;
-    left = uint32_t(lo == gamma ? gamma : n + gamma);
-    right = uint32_t(hi == gamma + 1 ? gamma + 1 : n + gamma + 1);
-}
-
 /// Apetrei's distance between sorted keys i and i + 1: their XOR above every index XOR, so
 /// that equal keys are joined first, in index order.
 template <typename Key>
 BVHLAB_HD inline uint64_t apetrei_delta(const Key* keys, uint32_t i) {
     const uint64_t x = uint64_t(keys[i] ^ keys[i + 1]);
     return x ? x + (uint64_t(1) << 32) : uint64_t(i ^ (i + 1));
+}
+
+/// Where the node over sorted keys [left, right] (not all n >= 2 of them) goes: its parent is
+/// interior node `split`, whose left child it is when `left_child` (then the parent splits
+/// between `right` and `right` + 1), else its right child.
+struct RadixParent {
+    uint32_t split;
+    bool left_child;
+};
+
+template <typename Key>
+BVHLAB_HD inline RadixParent radix_parent(const Key* keys, uint32_t n, uint32_t left, uint32_t right) {
+    if (left == 0 || (right != n - 1 && apetrei_delta(keys, right) < apetrei_delta(keys, left - 1)))
+        return {right, true};
+    return {left - 1, false};
 }
 
 }  // namespace bvhlab::accel::morton

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The GPU builders' host side: Morton codes, Karras's hierarchy and its CPU reference, the
+// The GPU builders' host side: Morton codes, the LBVH's radix tree and its CPU reference, the
 // BuildTree of a BVH2 layout, PLOC's CPU reference and the GPU builders' leaf choice, and the
 // options, specs and files of lbvh, ploc and hploc. The GPU
 // pipeline itself is tested in tests/traversal/gpu_builder_test.cpp.
@@ -41,37 +41,47 @@ TEST(Morton, CodesSpreadAndOrderTheAxes) {
     EXPECT_EQ(morton::axis_scale(0.0f, 2.0f, 1024), 512.0f);
 }
 
-TEST(Morton, KarrasHierarchyOfThePapersExample) {
-    // Karras 2012, figure 3: eight 5-bit keys. Interior node i's range starts or ends at key i;
-    // the root splits between keys 3 and 4.
-    const uint32_t keys[8] = {0b00001, 0b00010, 0b00100, 0b00101, 0b10011, 0b11000, 0b11001, 0b11110};
-    const int64_t n = 8;
-    uint32_t l[7], r[7];
-    for (int64_t i = 0; i < 7; ++i) morton::karras_children(keys, n, i, l[i], r[i]);
-    // Interior node i is id n + i; leaves are 0..7.
-    EXPECT_EQ(l[0], n + 3);  // root: keys 0..3 (internal node 3) and 4..7 (internal node 4)
-    EXPECT_EQ(r[0], n + 4);
-    EXPECT_EQ(l[3], n + 1);  // node 3 covers 0..3, splits 0..1 | 2..3
-    EXPECT_EQ(r[3], n + 2);
-    EXPECT_EQ(l[1], 0u);  // node 1 covers 0..1
-    EXPECT_EQ(r[1], 1u);
-    EXPECT_EQ(l[2], 2u);  // node 2 covers 2..3
-    EXPECT_EQ(r[2], 3u);
-    EXPECT_EQ(l[4], 4u);  // node 4 covers 4..7: 4 | 5..7
-    EXPECT_EQ(r[4], n + 5);
-    EXPECT_EQ(l[5], n + 6);  // node 5 covers 5..7: 5..6 | 7
-    EXPECT_EQ(r[5], 7u);
-    EXPECT_EQ(l[6], 5u);
-    EXPECT_EQ(r[6], 6u);
+TEST(Morton, RadixTreeOfKarrassExample) {
+    // Karras 2012, figure 3: eight 5-bit keys; the root splits between keys 3 and 4. Interior
+    // node n + i splits between keys i and i + 1; leaves are 0..7.
+    const RawHierarchy h = radix_tree({0b00001, 0b00010, 0b00100, 0b00101, 0b10011, 0b11000, 0b11001, 0b11110});
+    const uint32_t n = 8;
+    EXPECT_EQ(h.root, n + 3);
+    const std::vector<uint32_t> left{0, n + 0, 2, n + 1, 4, 5, n + 5}, right{1, n + 2, 3, n + 4, n + 6, 6, 7};
+    EXPECT_EQ(h.left, left);  // e.g. node 3 (0..3 | 4..7) over nodes 1 (0..1 | 2..3) and 4 (4 | 5..7)
+    EXPECT_EQ(h.right, right);
+    // Two keys: one interior node; keys out of order or too few are refused.
+    const RawHierarchy two = radix_tree({3, 9});
+    EXPECT_EQ(two.root, 2u);
+    EXPECT_EQ(two.left, std::vector<uint32_t>{0});
+    EXPECT_EQ(two.right, std::vector<uint32_t>{1});
+    EXPECT_THROW(radix_tree({9, 3}), Error);
+    EXPECT_THROW(radix_tree({3}), Error);
+}
+
+TEST(Morton, RadixParentJoinsTheCloserNeighbour) {
+    const uint32_t keys[5] = {0b000, 0b001, 0b100, 0b110, 0b111};
+    // Leaf 1: key 0 differs from it in the last bit, key 2 in the first: it joins leaf 0.
+    morton::RadixParent p = morton::radix_parent(keys, 5, 1, 1);
+    EXPECT_EQ(p.split, 0u);
+    EXPECT_FALSE(p.left_child);
+    p = morton::radix_parent(keys, 5, 3, 3);  // 110 is closer to 111 than to 100
+    EXPECT_EQ(p.split, 3u);
+    EXPECT_TRUE(p.left_child);
+    p = morton::radix_parent(keys, 5, 0, 0);  // the first key has no left neighbour
+    EXPECT_EQ(p.split, 0u);
+    EXPECT_TRUE(p.left_child);
+    p = morton::radix_parent(keys, 5, 2, 4);  // the last range has no right neighbour
+    EXPECT_EQ(p.split, 1u);
+    EXPECT_FALSE(p.left_child);
 }
 
 TEST(Morton, EqualKeysSplitByIndex) {
     // Eight equal keys: the index decides, so the tree is the balanced one over 0..7.
-    const uint64_t keys[8] = {7, 7, 7, 7, 7, 7, 7, 7};
-    uint32_t l, r;
-    morton::karras_children(keys, 8, 0, l, r);
-    EXPECT_EQ(l, 8u + 3);
-    EXPECT_EQ(r, 8u + 4);
+    const RawHierarchy h = radix_tree({7, 7, 7, 7, 7, 7, 7, 7});
+    EXPECT_EQ(h.root, 8u + 3);
+    EXPECT_EQ(h.left[3], 8u + 1);
+    EXPECT_EQ(h.right[3], 8u + 5);
     // Apetrei's distance puts every equal pair below every differing one.
     const uint64_t k2[3] = {5, 5, 6};
     EXPECT_LT(morton::apetrei_delta(k2, 0), morton::apetrei_delta(k2, 1));

@@ -65,11 +65,14 @@ __device__ NodeMeta load_meta(const NodeMeta* m) {
     return {v.x, v.y, __uint_as_float(v.z), v.w};
 }
 
+__device__ void store_meta(NodeMeta* at, const NodeMeta& m) {
+    *reinterpret_cast<uint4*>(at) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), m.height);
+}
+
 /// Writes interior node `id` over children a and b (complete) with box `box`, and decides by
 /// SAH whether its subtree becomes one leaf.
-__device__ void make_node(uint32_t id, uint32_t a, uint32_t b, const AABB& box, AABB* boxes, uint2* children,
-                          NodeMeta* meta, const LeafRule& rule) {
-    const NodeMeta ma = load_meta(meta + a), mb = load_meta(meta + b);
+__device__ NodeMeta make_node(uint32_t id, uint32_t a, uint32_t b, const NodeMeta& ma, const NodeMeta& mb,
+                              const AABB& box, AABB* boxes, uint2* children, NodeMeta* meta, const LeafRule& rule) {
     NodeMeta m;
     m.count = ma.count + mb.count;
     const float area = box.half_area();
@@ -81,7 +84,13 @@ __device__ void make_node(uint32_t id, uint32_t a, uint32_t b, const AABB& box, 
     m.height = leaf ? 0 : 1 + max(ma.height, mb.height);
     boxes[id] = box;
     children[id] = make_uint2(a, b);
-    *reinterpret_cast<uint4*>(meta + id) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), m.height);
+    store_meta(meta + id, m);
+    return m;
+}
+
+__device__ void make_node(uint32_t id, uint32_t a, uint32_t b, const AABB& box, AABB* boxes, uint2* children,
+                          NodeMeta* meta, const LeafRule& rule) {
+    make_node(id, a, b, load_meta(meta + a), load_meta(meta + b), box, boxes, children, meta, rule);
 }
 
 __global__ void triangle_boxes(uint32_t n, const Vec3* __restrict__ verts, const uint32_t* __restrict__ idx,
@@ -158,6 +167,9 @@ __global__ void morton_codes(uint32_t n, int bits, const AABB* __restrict__ boxe
     ids[t] = t;
 }
 
+/// A leaf's meta: one triangle, its SAH cost.
+__device__ NodeMeta leaf_meta(const AABB& box, const LeafRule& rule) { return {1, 0, rule.ci * box.half_area(), 0}; }
+
 /// Leaf s of the hierarchy is the s-th triangle in key order.
 __global__ void make_leaves(uint32_t n, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes,
                             AABB* __restrict__ boxes, NodeMeta* __restrict__ meta, uint32_t* __restrict__ clusters,
@@ -166,22 +178,47 @@ __global__ void make_leaves(uint32_t n, const uint32_t* __restrict__ sorted_ids,
     if (s >= n) return;
     const AABB b = tri_boxes[sorted_ids[s]];
     boxes[s] = b;
-    meta[s] = {1, 0, rule.ci * b.half_area(), 0};
+    meta[s] = leaf_meta(b, rule);
     if (clusters) clusters[s] = s;
 }
 
-// --- LBVH: Karras's hierarchy, then boxes bottom-up.
+// --- LBVH: the radix tree of the sorted keys, bottom-up with its boxes (accel::morton).
 
+/// Thread s makes leaf s (the s-th triangle in key order) and climbs: each node joins its
+/// parent (morton::radix_parent) and leaves its outer key there; the first of two siblings to
+/// arrive stops, the second reads the other's key, boxes the parent and goes on. A node's box
+/// and meta stay in registers on the way up, so each step loads only the sibling's.
 template <typename Key>
-__global__ void karras_hierarchy(uint32_t n, const Key* __restrict__ keys, uint2* __restrict__ children,
-                                 uint32_t* __restrict__ parent) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i + 1 >= n) return;
-    uint32_t l, r;
-    accel::morton::karras_children(keys, int64_t(n), int64_t(i), l, r);
-    children[n + i] = make_uint2(l, r);
-    parent[l] = n + i;
-    parent[r] = n + i;
+__global__ void lbvh_climb(uint32_t n, const Key* __restrict__ keys, const uint32_t* __restrict__ sorted_ids,
+                           const AABB* __restrict__ tri_boxes, AABB* boxes, NodeMeta* meta, uint2* children,
+                           uint32_t* __restrict__ parent, uint32_t* __restrict__ outer, uint32_t* __restrict__ root,
+                           LeafRule rule) {
+    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
+    if (s >= n) return;
+    AABB box = tri_boxes[sorted_ids[s]];
+    NodeMeta m = leaf_meta(box, rule);
+    boxes[s] = box;
+    store_meta(meta + s, m);
+    uint32_t node = s, left = s, right = s;
+    while (left != 0 || right != n - 1) {
+        const accel::morton::RadixParent p = accel::morton::radix_parent(keys, n, left, right);
+        const uint32_t up = n + p.split;
+        parent[node] = up;
+        reinterpret_cast<uint32_t*>(children + up)[p.left_child ? 0 : 1] = node;
+        __threadfence();  // this thread's node and link before the exchange
+        const uint32_t other = atomicExch(&outer[p.split], p.left_child ? left : right);
+        if (other == kInvalid) return;
+        __threadfence();
+        (p.left_child ? right : left) = other;
+        const uint32_t sibling = __ldcg(reinterpret_cast<const uint32_t*>(children + up) + (p.left_child ? 1 : 0));
+        const AABB sb = load_box(boxes + sibling);
+        const NodeMeta sm = load_meta(meta + sibling);
+        box = merge(box, sb);
+        m = p.left_child ? make_node(up, node, sibling, m, sm, box, boxes, children, meta, rule)
+                         : make_node(up, sibling, node, sm, m, box, boxes, children, meta, rule);
+        node = up;
+    }
+    *root = node;
 }
 
 /// From node k upwards; the second child to arrive at a node boxes it and goes on.
@@ -412,21 +449,13 @@ __global__ void __launch_bounds__(kBlock)
     bool active = i < n;
     while (__ballot_sync(~0u, active)) {
         if (active) {
-            int32_t previous;
             // Join the neighbour whose boundary keys differ less (Apetrei 2014); the first of
             // two siblings to arrive stops, the second takes the parent.
-            if (left == 0 || (right != n - 1 && accel::morton::apetrei_delta(keys, right) <
-                                                    accel::morton::apetrei_delta(keys, left - 1))) {
-                split = right + 1;
-                __threadfence();
-                previous = atomicExch(&parent_ids[right], int32_t(left));
-                if (previous != -1) right = uint32_t(previous);
-            } else {
-                split = left;
-                __threadfence();
-                previous = atomicExch(&parent_ids[left - 1], int32_t(right));
-                if (previous != -1) left = uint32_t(previous);
-            }
+            const accel::morton::RadixParent p = accel::morton::radix_parent(keys, n, left, right);
+            split = p.split + 1;  // the parent's right child's first key
+            __threadfence();
+            const int32_t previous = atomicExch(&parent_ids[p.split], int32_t(p.left_child ? left : right));
+            if (previous != -1) (p.left_child ? right : left) = uint32_t(previous);
             __threadfence();
             if (previous == -1) active = false;
         }
@@ -779,13 +808,19 @@ __global__ void parents_of(uint32_t n, const uint2* __restrict__ children, uint3
     parent[c.y] = x;
 }
 
-/// The layout orders nodes by id: the LBVH's root is its first interior node (n); PLOC and
-/// H-PLOC number nodes as they make them, so the root is the last and the order is reversed.
+/// The layout orders nodes by id, with the root first: PLOC and H-PLOC number nodes as they
+/// make them, so the root is the last and the order is reversed; the LBVH's root (*root) trades
+/// places with its first interior node (n).
 struct LayoutOrder {
     uint32_t total;  // 2n - 1 hierarchy nodes
     bool reverse;
     bool id_ranges;  // subtrees are ranges of the sorted triangles (the LBVH's, unless reinsertion moved them)
-    __device__ uint32_t operator()(uint32_t x) const { return reverse ? total - 1 - x : x; }
+    const uint32_t* root;
+    __device__ uint32_t operator()(uint32_t x) const {
+        if (reverse) return total - 1 - x;
+        const uint32_t first = (total + 1) / 2, r = __ldg(root);
+        return x == r ? first : x == first ? r : x;
+    }
 };
 
 /// Per hierarchy node, in layout order: 1 << 32 for a layout node (interior, not collapsed into
@@ -988,8 +1023,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     uint32_t* root = words.data();
     uint32_t* node_counter = words.data() + 1;
     detail::fill_device_bytes(parent.data(), 0xff, parent.bytes());
-    if (lbvh) {
-        detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+    if (lbvh) {  // the climb's outer keys, none yet
+        detail::fill_device_bytes(visits.data(), 0xff, visits.bytes());
     }
     if (kind == accel::BuilderKind::kHploc) {
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
@@ -1012,17 +1047,17 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     ev.record(5);
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = dv.Current();
-    make_leaves<<<grid_for(n), kBlock>>>(n, sorted_ids, tri_boxes.data(), boxes.data(), meta.data(),
-                                         lbvh ? nullptr : clusters.data(), rule);
-    BVHLAB_CHECK_LAUNCH();
+    if (!lbvh || n == 1) {  // the LBVH's climb makes its leaves
+        make_leaves<<<grid_for(n), kBlock>>>(n, sorted_ids, tri_boxes.data(), boxes.data(), meta.data(),
+                                             lbvh ? nullptr : clusters.data(), rule);
+        BVHLAB_CHECK_LAUNCH();
+    }
     if (n == 1) {
         // The root is leaf 0 (words are zero).
     } else if (lbvh) {
-        set_word<<<1, 1>>>(root, n);
-        karras_hierarchy<Key><<<grid_for(n - 1), kBlock>>>(n, sorted_keys, children.data(), parent.data());
-        BVHLAB_CHECK_LAUNCH();
-        fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(), visits.data(),
-                                           rule);
+        lbvh_climb<Key><<<grid_for(n), kBlock>>>(n, sorted_keys, sorted_ids, tri_boxes.data(), boxes.data(),
+                                                 meta.data(), children.data(), parent.data(), visits.data(), root,
+                                                 rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
         // Rounds over the whole list until a block can finish it; the host reads each round's
@@ -1115,7 +1150,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // The layout, flat: each node's place from a scan over every node's flag (no round trip).
     const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
     const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
-    const LayoutOrder order{uint32_t(nodes), !lbvh, lbvh && (!passes || g.reinsertion_undone)};
+    const LayoutOrder order{uint32_t(nodes), !lbvh, lbvh && (!passes || g.reinsertion_undone), root};
     {
         layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(),
                                                   layout_flags_.data());
