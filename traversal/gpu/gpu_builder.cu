@@ -819,6 +819,7 @@ struct LayoutOrder {
     __device__ uint32_t operator()(uint32_t x) const {
         if (reverse) return total - 1 - x;
         const uint32_t first = (total + 1) / 2, r = __ldg(root);
+        if (r < first) return x;  // a root leaf (one triangle) is already first
         return x == r ? first : x == first ? r : x;
     }
 };
