@@ -451,11 +451,18 @@ __global__ void __launch_bounds__(kBlock)
         if (active) {
             // Join the neighbour whose boundary keys differ less (Apetrei 2014); the first of
             // two siblings to arrive stops, the second takes the parent.
-            const accel::morton::RadixParent p = accel::morton::radix_parent(keys, n, left, right);
-            split = p.split + 1;  // the parent's right child's first key
-            __threadfence();
-            const int32_t previous = atomicExch(&parent_ids[p.split], int32_t(p.left_child ? left : right));
-            if (previous != -1) (p.left_child ? right : left) = uint32_t(previous);
+            int32_t previous;
+            if (accel::morton::radix_parent(keys, n, left, right).left_child) {
+                split = right + 1;  // the parent's right child's first key
+                __threadfence();
+                previous = atomicExch(&parent_ids[right], int32_t(left));
+                if (previous != -1) right = uint32_t(previous);
+            } else {
+                split = left;
+                __threadfence();
+                previous = atomicExch(&parent_ids[left - 1], int32_t(right));
+                if (previous != -1) left = uint32_t(previous);
+            }
             __threadfence();
             if (previous == -1) active = false;
         }
