@@ -4,9 +4,9 @@
 // (traversal/CMakeLists.txt): the Woop maps then equal the host's bit for bit.
 #include "traversal/gpu/gpu_builder.h"
 
+#include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
-#include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
 #include <cuda/atomic>
 
@@ -93,22 +93,71 @@ __device__ void make_node(uint32_t id, uint32_t a, uint32_t b, const AABB& box, 
     make_node(id, a, b, load_meta(meta + a), load_meta(meta + b), box, boxes, children, meta, rule);
 }
 
-__global__ void triangle_boxes(uint32_t n, const Vec3* __restrict__ verts, const uint32_t* __restrict__ idx,
-                               AABB* __restrict__ boxes, AABB* __restrict__ centres) {
-    const uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
-    if (t >= n) return;
-    AABB b = AABB::empty();
-    for (int k = 0; k < 3; ++k) b.extend(verts[idx[3 * t + k]]);
-    boxes[t] = b;
-    centres[t] = AABB::of_point(b.center());
+// Float minimum and maximum as atomics on the floats' bits: a non-negative float orders as its
+// int, a negative one reversed as its unsigned (-0 is made +0 first).
+__device__ void atomic_min(float* at, float v) {
+    v += 0.0f;
+    if (v >= 0.0f)
+        atomicMin(reinterpret_cast<int*>(at), __float_as_int(v));
+    else
+        atomicMax(reinterpret_cast<unsigned*>(at), __float_as_uint(v));
 }
 
-/// Instance i's world box (its BLAS's frontier boxes' corners under its transform) and record's
-/// inverse transform (in double, as scene::Transform::inverse). A singular or non-finite
-/// transform or box marks `bad` with the lowest such instance.
-__global__ void instance_boxes(uint32_t n, detail::TlasInput in, AABB* __restrict__ boxes, AABB* __restrict__ centres) {
-    const uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
-    if (t >= n) return;
+__device__ void atomic_max(float* at, float v) {
+    v += 0.0f;
+    if (v >= 0.0f)
+        atomicMax(reinterpret_cast<int*>(at), __float_as_int(v));
+    else
+        atomicMin(reinterpret_cast<unsigned*>(at), __float_as_uint(v));
+}
+
+__global__ void set_empty(AABB* box) { *box = AABB::empty(); }
+
+/// boxes[t] = box_of(t) for every primitive t, and the bounds of their centres added to *bounds
+/// (set empty before): each thread takes primitives a grid apart, a block's bounds are reduced
+/// in shared memory and added with one atomic per side and axis.
+template <typename BoxOf>
+__global__ void __launch_bounds__(kBlock)
+    prim_boxes(uint32_t n, BoxOf box_of, AABB* __restrict__ boxes, AABB* __restrict__ bounds) {
+    AABB c = AABB::empty();
+    for (uint32_t t = blockIdx.x * blockDim.x + threadIdx.x; t < n; t += gridDim.x * blockDim.x) {
+        const AABB b = box_of(t);
+        boxes[t] = b;
+        c.extend(b.center());
+    }
+    using Reduce = cub::BlockReduce<AABB, kBlock>;
+    __shared__ typename Reduce::TempStorage scratch;
+    c = Reduce(scratch).Reduce(c, BoxUnion{});
+    if (threadIdx.x == 0 && !c.is_empty()) {
+        atomic_min(&bounds->lo.x, c.lo.x);
+        atomic_min(&bounds->lo.y, c.lo.y);
+        atomic_min(&bounds->lo.z, c.lo.z);
+        atomic_max(&bounds->hi.x, c.hi.x);
+        atomic_max(&bounds->hi.y, c.hi.y);
+        atomic_max(&bounds->hi.z, c.hi.z);
+    }
+}
+
+/// A triangle's box.
+struct TriangleBox {
+    const Vec3* verts;
+    const uint32_t* idx;
+    __device__ AABB operator()(uint32_t t) const {
+        AABB b = AABB::empty();
+        for (int k = 0; k < 3; ++k) b.extend(verts[idx[3 * t + k]]);
+        return b;
+    }
+};
+
+/// Instance t's world box (its BLAS's frontier boxes' corners under its transform), and its
+/// record with the inverse transform (in double, as scene::Transform::inverse). A singular or
+/// non-finite transform or box marks `bad` with the lowest such instance.
+struct InstanceBox {
+    detail::TlasInput in;
+    __device__ AABB operator()(uint32_t t) const;
+};
+
+__device__ AABB InstanceBox::operator()(uint32_t t) const {
     const float* m = in.object_to_world[t].m;
     const double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
     const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
@@ -146,8 +195,7 @@ __global__ void instance_boxes(uint32_t n, detail::TlasInput in, AABB* __restric
             inv[4 * row + 3] = float(s);
         }
     }
-    boxes[t] = w;
-    centres[t] = AABB::of_point(w.center());
+    return w;
 }
 
 template <typename Key>
@@ -992,7 +1040,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
 
     // Everything the pipeline needs, before its first event.
     const size_t nodes = 2 * size_t(n) - 1, inner = std::max<size_t>(n - 1, 1);
-    DeviceBuffer<AABB> tri_boxes(n), centres(n), bounds(1), boxes(nodes);
+    DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
     DeviceBuffer<Key> keys(n), keys_alt(n);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<uint2> children(nodes);
@@ -1018,15 +1066,13 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<NodeMeta> r_root(passes ? 2 : 0);
     g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
-    size_t reduce_bytes = 0, sort_bytes = 0, scan_bytes = 0;
+    size_t sort_bytes = 0, scan_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
-    BVHLAB_CUDA_CHECK(cub::DeviceReduce::Reduce(nullptr, reduce_bytes, centres.data(), bounds.data(), int(n),
-                                                BoxUnion{}, AABB::empty()));
     BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
-    DeviceBuffer<uint8_t> scratch(std::max({reduce_bytes, sort_bytes, scan_bytes}));
+    DeviceBuffer<uint8_t> scratch(std::max(sort_bytes, scan_bytes));
     g.peak_bytes = gpu_memory_use().current - base;
     uint32_t* root = words.data();
     uint32_t* node_counter = words.data() + 1;
@@ -1039,14 +1085,15 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
 
+    // The boxes' kernel: a few blocks per SM, each primitive a grid apart (few atomics on the bounds).
+    const unsigned box_grid = std::min(grid_for(n), unsigned(4 * gpu_sm_count()));
     ev.record(2);
+    set_empty<<<1, 1>>>(bounds.data());
     if (prims.mesh)
-        triangle_boxes<<<grid_for(n), kBlock>>>(n, verts.data(), idx.data(), tri_boxes.data(), centres.data());
+        prim_boxes<<<box_grid, kBlock>>>(n, TriangleBox{verts.data(), idx.data()}, tri_boxes.data(), bounds.data());
     else
-        instance_boxes<<<grid_for(n), kBlock>>>(n, *prims.tlas, tri_boxes.data(), centres.data());
+        prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data());
     BVHLAB_CHECK_LAUNCH();
-    BVHLAB_CUDA_CHECK(cub::DeviceReduce::Reduce(scratch.data(), reduce_bytes, centres.data(), bounds.data(), int(n),
-                                                BoxUnion{}, AABB::empty()));
     ev.record(3);
     morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
     BVHLAB_CHECK_LAUNCH();
