@@ -14,14 +14,15 @@
 #   stanford-bunny  the full-resolution bunny as alecjacobson/common-3d-test-models has it
 #   dragon-100k     the Stanford dragon decimated to 100k triangles, from The Ray Tracer
 #                   Challenge's bonus assets (its header cites mrbluesummers.com)
-#   buddha-100k     has no public source this script knows: it is skipped with a note
+#   buddha-100k     has no public source this script knows: taken from --from DIR/buddha.obj
+#                   (checked like the others), else skipped with a note
 # The classic architectural scenes (crytek-sponza, conference, sibenik-full, san-miguel from
 # McGuire's archive) are fetched as archives whose checksum is pinned in data/scenes.sha256 on
 # first download (trust on first use); --strict refuses unpinned ones.
 #
 # Usage: data/fetch_scenes.sh [--dest DIR] [--from DIR] [--strict] [NAME ...]   (--list: the names)
 #   --from DIR: look for the downloads (embree-tools_*.deb, sibenik.zip, stanford-bunny.obj,
-#   dragon.zip, ...) in DIR before the network, for machines without internet.
+#   dragon.zip, buddha.obj, ...) in DIR before the network, for machines without internet.
 # Needs curl, python3 with numpy (tools/install_deps.sh), unzip, and dpkg/apt-get on Debian.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -55,7 +56,7 @@ while [ $# -gt 0 ]; do
         --from) [ $# -ge 2 ] && [ -d "$2" ] || die "--from needs an existing folder"; from=$(cd "$2" && pwd); shift 2 ;;
         --strict) strict=1; shift ;;
         --list) for s in "${benchmark[@]}" "${classic[@]}"; do echo "${s%%|*}"; done; exit 0 ;;
-        -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
         -*) die "unknown option '$1' (see --help)" ;;
         *) names+=("$1"); shift ;;
     esac
@@ -134,10 +135,15 @@ for s in "${benchmark[@]}"; do
             cp "$obj" "$out/dragon.obj"
             check "$name" "$out/dragon.obj" "$sha" ;;
         buddha-100k)
-            echo "fetch_scenes.sh: buddha-100k skipped: the decimated Happy Buddha the tables used has no public source" \
-                "this script knows (SHA-256 $sha); the full scan is at http://graphics.stanford.edu/pub/3Dscanrep/happy/"
-            rmdir "$out" 2>/dev/null || true
-            continue ;;
+            if [ -z "$from" ] || [ ! -f "$from/buddha.obj" ]; then
+                echo "fetch_scenes.sh: buddha-100k skipped: the decimated Happy Buddha the tables used has no public" \
+                    "source this script knows (SHA-256 $sha); with a copy, give its folder as --from DIR (DIR/buddha.obj);" \
+                    "the full scan is at http://graphics.stanford.edu/pub/3Dscanrep/happy/"
+                rmdir "$out" 2>/dev/null || true
+                continue
+            fi
+            cp "$from/buddha.obj" "$out/buddha.obj"
+            check "$name" "$out/buddha.obj" "$sha" ;;
     esac
     fetched+=("$name")
     echo "fetch_scenes.sh: $name ready in $out (SHA-256 as in the tables)"

@@ -37,4 +37,26 @@ bash "$src/data/fetch_scenes.sh" --from "$tmp/none" 2>"$tmp/err"
 check "--from a missing folder is refused" grep -q "from needs an existing folder" "$tmp/err"
 check "--list names the benchmark scenes" [ "$(bash "$src/data/fetch_scenes.sh" --list | head -6 | tr '\n' ' ')" = "cornell-box furball sibenik stanford-bunny dragon-100k buddha-100k " ]
 
+# buddha-100k has no public source: skipped with a note naming --from, or taken from --from
+# DIR/buddha.obj and checked like the others (the real file when $BVHLAB_SCENES has it).
+bash "$src/data/fetch_scenes.sh" --dest "$tmp/b0" buddha-100k >"$tmp/out" 2>&1
+check "buddha-100k without --from: skipped, pointing at --from" grep -q "buddha-100k skipped: .*--from DIR (DIR/buddha.obj)" "$tmp/out"
+check "and no folder left for it" [ ! -e "$tmp/b0/buddha-100k" ]
+mkdir -p "$tmp/fake"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/fake/buddha.obj"
+bash "$src/data/fetch_scenes.sh" --dest "$tmp/b1" --from "$tmp/fake" buddha-100k >/dev/null 2>"$tmp/err"
+rc=$?
+check "a buddha.obj that is not the tables' file is refused (rc $rc)" [ "$rc" -ne 0 ]
+check "by name, with both hashes" grep -q "buddha-100k: .*buddha.obj has SHA-256 [0-9a-f]*, not 1b2479c7" "$tmp/err"
+if [ -f "${BVHLAB_SCENES:-/nonexistent}/buddha-100k/buddha.obj" ]; then
+    mkdir -p "$tmp/real"
+    cp "$BVHLAB_SCENES/buddha-100k/buddha.obj" "$tmp/real/"
+    bash "$src/data/fetch_scenes.sh" --dest "$tmp/b2" --from "$tmp/real" buddha-100k >"$tmp/out" 2>&1
+    check "the tables' buddha.obj from --from is taken" cmp -s "$tmp/real/buddha.obj" "$tmp/b2/buddha-100k/buddha.obj"
+    check "and catalogued" "$py" -c "
+import json; d = json.load(open('$tmp/b2/scenes.json')); assert list(d['scenes']) == ['buddha-100k'], d"
+else
+    echo "fetch_scenes.sh test: the tables' buddha.obj is not in \$BVHLAB_SCENES; its --from success case not run"
+fi
+
 finish "fetch_scenes.sh test"
