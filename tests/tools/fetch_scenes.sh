@@ -9,8 +9,6 @@ src=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 . "$(dirname "$0")/check_lib.sh"
-py=/usr/bin/python3
-[ -x "$py" ] || py=python3
 
 mkdir -p "$tmp/from/sibenik"
 printf 'float sibenik_vertices[] =\n{\n    -0.011057, -15.3, 1e-006, 1.5, 2, 3,\n 0, 1, 0\n};\nunsigned int sibenik_indices[]=\n{\n 0, 1, 2\n};\n' \

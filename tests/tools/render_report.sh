@@ -11,8 +11,6 @@ src=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 . "$(dirname "$0")/check_lib.sh"
-py=/usr/bin/python3
-[ -x "$py" ] || py=python3
 if ! "$py" -c "import numpy, matplotlib" 2>/dev/null; then
     echo "render_report.sh: skipped: numpy and matplotlib are not installed (tools/install_deps.sh installs them)"
     exit 77
