@@ -253,10 +253,10 @@ __global__ void lbvh_climb(uint32_t n, const Key* __restrict__ keys, const uint3
         const uint32_t up = n + p.split;
         parent[node] = up;
         reinterpret_cast<uint32_t*>(children + up)[p.left_child ? 0 : 1] = node;
-        __threadfence();  // this thread's node and link before the exchange
-        const uint32_t other = atomicExch(&outer[p.split], p.left_child ? left : right);
+        // Releases this thread's node and link to the sibling's thread; acquires the sibling's.
+        cuda::atomic_ref<uint32_t, cuda::thread_scope_device> slot(outer[p.split]);
+        const uint32_t other = slot.exchange(p.left_child ? left : right, cuda::memory_order_acq_rel);
         if (other == kInvalid) return;
-        __threadfence();
         (p.left_child ? right : left) = other;
         const uint32_t sibling = __ldcg(reinterpret_cast<const uint32_t*>(children + up) + (p.left_child ? 1 : 0));
         const AABB sb = load_box(boxes + sibling);
