@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // BVH builders that run on the GPU, in plain C++ (the kernels are in gpu_builder.cu):
-//  - lbvh: Morton codes (30 or 60 bits), CUB's radix sort, Karras's (2012) parallel hierarchy
-//    and bottom-up box fitting;
+//  - lbvh: Morton codes (30 or 60 bits), CUB's radix sort, and the keys' radix tree (Karras
+//    2012) built bottom-up with its boxes in one kernel (Apetrei 2014; accel/core/morton.h);
 //  - ploc: PLOC (Meister & Bittner 2018) over the sorted leaves: rounds in which each cluster
 //    finds its nearest neighbour within a search radius (a block's clusters in shared memory),
 //    mutual pairs merge, and CUB's scan compacts the list, until one cluster is left; the same
