@@ -28,6 +28,8 @@ TEST(Morton, CodesSpreadAndOrderTheAxes) {
     EXPECT_EQ(morton::spread10(0x3ff), 0x09249249u);
     EXPECT_EQ(morton::spread10(1), 1u);
     EXPECT_EQ(morton::spread20(0xfffff), 0x0249249249249249ull);
+    EXPECT_EQ(morton::spread10(0xfffffc01u), 1u);  // only the low 10 (20) bits count
+    EXPECT_EQ(morton::spread20(0xfffffffffff00001ull), 1u);
     const Vec3 lo{0, 0, 0};
     EXPECT_EQ(morton::code30({0, 0, 0}, lo, {1, 1, 1}), 0u);
     EXPECT_EQ(morton::code30({1023.5f, 1023.5f, 1023.5f}, lo, {1, 1, 1}), 0x3fffffffu);
