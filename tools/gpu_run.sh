@@ -23,8 +23,9 @@
 #   render    the renderer's experiment on data/'s Cornell box (open and closed) and
 #             glass-and-mirror scene and the named scenes, 640x480, max depth 8: a timed render
 #             (RENDER_SPP, default 512; render.jsonl, images in renders.tar.xz); the first wave's
-#             dumped rays of every bounce through every kernel (render_bench.jsonl); the
-#             switches (SWITCH_SPP, default 256, three rounds; render_switches.jsonl): material
+#             dumped rays of every bounce (render_dumps.jsonl) through every kernel
+#             (render_bench.jsonl); the switches (SWITCH_SPP, default 256, three rounds;
+#             render_switches.jsonl): material
 #             sorting, the first-hit cache, no compaction; and compute-sanitizer memcheck of
 #             small renders.
 #             experiments/render_report.py turns OUT into docs/results.md's renderer section
@@ -207,7 +208,9 @@ if has render; then
         # 1. Overhead: timed without --dump-rays (dumping copies every queue back and writes
         #    files inside the pass); then the first wave again, dumped, for the kernel-only figure.
         run_render "$out/render.jsonl" "$s" "/tmp/renders/$n.pfm" --spp "${RENDER_SPP:-512}"
-        run_render /dev/null "$s" "/tmp/renders/$n-dump.pfm" --spp 6 --wave 6 --dump-rays "$d"
+        #    Its record (render_dumps.jsonl) says how the ray files were made, so that a bench
+        #    record on them can be rerun after the same render (the files' hashes are checked).
+        run_render "$out/render_dumps.jsonl" "$s" "/tmp/renders/$n-dump.pfm" --spp 6 --wave 6 --dump-rays "$d"
         # 2. Every bounce's rays through every BVH2 kernel and the CWBVH one (the coherence
         #    report on real path-tracer rays); each record names its ray file.
         for f in "$d"/*.rays; do
