@@ -108,15 +108,15 @@ private:
     std::shared_ptr<const DeviceStructure> device_;
 };
 
-/// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
-/// figures (SAH, EPO, sizes), and the traversal layout. A GPU builder's BVH2 stays on the device
-/// as built (device() returns it without an upload); its figures add "gpu_build" (the device
-/// time of each stage, Mtris/s and peak device memory).
 struct GpuBuildTimes;
 /// A GPU build's device time per stage as JSON (upload_ms ... convert_ms; the total apart): the
 /// `gpu_build` figures of a build and the `gpu_tlas` figures of a TLAS rebuild.
 nlohmann::json gpu_stage_times(const GpuBuildTimes& t);
 
+/// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
+/// figures (SAH, EPO, sizes), and the traversal layout. A GPU builder's BVH2 stays on the device
+/// as built (device() returns it without an upload); its figures add "gpu_build" (the device
+/// time of each stage, Mtris/s and peak device memory).
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec, const StageHook& stage = {});
 
 /// Builds the two-level BVH of an instanced scene: a BLAS per placed mesh by spec's BVH builder
