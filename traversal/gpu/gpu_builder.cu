@@ -4,7 +4,6 @@
 // (traversal/CMakeLists.txt): the Woop maps then equal the host's bit for bit.
 #include "traversal/gpu/gpu_builder.h"
 
-#include <cooperative_groups.h>
 #include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
@@ -566,18 +565,8 @@ enum Role : uint8_t {
     kInsideLeaf = 0,  // below a leaf: stays with it
     kFixed = 1,       // the root and its children: stay
     kInterior = 2,
-    kLeaf = 3,  // a leaf of the tree (as the SAH chose it): moves whole
+    kLeaf = 3,  // a leaf of the tree: the refit starts here
 };
-
-/// The kernels after the search run over a device-side list whose length is counts[which]: a grid of a
-/// few blocks per SM strides over it (no round trip for its length).
-enum ListCount : int { kMoveCount = 0, kDirtyCount = 1, kStartCount = 2, kRefitError = 3 };
-
-template <typename F>
-__device__ void each_listed(const uint32_t* list, const uint32_t* counts, int which, F&& f) {
-    const uint32_t m = counts[which];
-    for (uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < m; k += gridDim.x * blockDim.x) f(list[k]);
-}
 
 /// Whether node x lies inside a leaf (an ancestor chose to be one; only ancestors of at most
 /// max_leaf triangles can).
@@ -644,8 +633,7 @@ __device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? 
 /// root are not candidates.
 __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role, const uint32_t* __restrict__ parent,
                                 const SearchNode* __restrict__ search, float* __restrict__ gain,
-                                uint32_t* __restrict__ to, uint32_t* __restrict__ top, uint32_t* __restrict__ moves,
-                                uint32_t* __restrict__ counts) {
+                                uint32_t* __restrict__ to, uint32_t* __restrict__ top) {
     const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
     if (node >= total) return;
     float best = 0.0f;
@@ -716,12 +704,6 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
     gain[node] = best;
     to[node] = best_x;
     top[node] = best_top;
-    if (best_x != kInvalid) {  // onto the list of moves, one atomic per warp
-        const auto g = cooperative_groups::coalesced_threads();
-        uint32_t at = 0;
-        if (g.thread_rank() == 0) at = atomicAdd(counts + kMoveCount, g.size());
-        moves[g.shfl(at, 0) + g.thread_rank()] = node;
-    }
 }
 
 /// Calls f on every node whose links candidate `node`'s move to X = `to` changes: the node, its
@@ -741,56 +723,44 @@ __device__ unsigned long long reinsert_priority(float gain, uint32_t i) {
     return static_cast<unsigned long long>(__float_as_uint(gain)) << 32 | (0xffffffffu - i);
 }
 
-__global__ void reinsert_lock(const uint32_t* __restrict__ moves, const uint32_t* __restrict__ counts,
-                              const float* __restrict__ gain, const uint32_t* __restrict__ to,
+__global__ void reinsert_lock(uint32_t total, const float* __restrict__ gain, const uint32_t* __restrict__ to,
                               const uint32_t* __restrict__ parent, const uint2* __restrict__ children,
                               unsigned long long* locks) {
-    each_listed(moves, counts, kMoveCount, [&](uint32_t i) {
-        const unsigned long long key = reinsert_priority(gain[i], i);
-        each_touched(i, to[i], parent, children, [&](uint32_t y) { atomicMax(locks + y, key); });
-    });
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= total || to[i] == kInvalid) return;
+    const unsigned long long key = reinsert_priority(gain[i], i);
+    each_touched(i, to[i], parent, children, [&](uint32_t y) { atomicMax(locks + y, key); });
 }
 
-/// A move that holds every node it touches goes ahead and marks its node as moving.
-__global__ void reinsert_claim(const uint32_t* __restrict__ moves, const uint32_t* __restrict__ counts,
-                               const float* __restrict__ gain, const uint32_t* __restrict__ to,
+/// A move that holds every node it touches goes ahead and marks its node as moving; the others
+/// are dropped (to = kInvalid).
+__global__ void reinsert_claim(uint32_t total, const float* __restrict__ gain, uint32_t* __restrict__ to,
                                const uint32_t* __restrict__ parent, const uint2* __restrict__ children,
                                const unsigned long long* __restrict__ locks, uint8_t* __restrict__ moving) {
-    each_listed(moves, counts, kMoveCount, [&](uint32_t i) {
-        const unsigned long long key = reinsert_priority(gain[i], i);
-        bool mine = true;
-        each_touched(i, to[i], parent, children, [&](uint32_t y) { mine &= locks[y] == key; });
-        if (mine) moving[i] = 1;
-    });
-}
-
-/// The locks back to zero for the next pass, and the moves that lost a lock dropped (to =
-/// kInvalid).
-__global__ void reinsert_unlock(const uint32_t* __restrict__ moves, const uint32_t* __restrict__ counts,
-                                uint32_t* __restrict__ to, const uint32_t* __restrict__ parent,
-                                const uint2* __restrict__ children, unsigned long long* __restrict__ locks,
-                                const uint8_t* __restrict__ moving) {
-    each_listed(moves, counts, kMoveCount, [&](uint32_t i) {
-        each_touched(i, to[i], parent, children, [&](uint32_t y) { locks[y] = 0; });
-        if (!moving[i]) to[i] = kInvalid;
-    });
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= total || to[i] == kInvalid) return;
+    const unsigned long long key = reinsert_priority(gain[i], i);
+    bool mine = true;
+    each_touched(i, to[i], parent, children, [&](uint32_t y) { mine &= locks[y] == key; });
+    if (mine)
+        moving[i] = 1;
+    else
+        to[i] = kInvalid;
 }
 
 /// Drops a claimed move whose X lies below another claimed move's node (on X's path up to `top`,
 /// the common ancestor): that node could carry X into this move's own subtree, a cycle.
-__global__ void reinsert_uncross(const uint32_t* __restrict__ moves, const uint32_t* __restrict__ counts,
-                                 uint32_t* __restrict__ to, const uint32_t* __restrict__ top,
+__global__ void reinsert_uncross(uint32_t total, uint32_t* __restrict__ to, const uint32_t* __restrict__ top,
                                  const uint32_t* __restrict__ parent, const uint8_t* __restrict__ moving) {
-    each_listed(moves, counts, kMoveCount, [&](uint32_t i) {
-        if (to[i] == kInvalid) return;
-        for (uint32_t y = to[i]; y != top[i];) {
-            y = parent[y];
-            if (moving[y]) {
-                to[i] = kInvalid;
-                return;
-            }
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= total || to[i] == kInvalid) return;
+    for (uint32_t y = to[i]; y != top[i];) {
+        y = parent[y];
+        if (moving[y]) {
+            to[i] = kInvalid;
+            return;
         }
-    });
+    }
 }
 
 __device__ void replace_child(uint2* children, uint32_t at, uint32_t old_child, uint32_t new_child) {
@@ -803,98 +773,38 @@ __device__ void replace_child(uint2* children, uint32_t at, uint32_t old_child, 
 }
 
 /// The claimed moves: the node's parent p leaves (its sibling takes its place) and comes back
-/// over X and the node, in X's place. Moves that were claimed touch disjoint nodes. The old
-/// grandparent, where the refit starts beside p, goes to top[node]; every listed node's moving
-/// flag goes back to zero.
-__global__ void reinsert_apply(const uint32_t* __restrict__ moves, const uint32_t* __restrict__ counts,
-                               const uint32_t* __restrict__ to, uint32_t* __restrict__ top, uint32_t* parent,
-                               uint2* children, uint8_t* __restrict__ moving) {
-    each_listed(moves, counts, kMoveCount, [&](uint32_t node) {
-        moving[node] = 0;
-        const uint32_t x = to[node];
-        if (x == kInvalid) return;
-        const uint32_t p = parent[node], g = parent[p];
-        const uint32_t s = other_child(children[p], node);
-        replace_child(children, g, p, s);
-        parent[s] = g;
-        const uint32_t q = parent[x];
-        replace_child(children, q, x, p);
-        children[p] = make_uint2(x, node);
-        parent[x] = p;
-        parent[p] = q;
-        top[node] = g;
-    });
+/// over X and the node, in X's place. Moves that were claimed touch disjoint nodes.
+__global__ void reinsert_apply(uint32_t total, const uint32_t* __restrict__ to, uint32_t* parent, uint2* children) {
+    const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
+    if (node >= total || to[node] == kInvalid) return;
+    const uint32_t x = to[node];
+    const uint32_t p = parent[node], g = parent[p];
+    const uint32_t s = other_child(children[p], node);
+    replace_child(children, g, p, s);
+    parent[s] = g;
+    const uint32_t q = parent[x];
+    replace_child(children, q, x, p);
+    children[p] = make_uint2(x, node);
+    parent[x] = p;
+    parent[p] = q;
 }
 
 /// Copies the root's meta (the root's id in *root) to *out.
 __global__ void root_meta(const uint32_t* root, const NodeMeta* meta, NodeMeta* out) { *out = meta[*root]; }
 
-// The refit after a pass touches only the nodes whose boxes a move changed: p and the old
-// grandparent of each move, and their ancestors ("dirty"). Each dirty node counts its dirty
-// children; those with none start a climb like fit_boxes', in which the last dirty child to
-// arrive carries on. The other nodes keep their boxes and leaf choices, which a refit from the
-// leaves would compute again to the same bits.
-
-/// A walk up longer than this is a cycle (which the moves are made never to form): the passes
-/// are undone.
-constexpr uint32_t kMaxWalk = 1u << 20;
-
-__device__ void mark_dirty(uint32_t y, const uint32_t* parent, uint32_t* dirty, uint32_t* dirty_list,
-                           uint32_t* counts) {
-    for (uint32_t steps = 0; y != kInvalid; y = parent[y]) {
-        if (atomicExch(dirty + y, 1u)) return;  // marked already: so are its ancestors, or will be
-        dirty_list[atomicAdd(counts + kDirtyCount, 1u)] = y;
-        if (++steps > kMaxWalk) {
-            counts[kRefitError] = 1;
-            return;
-        }
-    }
+/// Zeroes the root's triangle count before a refit, which counts them again only if every leaf
+/// reaches the root.
+__global__ void clear_root_count(const uint32_t* root, NodeMeta* meta) {
+    if (!meta[*root].leaf()) meta[*root].count = 0;  // a root leaf: nothing moves
 }
 
-__global__ void refit_mark(const uint32_t* __restrict__ moves, uint32_t* __restrict__ counts,
-                           const uint32_t* __restrict__ to, const uint32_t* __restrict__ top,
-                           const uint32_t* __restrict__ parent, uint32_t* __restrict__ dirty,
-                           uint32_t* __restrict__ dirty_list) {
-    each_listed(moves, counts, kMoveCount, [&](uint32_t node) {
-        if (to[node] == kInvalid) return;
-        mark_dirty(parent[node], parent, dirty, dirty_list, counts);
-        mark_dirty(top[node], parent, dirty, dirty_list, counts);
-    });
-}
-
-/// Each dirty node's count of dirty children (in visits); those with none go to the start list.
-__global__ void refit_pending(const uint32_t* __restrict__ dirty_list, uint32_t* __restrict__ counts, uint32_t n,
-                              const uint2* __restrict__ children, const uint32_t* __restrict__ dirty,
-                              uint32_t* __restrict__ visits, uint32_t* __restrict__ starts) {
-    each_listed(dirty_list, counts, kDirtyCount, [&](uint32_t y) {
-        const uint2 c = children[y];
-        const uint32_t pending = dirty[c.x] + dirty[c.y];
-        visits[y - n] = pending;
-        if (!pending) starts[atomicAdd(counts + kStartCount, 1u)] = y;
-    });
-}
-
-__global__ void refit_climb(const uint32_t* __restrict__ starts, const uint32_t* __restrict__ counts, uint32_t n,
-                            const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
-                            uint32_t* __restrict__ visits, LeafRule rule) {
-    each_listed(starts, counts, kStartCount, [&](uint32_t y) {
-        for (;;) {
-            const uint2 c = children[y];
-            make_node(y, c.x, c.y, merge(load_box(boxes + c.x), load_box(boxes + c.y)), boxes, children, meta, rule);
-            const uint32_t up = parent[y];
-            if (up == kInvalid) return;
-            __threadfence();  // this node before the counter
-            if (atomicSub(&visits[up - n], 1u) != 1u) return;
-            __threadfence();
-            y = up;
-        }
-    });
-}
-
-/// The dirty flags back to zero for the next pass.
-__global__ void refit_clean(const uint32_t* __restrict__ dirty_list, const uint32_t* __restrict__ counts,
-                            uint32_t* __restrict__ dirty) {
-    each_listed(dirty_list, counts, kDirtyCount, [&](uint32_t y) { dirty[y] = 0; });
+/// fit_boxes from the tree's leaves (their subtrees are as they were) after a pass.
+__global__ void refit_from_leaves(uint32_t total, uint32_t n, const uint8_t* __restrict__ role,
+                                  const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
+                                  uint32_t* __restrict__ visits, LeafRule rule) {
+    const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
+    if (x >= total || role[x] != kLeaf) return;
+    climb(x, n, parent, children, boxes, meta, visits, rule);
 }
 
 // --- The BVH2 layout, flat: one scan over every node places them all.
@@ -1152,10 +1062,6 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<float> r_gain(r_nodes);
     DeviceBuffer<uint32_t> r_to(r_nodes), r_top(r_nodes), r_parent(r_nodes);
     DeviceBuffer<unsigned long long> r_locks(r_nodes);
-    // The pass's lists (moves, dirty nodes, the refit's starts), their lengths and each node's
-    // dirty flag.
-    DeviceBuffer<uint32_t> r_moves(r_nodes), r_dirty_list(r_nodes), r_starts(r_nodes), r_dirty(r_nodes);
-    DeviceBuffer<uint32_t> r_counts(passes ? 4 : 0);
     DeviceBuffer<uint2> r_children(r_nodes);
     DeviceBuffer<NodeMeta> r_root(passes ? 2 : 0);
     g.tris.resize(prims.mesh ? n : 0);
@@ -1249,50 +1155,30 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CUDA_CHECK(cudaMemcpyAsync(r_parent.data(), parent.data(), parent.bytes(), cudaMemcpyDeviceToDevice));
         root_meta<<<1, 1>>>(root, meta.data(), r_root.data());
         const uint32_t total = uint32_t(nodes);
-        // The list kernels' grid: a few blocks per SM stride over lists whose length stays on
-        // the device.
-        const unsigned list_grid = unsigned(4 * gpu_sm_count());
-        detail::fill_device_bytes(r_locks.data(), 0, r_locks.bytes());
-        detail::fill_device_bytes(r_moving.data(), 0, r_moving.bytes());
-        detail::fill_device_bytes(r_dirty.data(), 0, r_dirty.bytes());
-        detail::fill_device_bytes(r_counts.data(), 0, r_counts.bytes());
-        uint32_t* counts = r_counts.data();
         for (int pass = 0; pass < passes; ++pass) {
-            if (pass) {  // the lists' lengths back to zero, the refit's error flag kept
-                detail::fill_device_bytes(counts, 0, 3 * sizeof(uint32_t));
-            }
             reinsert_roles<<<grid_for(total), kBlock>>>(total, rule.max_leaf, parent.data(), children.data(),
                                                         boxes.data(), meta.data(), r_role.data(), r_search.data());
             BVHLAB_CHECK_LAUNCH();
             reinsert_search<<<grid_for(total), kBlock>>>(total, r_role.data(), parent.data(), r_search.data(),
-                                                         r_gain.data(), r_to.data(), r_top.data(), r_moves.data(),
-                                                         counts);
+                                                         r_gain.data(), r_to.data(), r_top.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_lock<<<list_grid, kBlock>>>(r_moves.data(), counts, r_gain.data(), r_to.data(), parent.data(),
-                                                 children.data(), r_locks.data());
+            detail::fill_device_bytes(r_locks.data(), 0, r_locks.bytes());
+            detail::fill_device_bytes(r_moving.data(), 0, r_moving.bytes());
+            reinsert_lock<<<grid_for(total), kBlock>>>(total, r_gain.data(), r_to.data(), parent.data(),
+                                                       children.data(), r_locks.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_claim<<<list_grid, kBlock>>>(r_moves.data(), counts, r_gain.data(), r_to.data(), parent.data(),
-                                                  children.data(), r_locks.data(), r_moving.data());
+            reinsert_claim<<<grid_for(total), kBlock>>>(total, r_gain.data(), r_to.data(), parent.data(),
+                                                        children.data(), r_locks.data(), r_moving.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_unlock<<<list_grid, kBlock>>>(r_moves.data(), counts, r_to.data(), parent.data(), children.data(),
-                                                   r_locks.data(), r_moving.data());
+            reinsert_uncross<<<grid_for(total), kBlock>>>(total, r_to.data(), r_top.data(), parent.data(),
+                                                          r_moving.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_uncross<<<list_grid, kBlock>>>(r_moves.data(), counts, r_to.data(), r_top.data(), parent.data(),
-                                                    r_moving.data());
+            reinsert_apply<<<grid_for(total), kBlock>>>(total, r_to.data(), parent.data(), children.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_apply<<<list_grid, kBlock>>>(r_moves.data(), counts, r_to.data(), r_top.data(), parent.data(),
-                                                  children.data(), r_moving.data());
-            BVHLAB_CHECK_LAUNCH();
-            refit_mark<<<list_grid, kBlock>>>(r_moves.data(), counts, r_to.data(), r_top.data(), parent.data(),
-                                              r_dirty.data(), r_dirty_list.data());
-            BVHLAB_CHECK_LAUNCH();
-            refit_pending<<<list_grid, kBlock>>>(r_dirty_list.data(), counts, n, children.data(), r_dirty.data(),
-                                                 visits.data(), r_starts.data());
-            BVHLAB_CHECK_LAUNCH();
-            refit_climb<<<list_grid, kBlock>>>(r_starts.data(), counts, n, parent.data(), children.data(), boxes.data(),
-                                               meta.data(), visits.data(), rule);
-            BVHLAB_CHECK_LAUNCH();
-            refit_clean<<<list_grid, kBlock>>>(r_dirty_list.data(), counts, r_dirty.data());
+            clear_root_count<<<1, 1>>>(root, meta.data());
+            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+            refit_from_leaves<<<grid_for(total), kBlock>>>(total, n, r_role.data(), parent.data(), children.data(),
+                                                           boxes.data(), meta.data(), visits.data(), rule);
             BVHLAB_CHECK_LAUNCH();
         }
         root_meta<<<1, 1>>>(root, meta.data(), r_root.data() + 1);
@@ -1302,10 +1188,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         // own subtree), are undone: the hierarchy as the builder made it, fitted again.
         NodeMeta rm[2];
         detail::copy_to_host(rm, r_root.data(), sizeof rm);
-        uint32_t refit_error = 0;
-        detail::copy_to_host(&refit_error, counts + kRefitError, sizeof refit_error);
         if ((std::max(rm[1].height, 1u) >= options.config.max_depth && rm[1].height > rm[0].height) ||
-            rm[1].count != n || refit_error) {
+            rm[1].count != n) {
             BVHLAB_CUDA_CHECK(
                 cudaMemcpyAsync(children.data(), r_children.data(), children.bytes(), cudaMemcpyDeviceToDevice));
             BVHLAB_CUDA_CHECK(
