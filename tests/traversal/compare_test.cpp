@@ -5,6 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
+#include "accel/core/check.h"
+
 #include "tests/support/test_support.h"
 #include "traversal/reference/ref_intersect.h"
 
@@ -27,6 +31,23 @@ TEST(CompareHits, AgreementAndTSlack) {
     EXPECT_EQ(rep.agree, 1u);
     rep = one(m, r, Query::kClosest, {0, 1.0f, 0.3f, 0.2f}, {0, 1.5f, 0.3f, 0.2f});
     EXPECT_EQ(rep.mismatches, 1u);  // same triangle, very different t
+}
+
+TEST(CompareHits, AnyHitNeedsAClosestHitLookupAndClosestHitDoesNot) {
+    // An any-hit set is judged against the closest hit (a hit the oracle did not report must
+    // still lie on its triangle, before the closest one): without a lookup it is refused by
+    // name, where a closest-hit comparison needs none.
+    scene::TriangleMesh m = square();
+    const Ray r{{0.5f, 0.2f, 1.0f}, 0.0f, {0, 0, -1}, INFINITY};
+    const Hit h{0, 1.0f, 0.3f, 0.2f};
+    try {
+        compare_hits(m, {r}, Query::kAny, {h}, {h}, {});
+        ADD_FAILURE() << "an any-hit comparison without a lookup was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("any-hit comparison needs a closest-hit lookup"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(compare_hits(m, {r}, Query::kClosest, {h}, {h}, {}).agree, 1u);
 }
 
 TEST(CompareHits, SharedEdgeTie) {
