@@ -8,7 +8,6 @@
 #include <string>
 
 #include "accel/core/check.h"
-
 #include "tests/support/test_support.h"
 #include "traversal/reference/ref_intersect.h"
 
