@@ -134,6 +134,14 @@ TEST(Validate, CatchesBrokenTrees) {
     BuildTree shrunk = t;
     shrunk.nodes[1].bounds.hi.x += 10.0f;  // child sticks out of the root
     EXPECT_NE(validate(shrunk, m, o.config), "");
+    // A node that no parent reaches (a copy of a leaf appended at the end): every triangle is
+    // still referenced once, so only the reachability check can see it.
+    BuildTree orphan = t;
+    uint32_t leaf = 0;
+    while (!orphan.nodes[leaf].is_leaf()) ++leaf;
+    orphan.nodes.push_back(orphan.nodes[leaf]);
+    orphan.nodes.back().prim_count = 0;
+    EXPECT_EQ(validate(orphan, m, o.config), "node " + std::to_string(t.nodes.size()) + " is unreachable");
     BuildTree big = t;
     o.config.max_leaf_size = 0;
     EXPECT_NE(validate(big, m, o.config), "");
