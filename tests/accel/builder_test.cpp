@@ -2,6 +2,7 @@
 // Property tests of every builder on seeded soups and structured scenes, plus edge cases.
 #include <gtest/gtest.h>
 
+#include <string>
 #include <tuple>
 
 #include "accel/builders/builder.h"
