@@ -5,6 +5,7 @@
 #include <string>
 #include <tuple>
 
+#include "accel/builders/binned_sah.h"
 #include "accel/builders/builder.h"
 #include "accel/core/check.h"
 #include "accel/core/stats.h"
@@ -101,6 +102,23 @@ TEST(BinnedSahBuilder, LeafSizeOneAndLargeLeaves) {
         BuildResult r = run_builder(BuilderKind::kBinned, m, o);
         EXPECT_EQ(validate(r.tree, m, o.config), "");
         EXPECT_LE(compute_stats(r.tree, m, o.config, false).max_leaf_size, max_leaf);
+    }
+}
+
+TEST(BinnedSahBuilder, SweepOfTheLargestSmallNodeIsExact) {
+    // sweep_threshold's largest value, 64: a 64-triangle scene is one small node whose exact
+    // sweep must give the full-sweep builder's tree (every triangle once, the same SAH).
+    for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+        const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 64, seed);
+        BinnedSahBuilder::Config cfg;
+        cfg.sweep_threshold = 64;
+        cfg.max_leaf_size = 4;
+        const BuildTree t = BinnedSahBuilder(cfg).build(m);
+        ASSERT_EQ(validate(t, m, cfg), "") << "seed " << seed;
+        BuilderOptions o;
+        o.config.max_leaf_size = 4;
+        const double sweep = compute_stats(run_builder(BuilderKind::kSweep, m, o).tree, m, o.config, false).sah;
+        EXPECT_NEAR(compute_stats(t, m, cfg, false).sah, sweep, 1e-4 * sweep) << "seed " << seed;
     }
 }
 
