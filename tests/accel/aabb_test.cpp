@@ -11,9 +11,11 @@ TEST(AABB, EmptyHasZeroAreaAndExtendsToPoint) {
     AABB b = AABB::empty();
     EXPECT_TRUE(b.is_empty());
     EXPECT_EQ(b.area(), 0.0f);
+    EXPECT_EQ(b.half_area(), 0.0f);  // not the +inf of its extents' products: SAH sums stay finite
     b.extend(Vec3{1, 2, 3});
     EXPECT_FALSE(b.is_empty());
     EXPECT_EQ(b.area(), 0.0f);
+    EXPECT_EQ(b.half_area(), 0.0f);
     EXPECT_EQ(b.lo.y, 2.0f);
     EXPECT_EQ(b.hi.z, 3.0f);
 }
