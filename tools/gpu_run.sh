@@ -25,9 +25,8 @@
 #             (RENDER_SPP, default 512; render.jsonl, images in renders.tar.xz); the first wave's
 #             dumped rays of every bounce (render_dumps.jsonl) through every kernel
 #             (render_bench.jsonl); the switches (SWITCH_SPP, default 256, three rounds;
-#             render_switches.jsonl): material
-#             sorting, the first-hit cache, no compaction; and compute-sanitizer memcheck of
-#             small renders.
+#             render_switches.jsonl): material sorting, the first-hit cache, no compaction;
+#             and compute-sanitizer memcheck of small renders.
 #             experiments/render_report.py turns OUT into docs/results.md's renderer section
 #             (RENDER_DATA_SCENES=0 leaves data/'s three scenes out, to split the run in two
 #             whose OUT folders the report reads together)
