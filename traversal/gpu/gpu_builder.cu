@@ -4,10 +4,12 @@
 // (traversal/CMakeLists.txt): the Woop maps then equal the host's bit for bit.
 #include "traversal/gpu/gpu_builder.h"
 
+#include <thrust/iterator/counting_iterator.h>
 #include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
+#include <cub/device/device_select.cuh>
 #include <cuda/atomic>
 
 #include <algorithm>
@@ -624,6 +626,20 @@ __global__ void reinsert_roles(uint32_t total, uint32_t max_leaf, const uint32_t
 
 __device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? c.y : c.x; }
 
+/// The nodes a pass can move (interior nodes and leaves of the tree, not the root): the pass's
+/// kernels run over their list, not over every node, most of which lie inside leaves.
+struct Movable {
+    const uint8_t* role;
+    __device__ bool operator()(uint32_t x) const { return role[x] >= kInterior; }
+};
+
+/// Calls f(x) for every node x on a pass's list (grid-stride: its length is on the device).
+template <typename F>
+__device__ void for_each_listed(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count, F&& f) {
+    const uint32_t m = *count;
+    for (uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < m; k += gridDim.x * blockDim.x) f(list[k]);
+}
+
 /// The best place for node `node`: `to` (kInvalid: none saves area), the area saved and `top`,
 /// the lowest common ancestor of the node and X. Cutting the node out frees its parent p (its
 /// area saved) and shrinks p's ancestors below `top`; putting it beside X adds A(X u node) and
@@ -631,11 +647,9 @@ __device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? 
 /// path to the root (depth-first branch and bound: a subtree whose growth already costs what the
 /// best saves is skipped; leaves are not entered), and over the ancestors themselves; p and the
 /// root are not candidates.
-__global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role, const uint32_t* __restrict__ parent,
-                                const SearchNode* __restrict__ search, float* __restrict__ gain,
-                                uint32_t* __restrict__ to, uint32_t* __restrict__ top) {
-    const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
-    if (node >= total) return;
+__device__ void reinsert_search_node(uint32_t node, const uint8_t* __restrict__ role,
+                                     const uint32_t* __restrict__ parent, const SearchNode* __restrict__ search,
+                                     float* __restrict__ gain, uint32_t* __restrict__ to, uint32_t* __restrict__ top) {
     float best = 0.0f;
     uint32_t best_x = kInvalid, best_top = kInvalid;
     const Role r = Role(role[node]);
@@ -651,14 +665,22 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
         AABB shrunk = load_search_node(search + s).box();  // the current ancestor without the node
         float stack_budget[kReinsertStack];
         uint32_t stack_node[kReinsertStack];
-        int steps = kReinsertSteps;
-        auto explore = [&](uint32_t from, uint32_t under) {
-            int sp = 0;
-            stack_budget[sp] = budget;
-            stack_node[sp++] = from;
-            while (sp && steps > 0) {
+        int steps = kReinsertSteps;  // shared by every subtree of the search
+        // One loop over both the subtrees' nodes and the levels up (not a loop over the levels
+        // with one over each subtree inside): a lane whose subtree is done goes on to the next
+        // level while the others are still in theirs, so the warp's lanes stay busy.
+        int sp = 0;
+        stack_budget[sp] = budget;
+        stack_node[sp++] = s;
+        uint32_t under = p;  // the common ancestor of the node and the subtree being explored
+        uint32_t below = p, level = 0;
+        bool up_pending = false;  // `under` is an ancestor whose own candidacy comes after its subtree
+        SearchNode un{};
+        uint32_t other = kInvalid;
+        for (;;) {
+            if (sp && steps > 0) {
                 --sp;
-                --steps;  // shared by every subtree of the search
+                --steps;
                 const float b = stack_budget[sp];
                 const uint32_t x = stack_node[sp];
                 if (b - an <= best) continue;
@@ -670,40 +692,56 @@ __global__ void reinsert_search(uint32_t total, const uint8_t* __restrict__ role
                     best_x = x;
                     best_top = under;
                 }
-                if (xn.leaf()) continue;                 // a leaf's triangles stay together
-                const float below = r + xb.half_area();  // X's own growth is paid by its children
-                if (below - an <= best || sp + 2 > kReinsertStack) continue;
+                if (xn.leaf()) continue;                   // a leaf's triangles stay together
+                const float below_x = r + xb.half_area();  // X's own growth is paid by its children
+                if (below_x - an <= best || sp + 2 > kReinsertStack) continue;
                 const uint2 c = xn.children();
-                stack_budget[sp] = below;
+                stack_budget[sp] = below_x;
                 stack_node[sp++] = c.y;
-                stack_budget[sp] = below;
+                stack_budget[sp] = below_x;
                 stack_node[sp++] = c.x;
+                continue;
             }
-        };
-        explore(s, p);
-        for (uint32_t below = p, level = 0; level < kReinsertLevels; ++level) {
+            if (up_pending) {  // `under` keeps its box below here: the node stays below it
+                const uint32_t up = under;
+                shrunk = merge(shrunk, load_search_node(search + other).box());
+                const float up_area = un.box().half_area();
+                budget += up_area - shrunk.half_area();  // `up` shrinks from here on
+                if (parent[up] != kInvalid) {            // X = up: a new node over it has its old box
+                    const float r = budget - up_area;
+                    if (r > best) {
+                        best = r;
+                        best_x = up;
+                        best_top = up;
+                    }
+                }
+                below = up;
+                ++level;
+                up_pending = false;
+            }
+            if (level >= kReinsertLevels) break;
             const uint32_t up = parent[below];
             if (up == kInvalid) break;
-            const SearchNode un = load_search_node(search + up);
-            const uint32_t other = other_child(un.children(), below);
-            explore(other, up);  // `up` keeps its box: the node stays below it
-            shrunk = merge(shrunk, load_search_node(search + other).box());
-            const float up_area = un.box().half_area();
-            budget += up_area - shrunk.half_area();  // `up` shrinks from here on
-            if (parent[up] != kInvalid) {            // X = up: a new node over it has its old box
-                const float r = budget - up_area;
-                if (r > best) {
-                    best = r;
-                    best_x = up;
-                    best_top = up;
-                }
-            }
-            below = up;
+            un = load_search_node(search + up);
+            other = other_child(un.children(), below);
+            sp = 0;
+            stack_budget[sp] = budget;
+            stack_node[sp++] = other;
+            under = up;
+            up_pending = true;
         }
     }
     gain[node] = best;
     to[node] = best_x;
     top[node] = best_top;
+}
+
+__global__ void reinsert_search(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count,
+                                const uint8_t* __restrict__ role, const uint32_t* __restrict__ parent,
+                                const SearchNode* __restrict__ search, float* __restrict__ gain,
+                                uint32_t* __restrict__ to, uint32_t* __restrict__ top) {
+    for_each_listed(list, count,
+                    [&](uint32_t node) { reinsert_search_node(node, role, parent, search, gain, to, top); });
 }
 
 /// Calls f on every node whose links candidate `node`'s move to X = `to` changes: the node, its
@@ -723,44 +761,50 @@ __device__ unsigned long long reinsert_priority(float gain, uint32_t i) {
     return static_cast<unsigned long long>(__float_as_uint(gain)) << 32 | (0xffffffffu - i);
 }
 
-__global__ void reinsert_lock(uint32_t total, const float* __restrict__ gain, const uint32_t* __restrict__ to,
+__global__ void reinsert_lock(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count,
+                              const float* __restrict__ gain, const uint32_t* __restrict__ to,
                               const uint32_t* __restrict__ parent, const uint2* __restrict__ children,
                               unsigned long long* locks) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= total || to[i] == kInvalid) return;
-    const unsigned long long key = reinsert_priority(gain[i], i);
-    each_touched(i, to[i], parent, children, [&](uint32_t y) { atomicMax(locks + y, key); });
+    for_each_listed(list, count, [&](uint32_t i) {
+        if (to[i] == kInvalid) return;
+        const unsigned long long key = reinsert_priority(gain[i], i);
+        each_touched(i, to[i], parent, children, [&](uint32_t y) { atomicMax(locks + y, key); });
+    });
 }
 
 /// A move that holds every node it touches goes ahead and marks its node as moving; the others
 /// are dropped (to = kInvalid).
-__global__ void reinsert_claim(uint32_t total, const float* __restrict__ gain, uint32_t* __restrict__ to,
+__global__ void reinsert_claim(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count,
+                               const float* __restrict__ gain, uint32_t* __restrict__ to,
                                const uint32_t* __restrict__ parent, const uint2* __restrict__ children,
                                const unsigned long long* __restrict__ locks, uint8_t* __restrict__ moving) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= total || to[i] == kInvalid) return;
-    const unsigned long long key = reinsert_priority(gain[i], i);
-    bool mine = true;
-    each_touched(i, to[i], parent, children, [&](uint32_t y) { mine &= locks[y] == key; });
-    if (mine)
-        moving[i] = 1;
-    else
-        to[i] = kInvalid;
+    for_each_listed(list, count, [&](uint32_t i) {
+        if (to[i] == kInvalid) return;
+        const unsigned long long key = reinsert_priority(gain[i], i);
+        bool mine = true;
+        each_touched(i, to[i], parent, children, [&](uint32_t y) { mine &= locks[y] == key; });
+        if (mine)
+            moving[i] = 1;
+        else
+            to[i] = kInvalid;
+    });
 }
 
 /// Drops a claimed move whose X lies below another claimed move's node (on X's path up to `top`,
 /// the common ancestor): that node could carry X into this move's own subtree, a cycle.
-__global__ void reinsert_uncross(uint32_t total, uint32_t* __restrict__ to, const uint32_t* __restrict__ top,
+__global__ void reinsert_uncross(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count,
+                                 uint32_t* __restrict__ to, const uint32_t* __restrict__ top,
                                  const uint32_t* __restrict__ parent, const uint8_t* __restrict__ moving) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= total || to[i] == kInvalid) return;
-    for (uint32_t y = to[i]; y != top[i];) {
-        y = parent[y];
-        if (moving[y]) {
-            to[i] = kInvalid;
-            return;
+    for_each_listed(list, count, [&](uint32_t i) {
+        if (to[i] == kInvalid) return;
+        for (uint32_t y = to[i]; y != top[i];) {
+            y = parent[y];
+            if (moving[y]) {
+                to[i] = kInvalid;
+                return;
+            }
         }
-    }
+    });
 }
 
 __device__ void replace_child(uint2* children, uint32_t at, uint32_t old_child, uint32_t new_child) {
@@ -774,19 +818,21 @@ __device__ void replace_child(uint2* children, uint32_t at, uint32_t old_child, 
 
 /// The claimed moves: the node's parent p leaves (its sibling takes its place) and comes back
 /// over X and the node, in X's place. Moves that were claimed touch disjoint nodes.
-__global__ void reinsert_apply(uint32_t total, const uint32_t* __restrict__ to, uint32_t* parent, uint2* children) {
-    const uint32_t node = blockIdx.x * blockDim.x + threadIdx.x;
-    if (node >= total || to[node] == kInvalid) return;
-    const uint32_t x = to[node];
-    const uint32_t p = parent[node], g = parent[p];
-    const uint32_t s = other_child(children[p], node);
-    replace_child(children, g, p, s);
-    parent[s] = g;
-    const uint32_t q = parent[x];
-    replace_child(children, q, x, p);
-    children[p] = make_uint2(x, node);
-    parent[x] = p;
-    parent[p] = q;
+__global__ void reinsert_apply(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count,
+                               const uint32_t* __restrict__ to, uint32_t* parent, uint2* children) {
+    for_each_listed(list, count, [&](uint32_t node) {
+        if (to[node] == kInvalid) return;
+        const uint32_t x = to[node];
+        const uint32_t p = parent[node], g = parent[p];
+        const uint32_t s = other_child(children[p], node);
+        replace_child(children, g, p, s);
+        parent[s] = g;
+        const uint32_t q = parent[x];
+        replace_child(children, q, x, p);
+        children[p] = make_uint2(x, node);
+        parent[x] = p;
+        parent[p] = q;
+    });
 }
 
 /// Copies the root's meta (the root's id in *root) to *out.
@@ -799,12 +845,13 @@ __global__ void clear_root_count(const uint32_t* root, NodeMeta* meta) {
 }
 
 /// fit_boxes from the tree's leaves (their subtrees are as they were) after a pass.
-__global__ void refit_from_leaves(uint32_t total, uint32_t n, const uint8_t* __restrict__ role,
-                                  const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
-                                  uint32_t* __restrict__ visits, LeafRule rule) {
-    const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
-    if (x >= total || role[x] != kLeaf) return;
-    climb(x, n, parent, children, boxes, meta, visits, rule);
+__global__ void refit_from_leaves(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count, uint32_t n,
+                                  const uint8_t* __restrict__ role, const uint32_t* __restrict__ parent,
+                                  uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
+                                  LeafRule rule) {
+    for_each_listed(list, count, [&](uint32_t x) {
+        if (role[x] == kLeaf) climb(x, n, parent, children, boxes, meta, visits, rule);
+    });
 }
 
 // --- The BVH2 layout, flat: one scan over every node places them all.
@@ -1060,19 +1107,23 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint8_t> r_role(r_nodes), r_moving(r_nodes);
     DeviceBuffer<SearchNode> r_search(r_nodes);
     DeviceBuffer<float> r_gain(r_nodes);
-    DeviceBuffer<uint32_t> r_to(r_nodes), r_top(r_nodes), r_parent(r_nodes);
+    DeviceBuffer<uint32_t> r_to(r_nodes), r_top(r_nodes), r_parent(r_nodes), r_list(r_nodes), r_count(passes ? 1 : 0);
     DeviceBuffer<unsigned long long> r_locks(r_nodes);
     DeviceBuffer<uint2> r_children(r_nodes);
     DeviceBuffer<NodeMeta> r_root(passes ? 2 : 0);
     g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
-    size_t sort_bytes = 0, scan_bytes = 0;
+    size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
     BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
-    DeviceBuffer<uint8_t> scratch(std::max(sort_bytes, scan_bytes));
+    if (passes) {
+        BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(nullptr, select_bytes, thrust::counting_iterator<uint32_t>(0),
+                                                r_list.data(), r_count.data(), int(nodes), Movable{r_role.data()}));
+    }
+    DeviceBuffer<uint8_t> scratch(std::max({sort_bytes, scan_bytes, select_bytes}));
     g.peak_bytes = gpu_memory_use().current - base;
     uint32_t* root = words.data();
     uint32_t* node_counter = words.data() + 1;
@@ -1155,30 +1206,38 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CUDA_CHECK(cudaMemcpyAsync(r_parent.data(), parent.data(), parent.bytes(), cudaMemcpyDeviceToDevice));
         root_meta<<<1, 1>>>(root, meta.data(), r_root.data());
         const uint32_t total = uint32_t(nodes);
+        // The list kernels' grid: enough blocks to fill every SM, each thread taking the list's
+        // nodes a grid apart.
+        const unsigned list_grid = std::min(grid_for(total), unsigned(16 * gpu_sm_count()));
         for (int pass = 0; pass < passes; ++pass) {
             reinsert_roles<<<grid_for(total), kBlock>>>(total, rule.max_leaf, parent.data(), children.data(),
                                                         boxes.data(), meta.data(), r_role.data(), r_search.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_search<<<grid_for(total), kBlock>>>(total, r_role.data(), parent.data(), r_search.data(),
-                                                         r_gain.data(), r_to.data(), r_top.data());
+            BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(scratch.data(), select_bytes,
+                                                    thrust::counting_iterator<uint32_t>(0), r_list.data(),
+                                                    r_count.data(), int(total), Movable{r_role.data()}));
+            const uint32_t* list = r_list.data();
+            const uint32_t* count = r_count.data();
+            reinsert_search<<<list_grid, kBlock>>>(list, count, r_role.data(), parent.data(), r_search.data(),
+                                                   r_gain.data(), r_to.data(), r_top.data());
             BVHLAB_CHECK_LAUNCH();
             detail::fill_device_bytes(r_locks.data(), 0, r_locks.bytes());
             detail::fill_device_bytes(r_moving.data(), 0, r_moving.bytes());
-            reinsert_lock<<<grid_for(total), kBlock>>>(total, r_gain.data(), r_to.data(), parent.data(),
-                                                       children.data(), r_locks.data());
+            reinsert_lock<<<list_grid, kBlock>>>(list, count, r_gain.data(), r_to.data(), parent.data(),
+                                                 children.data(), r_locks.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_claim<<<grid_for(total), kBlock>>>(total, r_gain.data(), r_to.data(), parent.data(),
-                                                        children.data(), r_locks.data(), r_moving.data());
+            reinsert_claim<<<list_grid, kBlock>>>(list, count, r_gain.data(), r_to.data(), parent.data(),
+                                                  children.data(), r_locks.data(), r_moving.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_uncross<<<grid_for(total), kBlock>>>(total, r_to.data(), r_top.data(), parent.data(),
-                                                          r_moving.data());
+            reinsert_uncross<<<list_grid, kBlock>>>(list, count, r_to.data(), r_top.data(), parent.data(),
+                                                    r_moving.data());
             BVHLAB_CHECK_LAUNCH();
-            reinsert_apply<<<grid_for(total), kBlock>>>(total, r_to.data(), parent.data(), children.data());
+            reinsert_apply<<<list_grid, kBlock>>>(list, count, r_to.data(), parent.data(), children.data());
             BVHLAB_CHECK_LAUNCH();
             clear_root_count<<<1, 1>>>(root, meta.data());
             detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-            refit_from_leaves<<<grid_for(total), kBlock>>>(total, n, r_role.data(), parent.data(), children.data(),
-                                                           boxes.data(), meta.data(), visits.data(), rule);
+            refit_from_leaves<<<list_grid, kBlock>>>(list, count, n, r_role.data(), parent.data(), children.data(),
+                                                     boxes.data(), meta.data(), visits.data(), rule);
             BVHLAB_CHECK_LAUNCH();
         }
         root_meta<<<1, 1>>>(root, meta.data(), r_root.data() + 1);
