@@ -4,10 +4,12 @@
 // (traversal/CMakeLists.txt): the Woop maps then equal the host's bit for bit.
 #include "traversal/gpu/gpu_builder.h"
 
+#include <thrust/iterator/counting_iterator.h>
 #include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
+#include <cub/device/device_select.cuh>
 #include <cuda/atomic>
 
 #include <algorithm>
@@ -599,46 +601,37 @@ __device__ SearchNode load_search_node(const SearchNode* n) {
             __uint_as_float(b.x), __uint_as_float(b.y), __uint_as_float(b.z), b.w};
 }
 
-/// Each node's role, for the nodes of the tree (not inside a leaf) the search's copy, and the
-/// list of the nodes a pass can move (interior nodes and leaves of the tree, not the root): the
-/// pass's kernels run over it, not over every node, most of which lie inside leaves. Its order
-/// varies between runs (a warp's nodes are appended together); the moves do not depend on it.
-/// *count is zero before.
+/// Each node's role, and for the nodes of the tree (not inside a leaf) the search's copy.
 __global__ void reinsert_roles(uint32_t total, uint32_t max_leaf, const uint32_t* __restrict__ parent,
                                const uint2* __restrict__ children, const AABB* __restrict__ boxes,
                                const NodeMeta* __restrict__ meta, uint8_t* __restrict__ role,
-                               SearchNode* __restrict__ search, uint32_t* __restrict__ list,
-                               uint32_t* __restrict__ count) {
+                               SearchNode* __restrict__ search) {
     const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
-    Role r = kInsideLeaf;
-    if (x < total) {
-        const uint32_t p = parent[x];
-        if (inside_leaf(x, max_leaf, parent, meta))
-            r = kInsideLeaf;
-        else if (meta[x].leaf())
-            r = kLeaf;
-        else
-            r = kInterior;
-        if (r != kInsideLeaf && (p == kInvalid || parent[p] == kInvalid)) r = r == kLeaf ? kLeaf : kFixed;
-        role[x] = r;
-        if (r != kInsideLeaf) {
-            const AABB b = boxes[x];
-            const uint2 c = r == kLeaf ? make_uint2(kInvalid, kInvalid) : children[x];
-            search[x] = {b.lo.x, b.lo.y, b.lo.z, c.x, b.hi.x, b.hi.y, b.hi.z, c.y};
-        }
-    }
-    // One atomic a warp for its listed nodes (every lane of a launched warp gets here).
-    const uint32_t lane = threadIdx.x % kWarp;
-    const bool listed = r >= kInterior;
-    const uint32_t lanes = __ballot_sync(~0u, listed);
-    if (!lanes) return;
-    uint32_t first = 0;
-    if (lane == uint32_t(__ffs(lanes) - 1)) first = atomicAdd(count, uint32_t(__popc(lanes)));
-    first = __shfl_sync(~0u, first, __ffs(lanes) - 1);
-    if (listed) list[first + __popc(lanes & ((1u << lane) - 1))] = x;
+    if (x >= total) return;
+    const uint32_t p = parent[x];
+    Role r;
+    if (inside_leaf(x, max_leaf, parent, meta))
+        r = kInsideLeaf;
+    else if (meta[x].leaf())
+        r = kLeaf;
+    else
+        r = kInterior;
+    if (r != kInsideLeaf && (p == kInvalid || parent[p] == kInvalid)) r = r == kLeaf ? kLeaf : kFixed;
+    role[x] = r;
+    if (r == kInsideLeaf) return;
+    const AABB b = boxes[x];
+    const uint2 c = r == kLeaf ? make_uint2(kInvalid, kInvalid) : children[x];
+    search[x] = {b.lo.x, b.lo.y, b.lo.z, c.x, b.hi.x, b.hi.y, b.hi.z, c.y};
 }
 
 __device__ uint32_t other_child(const uint2& c, uint32_t x) { return c.x == x ? c.y : c.x; }
+
+/// The nodes a pass can move (interior nodes and leaves of the tree, not the root): the pass's
+/// kernels run over their list, not over every node, most of which lie inside leaves.
+struct Movable {
+    const uint8_t* role;
+    __device__ bool operator()(uint32_t x) const { return role[x] >= kInterior; }
+};
 
 /// Calls f(x) for every node x on a pass's list (grid-stride: its length is on the device).
 template <typename F>
@@ -1120,13 +1113,17 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<NodeMeta> r_root(passes ? 2 : 0);
     g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
-    size_t sort_bytes = 0, scan_bytes = 0;
+    size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
     BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
-    DeviceBuffer<uint8_t> scratch(std::max(sort_bytes, scan_bytes));
+    if (passes) {
+        BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(nullptr, select_bytes, thrust::counting_iterator<uint32_t>(0),
+                                                r_list.data(), r_count.data(), int(nodes), Movable{r_role.data()}));
+    }
+    DeviceBuffer<uint8_t> scratch(std::max({sort_bytes, scan_bytes, select_bytes}));
     g.peak_bytes = gpu_memory_use().current - base;
     uint32_t* root = words.data();
     uint32_t* node_counter = words.data() + 1;
@@ -1213,11 +1210,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         // nodes a grid apart.
         const unsigned list_grid = std::min(grid_for(total), unsigned(16 * gpu_sm_count()));
         for (int pass = 0; pass < passes; ++pass) {
-            detail::fill_device_bytes(r_count.data(), 0, r_count.bytes());
             reinsert_roles<<<grid_for(total), kBlock>>>(total, rule.max_leaf, parent.data(), children.data(),
-                                                        boxes.data(), meta.data(), r_role.data(), r_search.data(),
-                                                        r_list.data(), r_count.data());
+                                                        boxes.data(), meta.data(), r_role.data(), r_search.data());
             BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(scratch.data(), select_bytes,
+                                                    thrust::counting_iterator<uint32_t>(0), r_list.data(),
+                                                    r_count.data(), int(total), Movable{r_role.data()}));
             const uint32_t* list = r_list.data();
             const uint32_t* count = r_count.data();
             reinsert_search<<<list_grid, kBlock>>>(list, count, r_role.data(), parent.data(), r_search.data(),
