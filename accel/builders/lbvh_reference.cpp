@@ -2,6 +2,8 @@
 #include "accel/builders/lbvh_reference.h"
 
 #include <algorithm>
+#include <array>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -9,6 +11,7 @@
 
 #include "accel/core/check.h"
 #include "accel/core/morton.h"
+#include "accel/core/reinsertion_search.h"
 
 namespace bvhlab::accel {
 
@@ -80,6 +83,74 @@ RawHierarchy morton_order(const scene::TriangleMesh& mesh, int morton_bits) {
     return h;
 }
 
+/// What the leaf choice keeps of a node (as the GPU's NodeMeta): its triangles, whether its
+/// subtree becomes one leaf, its SAH cost and its height in the layout (0 for a leaf).
+struct NodeFit {
+    uint32_t count = 1;
+    bool leaf = true;
+    float cost = 0.0f;
+    uint32_t height = 0;
+};
+
+NodeFit leaf_fit(const AABB& box, const BuildConfig& config) {
+    return {1, true, config.intersection_cost * box.half_area(), 0};
+}
+
+/// A node's fit from its children's, in the GPU's float operations (make_node): a leaf when it
+/// holds at most min_leaf triangles, or at most max_leaf and costs no more as one.
+NodeFit node_fit(const NodeFit& a, const NodeFit& b, float area, const BuildConfig& config) {
+    NodeFit m;
+    m.count = a.count + b.count;
+    const float inner = config.traversal_cost * area + a.cost + b.cost;
+    const float as_leaf = config.intersection_cost * float(m.count) * area;
+    m.leaf = m.count <= config.min_leaf_size || (m.count <= config.max_leaf_size && as_leaf <= inner);
+    m.cost = m.leaf ? as_leaf : inner;
+    m.height = m.leaf ? 0 : 1 + std::max(a.height, b.height);
+    return m;
+}
+
+/// n, the hierarchy's leaves; throws unless it has n - 1 nodes and 2n - 1 boxes.
+uint32_t check_hierarchy(const RawHierarchy& h) {
+    const uint32_t n = uint32_t(h.sorted_ids.size());
+    BVHLAB_CHECK(n > 0 && h.boxes.size() == 2 * size_t(n) - 1 && h.left.size() + 1 == n && h.right.size() + 1 == n,
+                 "a hierarchy of n leaves has n - 1 nodes");
+    return n;
+}
+
+/// Visits the nodes of the subtree of `root` children first (a depth-first walk; nodes below n
+/// are leaves, children(x) gives an interior node's two); `enter(x)` false stops the walk at x,
+/// which is visited as it is.
+template <typename Children, typename Enter, typename Visit>
+void post_order(uint32_t root, uint32_t n, Children&& children, Enter&& enter, Visit&& visit) {
+    std::vector<std::pair<uint32_t, bool>> stack{{root, false}};
+    while (!stack.empty()) {
+        const auto [x, expanded] = stack.back();
+        stack.pop_back();
+        if (x < n || expanded || !enter(x)) {
+            visit(x);
+        } else {
+            const std::pair<uint32_t, uint32_t> c = children(x);
+            stack.push_back({x, true});
+            stack.push_back({c.second, false});
+            stack.push_back({c.first, false});
+        }
+    }
+}
+
+/// Every node's fit, bottom-up from the hierarchy's boxes.
+std::vector<NodeFit> fit_hierarchy(const RawHierarchy& h, const BuildConfig& config) {
+    const uint32_t n = uint32_t(h.sorted_ids.size());
+    std::vector<NodeFit> fit(h.boxes.size());
+    post_order(
+        h.root, n, [&](uint32_t x) { return std::make_pair(h.left[x - n], h.right[x - n]); },
+        [](uint32_t) { return true; },
+        [&](uint32_t x) {
+            fit[x] = x < n ? leaf_fit(h.boxes[x], config)
+                           : node_fit(fit[h.left[x - n]], fit[h.right[x - n]], h.boxes[x].half_area(), config);
+        });
+    return fit;
+}
+
 }  // namespace
 
 RawHierarchy lbvh_reference(const scene::TriangleMesh& mesh, int morton_bits) {
@@ -140,35 +211,8 @@ RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, in
 }
 
 BuildTree tree_from_hierarchy(const RawHierarchy& h, const BuildConfig& config) {
-    const uint32_t n = uint32_t(h.sorted_ids.size());
-    BVHLAB_CHECK(n > 0 && h.boxes.size() == 2 * size_t(n) - 1 && h.left.size() + 1 == n,
-                 "a hierarchy of n leaves has n - 1 nodes");
-    // Bottom-up (children before parents, by a depth-first walk): triangles and SAH cost of
-    // every node, and whether its subtree becomes one leaf.
-    const size_t total = h.boxes.size();
-    std::vector<uint32_t> count(total, 1);
-    std::vector<float> cost(total);
-    std::vector<uint8_t> leaf(total, 1);
-    std::vector<std::pair<uint32_t, bool>> stack{{h.root, false}};
-    while (!stack.empty()) {
-        const auto [x, expanded] = stack.back();
-        stack.pop_back();
-        const float area = h.boxes[x].half_area();
-        if (x < n) {
-            cost[x] = config.intersection_cost * area;
-        } else if (!expanded) {
-            stack.push_back({x, true});
-            stack.push_back({h.right[x - n], false});
-            stack.push_back({h.left[x - n], false});
-        } else {
-            const uint32_t a = h.left[x - n], b = h.right[x - n];
-            count[x] = count[a] + count[b];
-            const float inner = config.traversal_cost * area + cost[a] + cost[b];
-            const float as_leaf = config.intersection_cost * float(count[x]) * area;
-            leaf[x] = count[x] <= config.min_leaf_size || (count[x] <= config.max_leaf_size && as_leaf <= inner);
-            cost[x] = leaf[x] ? as_leaf : inner;
-        }
-    }
+    const uint32_t n = check_hierarchy(h);
+    const std::vector<NodeFit> fit = fit_hierarchy(h, config);
     // Top-down: a node's children at two adjacent slots; a leaf's triangles left to right.
     BuildTree tree;
     tree.nodes.push_back({h.boxes[h.root], 0, 0});
@@ -177,9 +221,9 @@ BuildTree tree_from_hierarchy(const RawHierarchy& h, const BuildConfig& config) 
     while (!todo.empty()) {
         const auto [x, slot] = todo.back();
         todo.pop_back();
-        if (leaf[x]) {
+        if (fit[x].leaf) {
             tree.nodes[slot].first_index = uint32_t(tree.prim_indices.size());
-            tree.nodes[slot].prim_count = count[x];
+            tree.nodes[slot].prim_count = fit[x].count;
             below.assign(1, x);
             while (!below.empty()) {
                 const uint32_t y = below.back();
@@ -202,6 +246,125 @@ BuildTree tree_from_hierarchy(const RawHierarchy& h, const BuildConfig& config) 
         todo.push_back({a, first});
     }
     return tree;
+}
+
+bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, int passes) {
+    const uint32_t n = check_hierarchy(h);
+    if (n < 3 || passes <= 0) return true;
+    const uint32_t total = uint32_t(h.boxes.size());
+    std::vector<uint32_t> left(total, kReinsertNone), right(total, kReinsertNone), parent(total, kReinsertNone);
+    for (uint32_t i = 0; i + 1 < n; ++i) {
+        left[n + i] = h.left[i];
+        right[n + i] = h.right[i];
+        parent[h.left[i]] = parent[h.right[i]] = n + i;
+    }
+    const std::vector<uint32_t> left0 = left, right0 = right, parent0 = parent;
+    std::vector<NodeFit> fit = fit_hierarchy(h, config);
+    const NodeFit before = fit[h.root];
+    const auto children = [&](uint32_t x) { return std::make_pair(left[x], right[x]); };
+    // Boxes and fits again below `root` from the nodes where enter(x) is false (and the leaves).
+    const auto refit = [&](auto&& enter) {
+        post_order(h.root, n, children, enter, [&](uint32_t x) {
+            if (x < n || !enter(x)) return;
+            h.boxes[x] = merge(h.boxes[left[x]], h.boxes[right[x]]);
+            fit[x] = node_fit(fit[left[x]], fit[right[x]], h.boxes[x].half_area(), config);
+        });
+    };
+    enum Role : uint8_t { kInsideLeaf, kFixed, kInterior, kLeaf };  // as the GPU's
+    std::vector<uint8_t> role(total);
+    std::vector<SearchNode> search(total);
+    std::vector<ReinsertMove> move(total);
+    std::vector<unsigned long long> locks(total);
+    std::vector<uint8_t> moving(total);
+    for (int pass = 0; pass < passes; ++pass) {
+        for (uint32_t x = 0; x < total; ++x) {
+            const uint32_t p = parent[x];
+            bool inside = false;
+            for (uint32_t q = p; q != kReinsertNone && fit[q].count <= config.max_leaf_size; q = parent[q]) {
+                if (fit[q].leaf) {
+                    inside = true;
+                    break;
+                }
+            }
+            Role r = inside ? kInsideLeaf : fit[x].leaf ? kLeaf : kInterior;
+            if (r != kInsideLeaf && (p == kReinsertNone || parent[p] == kReinsertNone)) r = r == kLeaf ? kLeaf : kFixed;
+            role[x] = r;
+            const AABB& b = h.boxes[x];
+            const bool open = r != kLeaf && x >= n;
+            search[x] = {b.lo.x, b.lo.y, b.lo.z, open ? left[x] : kReinsertNone,
+                         b.hi.x, b.hi.y, b.hi.z, open ? right[x] : kReinsertNone};
+        }
+        for (uint32_t x = 0; x < total; ++x) {
+            const uint32_t p = parent[x];
+            move[x] = {};
+            if (role[x] >= kInterior && p != kReinsertNone && parent[p] != kReinsertNone) {
+                move[x] = reinsertion_search(
+                    x, p, [&](uint32_t y) { return search[y]; }, [&](uint32_t y) { return parent[y]; });
+            }
+        }
+        // The six nodes whose links a move changes, its priority (gain, then the lower node).
+        const auto touched = [&](uint32_t x) {
+            const uint32_t p = parent[x], to = move[x].to;
+            return std::array<uint32_t, 6>{x, p, left[p] == x ? right[p] : left[p], parent[p], to, parent[to]};
+        };
+        const auto key = [&](uint32_t x) {
+            uint32_t bits;
+            std::memcpy(&bits, &move[x].gain, sizeof bits);
+            return static_cast<unsigned long long>(bits) << 32 | (0xffffffffu - x);
+        };
+        std::fill(locks.begin(), locks.end(), 0ull);
+        std::fill(moving.begin(), moving.end(), uint8_t(0));
+        for (uint32_t x = 0; x < total; ++x)
+            if (move[x].to != kReinsertNone)
+                for (uint32_t y : touched(x)) locks[y] = std::max(locks[y], key(x));
+        for (uint32_t x = 0; x < total; ++x) {
+            if (move[x].to == kReinsertNone) continue;
+            bool mine = true;
+            for (uint32_t y : touched(x)) mine &= locks[y] == key(x);
+            if (mine)
+                moving[x] = 1;
+            else
+                move[x].to = kReinsertNone;
+        }
+        for (uint32_t x = 0; x < total; ++x) {  // no subtree carried into itself
+            for (uint32_t y = move[x].to; move[x].to != kReinsertNone && y != move[x].top;) {
+                y = parent[y];
+                if (moving[y]) move[x].to = kReinsertNone;
+            }
+        }
+        const auto replace_child = [&](uint32_t at, uint32_t old_child, uint32_t new_child) {
+            (left[at] == old_child ? left[at] : right[at]) = new_child;
+        };
+        for (uint32_t x = 0; x < total; ++x) {
+            const uint32_t to = move[x].to;
+            if (to == kReinsertNone) continue;
+            const uint32_t p = parent[x], g = parent[p];
+            const uint32_t s = left[p] == x ? right[p] : left[p];
+            replace_child(g, p, s);
+            parent[s] = g;
+            const uint32_t q = parent[to];
+            replace_child(q, to, p);
+            left[p] = to;
+            right[p] = x;
+            parent[to] = p;
+            parent[p] = q;
+        }
+        refit([&](uint32_t x) { return role[x] != kLeaf; });  // the tree's leaves keep theirs
+    }
+    const NodeFit after = fit[h.root];
+    const bool stand =
+        !(std::max(after.height, 1u) >= config.max_depth && after.height > before.height) && after.count == n;
+    if (!stand) {  // the hierarchy as it was, fitted again from its leaves
+        left = left0;
+        right = right0;
+        parent = parent0;
+        refit([](uint32_t) { return true; });
+    }
+    for (uint32_t i = 0; i + 1 < n; ++i) {
+        h.left[i] = left[n + i];
+        h.right[i] = right[n + i];
+    }
+    return stand;
 }
 
 }  // namespace bvhlab::accel

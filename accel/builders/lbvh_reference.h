@@ -55,4 +55,17 @@ RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, in
 /// triangles left to right.
 BuildTree tree_from_hierarchy(const RawHierarchy& h, const BuildConfig& config);
 
+/// `passes` passes of the GPU builders' parallel reinsertion (after Meister & Bittner 2018) over
+/// h, in place, as traversal/gpu/gpu_builder.cu makes them, bit for bit. Each pass, the nodes of
+/// the tree (its leaves, as tree_from_hierarchy's leaf choice makes them, and the interior nodes
+/// above them, but the root and its children) search for their best move
+/// (accel::reinsertion_search, against the boxes as the pass began); a move that changes the
+/// same links as another goes ahead only if its gain is the larger (on equal gains the lower
+/// node); a move whose X lies below another moving node on X's path to the common ancestor is
+/// dropped; the rest move at once, and boxes and leaf choices are fitted again from the tree's
+/// leaves up. Passes that leave the tree at least max_depth deep and deeper than it was are
+/// undone (the hierarchy as it was, boxes fitted again from its leaves): returns whether they
+/// stand. Fewer than 3 leaves: nothing moves. Throws bvhlab::Error as tree_from_hierarchy does.
+bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, int passes);
+
 }  // namespace bvhlab::accel

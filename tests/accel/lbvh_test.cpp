@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 #include "accel/builders/builder.h"
@@ -221,6 +222,113 @@ TEST(PlocReference, LeavesBySahFollowTheRule) {
     }
     EXPECT_EQ(below[0], mesh.triangle_count());
     EXPECT_LT(compute_stats(t4, mesh, c, false).leaves, s.leaves);
+}
+
+/// Two pairs of overlapping unit boxes 10 apart, hierarchy ((A, C), (B, D)): each leaf belongs
+/// beside the other of its pair.
+RawHierarchy crossed_pairs() {
+    RawHierarchy h;
+    const auto box = [](float x) { return AABB{{x, 0, 0}, {x + 1, 1, 1}}; };
+    h.sorted_ids = {0, 1, 2, 3};
+    h.keys = {0, 1, 2, 3};
+    h.boxes = {box(0), box(0.5f), box(10), box(10.5f)};  // A, B, C, D
+    h.left = {5, 0, 1};
+    h.right = {6, 2, 3};
+    h.root = 4;
+    h.boxes.push_back(merge(merge(h.boxes[0], h.boxes[2]), merge(h.boxes[1], h.boxes[3])));
+    h.boxes.push_back(merge(h.boxes[0], h.boxes[2]));
+    h.boxes.push_back(merge(h.boxes[1], h.boxes[3]));
+    return h;
+}
+
+/// The interior nodes' half areas together (what reinsertion lowers).
+double interior_area(const RawHierarchy& h) {
+    double a = 0;
+    for (size_t x = h.sorted_ids.size(); x < h.boxes.size(); ++x) a += h.boxes[x].half_area();
+    return a;
+}
+
+/// Parent of every node of h (the root's is ~0u).
+std::vector<uint32_t> parents(const RawHierarchy& h) {
+    const size_t n = h.sorted_ids.size();
+    std::vector<uint32_t> p(2 * n - 1, ~0u);
+    for (size_t i = 0; i + 1 < n; ++i) p[h.left[i]] = p[h.right[i]] = uint32_t(n + i);
+    return p;
+}
+
+TEST(ParallelReinsertionReference, MovesLeavesBesideTheirNeighbours) {
+    BuildConfig single;
+    single.max_leaf_size = 1;  // every pair stays two leaves
+    RawHierarchy h = crossed_pairs();
+    const double before = interior_area(h);
+    // One pass: the four leaves' moves all change the root's children's links; one wins, the
+    // largest gain: B beside A (it frees (B, D) and grows (A, C) into A u B u C, which is smaller
+    // than the A u B u D that A's move beside B grows (B, D) into).
+    ASSERT_TRUE(parallel_reinsertion_reference(h, single, 1));
+    std::vector<uint32_t> p = parents(h);
+    EXPECT_EQ(p[0], p[1]);
+    EXPECT_NE(p[2], p[3]);
+    EXPECT_EQ(p[3], h.root);  // D took its old parent's place
+    // A second pass moves C beside D (D, now a child of the root, does not move itself).
+    ASSERT_TRUE(parallel_reinsertion_reference(h, single, 1));
+    p = parents(h);
+    EXPECT_EQ(p[0], p[1]);
+    EXPECT_EQ(p[2], p[3]);
+    for (uint32_t x = 4; x < 7; ++x) {
+        const AABB u = merge(h.boxes[h.left[x - 4]], h.boxes[h.right[x - 4]]);
+        EXPECT_EQ(std::memcmp(&u, &h.boxes[x], sizeof u), 0) << "node " << x << " refitted";
+    }
+    EXPECT_LT(interior_area(h), 0.5 * before);
+    // A third finds nothing to move.
+    const RawHierarchy settled = h;
+    ASSERT_TRUE(parallel_reinsertion_reference(h, single, 1));
+    EXPECT_EQ(h.left, settled.left);
+    EXPECT_EQ(h.right, settled.right);
+}
+
+TEST(ParallelReinsertionReference, LowersTheSahOfSoundHierarchies) {
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 3000, 5);
+    const BuildConfig c;
+    for (const RawHierarchy& built : {lbvh_reference(mesh, 30), ploc_reference(mesh, 30, 8)}) {
+        const double before = compute_stats(tree_from_hierarchy(built, c), mesh, c, false).sah;
+        RawHierarchy h = built;
+        ASSERT_TRUE(parallel_reinsertion_reference(h, c, 0));
+        EXPECT_EQ(h.left, built.left);  // no passes: nothing moves
+        EXPECT_EQ(h.right, built.right);
+        ASSERT_TRUE(parallel_reinsertion_reference(h, c, 3));
+        expect_sound(h, mesh);
+        const BuildTree tree = tree_from_hierarchy(h, c);
+        EXPECT_EQ(validate(tree, mesh, c), "");
+        const double after = compute_stats(tree, mesh, c, false).sah;
+        std::printf("reference reinsertion: SAH %.4f -> %.4f\n", before, after);
+        EXPECT_LT(after, 0.97 * before);
+    }
+    RawHierarchy two = lbvh_reference(scene::make_procedural(scene::ProceduralKind::kSoup, 2, 1), 30);
+    const RawHierarchy two0 = two;
+    EXPECT_TRUE(parallel_reinsertion_reference(two, c, 3));  // under 3 leaves: nothing to move
+    EXPECT_EQ(two.left, two0.left);
+    RawHierarchy broken = two0;
+    broken.right.clear();
+    EXPECT_THROW(parallel_reinsertion_reference(broken, c, 1), Error);
+}
+
+TEST(ParallelReinsertionReference, PassesThatReachMaxDepthAreUndone) {
+    // As the GPU's: with max_depth one level above the tree's own depth, passes that deepen the
+    // tree are undone, and the hierarchy is the builder's, boxes and all.
+    const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 30000, 7);
+    const RawHierarchy built = lbvh_reference(mesh, 30);
+    BuildConfig c;
+    const uint32_t depth = compute_stats(tree_from_hierarchy(built, c), mesh, c, false).depth;
+    RawHierarchy free = built;
+    ASSERT_TRUE(parallel_reinsertion_reference(free, c, 3));
+    const uint32_t deeper = compute_stats(tree_from_hierarchy(free, c), mesh, c, false).depth;
+    ASSERT_GT(deeper, depth) << "reinsertion does not deepen this tree: pick another";
+    c.max_depth = depth + 1;
+    RawHierarchy held = built;
+    EXPECT_FALSE(parallel_reinsertion_reference(held, c, 3));
+    EXPECT_EQ(held.left, built.left);
+    EXPECT_EQ(held.right, built.right);
+    EXPECT_EQ(std::memcmp(held.boxes.data(), built.boxes.data(), built.boxes.size() * sizeof(AABB)), 0);
 }
 
 TEST(Bvh2Convert, BuildTreeOfTheLayoutKeepsTreeAndFigures) {

@@ -317,6 +317,34 @@ TEST(GpuReinsertion, LowersTheSahAndAgreesWithEmbree) {
     }
 }
 
+TEST(GpuReinsertion, LbvhAndPlocPassesEqualTheCpuReferenceBitForBit) {
+    // The device's passes (roles, search, settling, moves, refit) make the hierarchy that
+    // accel::parallel_reinsertion_reference makes from the builder's CPU reference: the same
+    // links and boxes, for several leaf sizes and pass counts.
+    BVHLAB_SKIP_WITHOUT_GPU();
+    for (const NamedMesh& m : builder_meshes()) {
+        for (auto kind : {accel::BuilderKind::kLbvh, accel::BuilderKind::kPloc}) {
+            for (int passes : {1, 3}) {
+                for (uint32_t max_leaf : {1u, 8u}) {
+                    SCOPED_TRACE(m.name + ", " + accel::builder_name(kind) + ", " + std::to_string(passes) +
+                                 " passes, max leaf " + std::to_string(max_leaf));
+                    accel::BuilderOptions o;
+                    o.reinsertion_passes = passes;
+                    o.config.max_leaf_size = max_leaf;
+                    const GpuBuild g = build_on_gpu(m.mesh, kind, o, true);
+                    accel::RawHierarchy cpu = kind == accel::BuilderKind::kLbvh
+                                                  ? accel::lbvh_reference(m.mesh, o.morton_bits)
+                                                  : accel::ploc_reference(m.mesh, o.morton_bits, o.ploc_radius);
+                    const accel::RawHierarchy built = cpu;
+                    EXPECT_EQ(accel::parallel_reinsertion_reference(cpu, o.config, passes), !g.reinsertion_undone);
+                    expect_same_hierarchy(g.raw, cpu);
+                    if (m.mesh.triangle_count() >= 1000) EXPECT_NE(cpu.left, built.left) << "nothing moved";
+                }
+            }
+        }
+    }
+}
+
 TEST(GpuReinsertion, PassesThatDeepenTheTreeToMaxDepthAreUndone) {
     // With max_depth one level above the LBVH's own tree, passes that deepen it are undone: the
     // tree is the LBVH's, node for node.

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "accel/core/morton.h"
+#include "accel/core/reinsertion_search.h"
 #include "traversal/cuda_check.h"
 
 namespace bvhlab::trav {
@@ -555,12 +556,8 @@ __global__ void __launch_bounds__(kBlock)
 // same nodes' links are resolved by priority (the larger gain wins), the winners move at once,
 // and boxes and leaf choices are fitted again bottom-up from the tree's leaves.
 
-constexpr int kReinsertStack = 48;
-/// The search's reach: ancestors up to this many levels above the node's parent, and this many
-/// nodes visited in all (experiments/NOTES.md: against an unbounded search, the same trace speed
-/// within the noise and 10% less time on furball; 8 levels lose 2-3% of it).
-constexpr uint32_t kReinsertLevels = 16;
-constexpr int kReinsertSteps = 64;
+using accel::SearchNode;
+static_assert(accel::kReinsertNone == kInvalid, "one word for no node");
 
 /// A node's part in a pass.
 enum Role : uint8_t {
@@ -580,20 +577,6 @@ __device__ bool inside_leaf(uint32_t x, uint32_t max_leaf, const uint32_t* paren
     }
     return false;
 }
-
-/// What the search reads of a node, in one 32-byte sector: its box and children (kInvalid for a
-/// leaf of the tree).
-struct alignas(32) SearchNode {
-    float lo_x, lo_y, lo_z;
-    uint32_t left;
-    float hi_x, hi_y, hi_z;
-    uint32_t right;
-
-    __device__ AABB box() const { return {{lo_x, lo_y, lo_z}, {hi_x, hi_y, hi_z}}; }
-    __device__ bool leaf() const { return left == kInvalid; }
-    __device__ uint2 children() const { return make_uint2(left, right); }
-};
-static_assert(sizeof(SearchNode) == 32, "one sector per node");
 
 __device__ SearchNode load_search_node(const SearchNode* n) {
     const uint4 a = __ldg(reinterpret_cast<const uint4*>(n)), b = __ldg(reinterpret_cast<const uint4*>(n) + 1);
@@ -640,100 +623,23 @@ __device__ void for_each_listed(const uint32_t* __restrict__ list, const uint32_
     for (uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < m; k += gridDim.x * blockDim.x) f(list[k]);
 }
 
-/// The best place for node `node`: `to` (kInvalid: none saves area), the area saved and `top`,
-/// the lowest common ancestor of the node and X. Cutting the node out frees its parent p (its
-/// area saved) and shrinks p's ancestors below `top`; putting it beside X adds A(X u node) and
-/// grows X's ancestors below `top`. X runs over the subtree of the sibling of each node on the
-/// path to the root (depth-first branch and bound: a subtree whose growth already costs what the
-/// best saves is skipped; leaves are not entered), and over the ancestors themselves; p and the
-/// root are not candidates.
+/// The best move of node `node` (accel::reinsertion_search) to gain, to and top; none for the
+/// root, its children and the nodes inside leaves.
 __device__ void reinsert_search_node(uint32_t node, const uint8_t* __restrict__ role,
                                      const uint32_t* __restrict__ parent, const SearchNode* __restrict__ search,
                                      float* __restrict__ gain, uint32_t* __restrict__ to, uint32_t* __restrict__ top) {
-    float best = 0.0f;
-    uint32_t best_x = kInvalid, best_top = kInvalid;
+    accel::ReinsertMove best;
     const Role r = Role(role[node]);
     const uint32_t p = parent[node];
     // The root and its children stay (kFixed), and so do leaves among them (p or its parent is
     // the root).
     if ((r == kInterior || r == kLeaf) && p != kInvalid && parent[p] != kInvalid) {
-        const AABB nb = load_search_node(search + node).box();
-        const float an = nb.half_area();
-        const SearchNode pn = load_search_node(search + p);
-        float budget = pn.box().half_area();  // what the move saves before X's cost
-        const uint32_t s = other_child(pn.children(), node);
-        AABB shrunk = load_search_node(search + s).box();  // the current ancestor without the node
-        float stack_budget[kReinsertStack];
-        uint32_t stack_node[kReinsertStack];
-        int steps = kReinsertSteps;  // shared by every subtree of the search
-        // One loop over both the subtrees' nodes and the levels up (not a loop over the levels
-        // with one over each subtree inside): a lane whose subtree is done goes on to the next
-        // level while the others are still in theirs, so the warp's lanes stay busy.
-        int sp = 0;
-        stack_budget[sp] = budget;
-        stack_node[sp++] = s;
-        uint32_t under = p;  // the common ancestor of the node and the subtree being explored
-        uint32_t below = p, level = 0;
-        bool up_pending = false;  // `under` is an ancestor whose own candidacy comes after its subtree
-        SearchNode un{};
-        uint32_t other = kInvalid;
-        for (;;) {
-            if (sp && steps > 0) {
-                --sp;
-                --steps;
-                const float b = stack_budget[sp];
-                const uint32_t x = stack_node[sp];
-                if (b - an <= best) continue;
-                const SearchNode xn = load_search_node(search + x);
-                const AABB xb = xn.box();
-                const float r = b - merge(xb, nb).half_area();
-                if (r > best) {
-                    best = r;
-                    best_x = x;
-                    best_top = under;
-                }
-                if (xn.leaf()) continue;                   // a leaf's triangles stay together
-                const float below_x = r + xb.half_area();  // X's own growth is paid by its children
-                if (below_x - an <= best || sp + 2 > kReinsertStack) continue;
-                const uint2 c = xn.children();
-                stack_budget[sp] = below_x;
-                stack_node[sp++] = c.y;
-                stack_budget[sp] = below_x;
-                stack_node[sp++] = c.x;
-                continue;
-            }
-            if (up_pending) {  // `under` keeps its box below here: the node stays below it
-                const uint32_t up = under;
-                shrunk = merge(shrunk, load_search_node(search + other).box());
-                const float up_area = un.box().half_area();
-                budget += up_area - shrunk.half_area();  // `up` shrinks from here on
-                if (parent[up] != kInvalid) {            // X = up: a new node over it has its old box
-                    const float r = budget - up_area;
-                    if (r > best) {
-                        best = r;
-                        best_x = up;
-                        best_top = up;
-                    }
-                }
-                below = up;
-                ++level;
-                up_pending = false;
-            }
-            if (level >= kReinsertLevels) break;
-            const uint32_t up = parent[below];
-            if (up == kInvalid) break;
-            un = load_search_node(search + up);
-            other = other_child(un.children(), below);
-            sp = 0;
-            stack_budget[sp] = budget;
-            stack_node[sp++] = other;
-            under = up;
-            up_pending = true;
-        }
+        best = accel::reinsertion_search(
+            node, p, [&](uint32_t x) { return load_search_node(search + x); }, [&](uint32_t x) { return parent[x]; });
     }
-    gain[node] = best;
-    to[node] = best_x;
-    top[node] = best_top;
+    gain[node] = best.gain;
+    to[node] = best.to;
+    top[node] = best.top;
 }
 
 __global__ void reinsert_search(const uint32_t* __restrict__ list, const uint32_t* __restrict__ count,
