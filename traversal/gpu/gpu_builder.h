@@ -67,8 +67,9 @@ struct GpuBuild {
 
 /// Builds `mesh` (at least one triangle) with GPU builder `kind` and the options' leaf sizes,
 /// costs, Morton bits and (H-)PLOC search radius. `keep_raw` also downloads the hierarchy before
-/// the leaves are chosen (the LBVH's and PLOC's are comparable bit for bit with
-/// accel::lbvh_reference and accel::ploc_reference).
+/// the leaves are chosen, after any reinsertion passes (the LBVH's and PLOC's are comparable bit
+/// for bit with accel::lbvh_reference and accel::ploc_reference, passes with
+/// accel::parallel_reinsertion_reference).
 /// Throws bvhlab::Error without a GPU, for a CPU builder, for leaves larger than the BVH2
 /// layout's 16 triangles, or for a mesh past its 2^27 triangle references.
 GpuBuild build_on_gpu(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
