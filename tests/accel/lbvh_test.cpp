@@ -125,7 +125,11 @@ TEST(LbvhReference, HierarchyIsSoundForBothCodeLengths) {
         const scene::TriangleMesh mesh = scene::make_procedural(kind, 3000, 5);
         for (int bits : {30, 60}) {
             SCOPED_TRACE(bits);
-            expect_sound(lbvh_reference(mesh, bits), mesh);
+            const RawHierarchy h = lbvh_reference(mesh, bits);
+            expect_sound(h, mesh);
+            std::vector<uint64_t> distinct = h.keys;
+            distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+            EXPECT_GT(distinct.size(), mesh.triangle_count() / 2) << "the codes do not spread the triangles";
         }
     }
     // Many triangles with one centre: equal keys, split by index.
@@ -310,6 +314,22 @@ TEST(ParallelReinsertionReference, LowersTheSahOfSoundHierarchies) {
     RawHierarchy broken = two0;
     broken.right.clear();
     EXPECT_THROW(parallel_reinsertion_reference(broken, c, 1), Error);
+}
+
+TEST(ParallelReinsertionReference, ManyMovesAtOnceKeepTheHierarchySound) {
+    // Overlapping soups, whose passes move many nodes at once: after every pass each node is
+    // reached once from the root and every box is its children's union (a move applied wrongly,
+    // or a refit that missed a node, breaks one or the other).
+    const BuildConfig c;
+    for (uint64_t seed : {1, 2, 3}) {
+        const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kSoup, 20000, seed);
+        RawHierarchy h = lbvh_reference(mesh, 30);
+        for (int pass = 0; pass < 6; ++pass) {
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", pass " + std::to_string(pass));
+            ASSERT_TRUE(parallel_reinsertion_reference(h, c, 1));
+            expect_sound(h, mesh);
+        }
+    }
 }
 
 TEST(ParallelReinsertionReference, PassesThatReachMaxDepthAreUndone) {
