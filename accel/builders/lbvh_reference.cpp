@@ -262,6 +262,7 @@ bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, 
     std::vector<NodeFit> fit = fit_hierarchy(h, config);
     const NodeFit before = fit[h.root];
     const auto children = [&](uint32_t x) { return std::make_pair(left[x], right[x]); };
+    const auto sibling = [&](uint32_t x) { return left[parent[x]] == x ? right[parent[x]] : left[parent[x]]; };
     // Boxes and fits again below `root` from the nodes where enter(x) is false (and the leaves).
     const auto refit = [&](auto&& enter) {
         post_order(h.root, n, children, enter, [&](uint32_t x) {
@@ -270,7 +271,6 @@ bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, 
             fit[x] = node_fit(fit[left[x]], fit[right[x]], h.boxes[x].half_area(), config);
         });
     };
-    enum Role : uint8_t { kInsideLeaf, kFixed, kInterior, kLeaf };  // as the GPU's
     std::vector<uint8_t> role(total);
     std::vector<SearchNode> search(total);
     std::vector<ReinsertMove> move(total);
@@ -278,16 +278,11 @@ bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, 
     std::vector<uint8_t> moving(total);
     for (int pass = 0; pass < passes; ++pass) {
         for (uint32_t x = 0; x < total; ++x) {
-            const uint32_t p = parent[x];
-            bool inside = false;
-            for (uint32_t q = p; q != kReinsertNone && fit[q].count <= config.max_leaf_size; q = parent[q]) {
-                if (fit[q].leaf) {
-                    inside = true;
-                    break;
-                }
-            }
-            Role r = inside ? kInsideLeaf : fit[x].leaf ? kLeaf : kInterior;
-            if (r != kInsideLeaf && (p == kReinsertNone || parent[p] == kReinsertNone)) r = r == kLeaf ? kLeaf : kFixed;
+            const ReinsertRole r = reinsertion_role(
+                x, config.max_leaf_size, [&](uint32_t y) { return parent[y]; },
+                [&](uint32_t y) {
+                    return ReinsertMeta{fit[y].count, fit[y].leaf};
+                });
             role[x] = r;
             const AABB& b = h.boxes[x];
             const bool open = r != kLeaf && x >= n;
@@ -305,7 +300,7 @@ bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, 
         // The six nodes whose links a move changes, its priority (gain, then the lower node).
         const auto touched = [&](uint32_t x) {
             const uint32_t p = parent[x], to = move[x].to;
-            return std::array<uint32_t, 6>{x, p, left[p] == x ? right[p] : left[p], parent[p], to, parent[to]};
+            return std::array<uint32_t, 6>{x, p, sibling(x), parent[p], to, parent[to]};
         };
         const auto key = [&](uint32_t x) {
             uint32_t bits;
@@ -339,7 +334,7 @@ bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, 
             const uint32_t to = move[x].to;
             if (to == kReinsertNone) continue;
             const uint32_t p = parent[x], g = parent[p];
-            const uint32_t s = left[p] == x ? right[p] : left[p];
+            const uint32_t s = sibling(x);
             replace_child(g, p, s);
             parent[s] = g;
             const uint32_t q = parent[to];

@@ -19,6 +19,35 @@ constexpr uint32_t kReinsertLevels = 16;
 constexpr int kReinsertSteps = 64;
 constexpr int kReinsertStack = 48;  ///< deeper than any search goes (24 changes nothing measured)
 
+/// A node's part in a pass.
+enum ReinsertRole : uint8_t {
+    kInsideLeaf = 0,  ///< below a leaf: stays with it
+    kFixed = 1,       ///< the root and its children: stay
+    kInterior = 2,
+    kLeaf = 3,  ///< a leaf of the tree: the refit starts here
+};
+
+/// What the role needs of a node's leaf choice.
+struct ReinsertMeta {
+    uint32_t count;  ///< triangles below
+    bool leaf;       ///< its subtree becomes one leaf
+};
+
+/// Node x's role. A node lies inside a leaf when an ancestor chose to be one (only ancestors of
+/// at most max_leaf triangles can); leaves of the tree keep kLeaf even beside the root.
+/// parent_of(y) gives y's parent (kReinsertNone for the root), meta_of(y) its ReinsertMeta.
+template <typename ParentOf, typename MetaOf>
+BVHLAB_HD ReinsertRole reinsertion_role(uint32_t x, uint32_t max_leaf, ParentOf&& parent_of, MetaOf&& meta_of) {
+    const uint32_t p = parent_of(x);
+    for (uint32_t q = p; q != kReinsertNone; q = parent_of(q)) {
+        const ReinsertMeta m = meta_of(q);
+        if (m.count > max_leaf) break;
+        if (m.leaf) return kInsideLeaf;
+    }
+    if (meta_of(x).leaf) return kLeaf;
+    return p == kReinsertNone || parent_of(p) == kReinsertNone ? kFixed : kInterior;
+}
+
 /// What the search reads of a node, in one 32-byte sector: its box and children (kReinsertNone
 /// for a leaf of the tree, whose triangles stay together).
 struct alignas(32) SearchNode {

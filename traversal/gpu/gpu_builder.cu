@@ -559,24 +559,11 @@ __global__ void __launch_bounds__(kBlock)
 using accel::SearchNode;
 static_assert(accel::kReinsertNone == kInvalid, "one word for no node");
 
-/// A node's part in a pass.
-enum Role : uint8_t {
-    kInsideLeaf = 0,  // below a leaf: stays with it
-    kFixed = 1,       // the root and its children: stay
-    kInterior = 2,
-    kLeaf = 3,  // a leaf of the tree: the refit starts here
-};
-
-/// Whether node x lies inside a leaf (an ancestor chose to be one; only ancestors of at most
-/// max_leaf triangles can).
-__device__ bool inside_leaf(uint32_t x, uint32_t max_leaf, const uint32_t* parent, const NodeMeta* meta) {
-    for (uint32_t p = parent[x]; p != kInvalid; p = parent[p]) {
-        const NodeMeta pm = meta[p];
-        if (pm.count > max_leaf) return false;
-        if (pm.leaf()) return true;
-    }
-    return false;
-}
+using accel::kFixed;
+using accel::kInsideLeaf;
+using accel::kInterior;
+using accel::kLeaf;
+using Role = accel::ReinsertRole;
 
 __device__ SearchNode load_search_node(const SearchNode* n) {
     const uint4 a = __ldg(reinterpret_cast<const uint4*>(n)), b = __ldg(reinterpret_cast<const uint4*>(n) + 1);
@@ -591,15 +578,12 @@ __global__ void reinsert_roles(uint32_t total, uint32_t max_leaf, const uint32_t
                                SearchNode* __restrict__ search) {
     const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
     if (x >= total) return;
-    const uint32_t p = parent[x];
-    Role r;
-    if (inside_leaf(x, max_leaf, parent, meta))
-        r = kInsideLeaf;
-    else if (meta[x].leaf())
-        r = kLeaf;
-    else
-        r = kInterior;
-    if (r != kInsideLeaf && (p == kInvalid || parent[p] == kInvalid)) r = r == kLeaf ? kLeaf : kFixed;
+    const Role r = accel::reinsertion_role(
+        x, max_leaf, [&](uint32_t y) { return parent[y]; },
+        [&](uint32_t y) {
+            const NodeMeta m = meta[y];
+            return accel::ReinsertMeta{m.count, m.leaf()};
+        });
     role[x] = r;
     if (r == kInsideLeaf) return;
     const AABB b = boxes[x];
