@@ -180,8 +180,9 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     f["layout_depth"] = b.structure.depth();
     f["build_device"] = spec.on_gpu() ? "gpu" : "cpu";
     if (spec.on_gpu()) {
-        f["morton_bits"] = spec.options.morton_bits;
+        if (accel::uses_morton(spec.kind())) f["morton_bits"] = spec.options.morton_bits;
         if (accel::uses_radius(spec.kind())) f["radius"] = spec.options.ploc_radius;
+        if (spec.kind() == accel::BuilderKind::kGpuBinned) f["bins"] = 32;
     } else if (builder != "sweep") {
         f["bins"] = spec.options.num_bins;
     }
@@ -264,7 +265,7 @@ void StructureSpec::check() const {
     if (build_device != "auto" && build_device != "cpu" && build_device != "gpu")
         throw Error("build_device '" + build_device + "' is not one of auto, cpu, gpu");
     if (build_device == "gpu" && !on_gpu())
-        throw Error("build_device gpu applies to the GPU builders (lbvh, ploc, hploc), not " + builder);
+        throw Error("build_device gpu applies to the GPU builders (lbvh, ploc, hploc, gpu-binned), not " + builder);
     if (build_device == "cpu" && on_gpu()) throw Error("builder '" + builder + "' runs on the GPU only");
 }
 
@@ -368,7 +369,7 @@ AccelStructure build_structure(const scene::InstancedScene& placed, const Struct
     f["bytes_per_world_triangle"] = t.world_triangles ? double(b.structure.bytes()) / double(t.world_triangles) : 0.0;
     f["build_ms"] = b.result.build_ms;
     f["build_device"] = spec.on_gpu() ? "gpu" : "cpu";
-    if (spec.on_gpu())
+    if (spec.on_gpu() && accel::uses_morton(spec.kind()))
         f["morton_bits"] = spec.options.morton_bits;
     else if (spec.builder != "sweep")
         f["bins"] = spec.options.num_bins;

@@ -30,7 +30,8 @@ namespace bvhlab::trav {
 
 /// What to build. The defaults are the CLI's: a binned SAH BVH in the BVH2 layout.
 struct StructureSpec {
-    std::string builder = "binned";   ///< binned (also "bvh"), sweep, sbvh, kdtree; lbvh, ploc or hploc on the GPU
+    std::string builder =
+        "binned";  ///< binned (also "bvh"), sweep, sbvh, kdtree; lbvh, ploc, hploc or gpu-binned on the GPU
     std::string layout = "bvh2";      ///< a BVH's traversal layout: bvh2 or cwbvh (8-wide, compressed)
     accel::BuilderOptions options;    ///< the BVH builders' options (bins, leaf sizes, SBVH, reinsertion)
     accel::KdTreeBuilder::Config kd;  ///< the kd-tree builder's constants
@@ -44,7 +45,7 @@ struct StructureSpec {
 
     bool is_kdtree() const { return builder == "kdtree"; }
     bool is_cwbvh() const { return !is_kdtree() && layout == "cwbvh"; }
-    /// Whether the builder runs on the GPU (lbvh, ploc, hploc).
+    /// Whether the builder runs on the GPU (lbvh, ploc, hploc, gpu-binned).
     bool on_gpu() const { return !is_kdtree() && accel::runs_on_gpu(kind()); }
     /// The BVH builder (throws bvhlab::Error for kdtree or an unknown name).
     accel::BuilderKind kind() const;

@@ -37,7 +37,8 @@ BuilderKind parse_builder_kind(const std::string& name) {
     if (name == "lbvh") return BuilderKind::kLbvh;
     if (name == "ploc") return BuilderKind::kPloc;
     if (name == "hploc") return BuilderKind::kHploc;
-    throw Error("unknown builder '" + name + "' (expected binned, sweep, sbvh, lbvh, ploc or hploc)");
+    if (name == "gpu-binned") return BuilderKind::kGpuBinned;
+    throw Error("unknown builder '" + name + "' (expected binned, sweep, sbvh, lbvh, ploc, hploc or gpu-binned)");
 }
 
 const char* builder_name(BuilderKind kind) {
@@ -54,6 +55,8 @@ const char* builder_name(BuilderKind kind) {
             return "ploc";
         case BuilderKind::kHploc:
             return "hploc";
+        case BuilderKind::kGpuBinned:
+            return "gpu-binned";
     }
     return "unknown";
 }

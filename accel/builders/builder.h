@@ -13,17 +13,23 @@ namespace bvhlab::accel {
 
 /// The CPU builders, and the GPU builders (traversal/gpu/gpu_builder.h; their codes skip 3, the
 /// kd-tree's in structure files).
-enum class BuilderKind { kBinned = 0, kSweep = 1, kSbvh = 2, kLbvh = 4, kPloc = 5, kHploc = 6 };
+enum class BuilderKind { kBinned = 0, kSweep = 1, kSbvh = 2, kLbvh = 4, kPloc = 5, kHploc = 6, kGpuBinned = 7 };
 
-/// Whether `kind` runs on the GPU (lbvh, ploc, hploc).
+/// Whether `kind` runs on the GPU (lbvh, ploc, hploc, gpu-binned).
 inline bool runs_on_gpu(BuilderKind kind) {
+    return kind == BuilderKind::kLbvh || kind == BuilderKind::kPloc || kind == BuilderKind::kHploc ||
+           kind == BuilderKind::kGpuBinned;
+}
+
+/// Whether `kind` orders the triangles by Morton codes and so takes their bits (lbvh, ploc, hploc).
+inline bool uses_morton(BuilderKind kind) {
     return kind == BuilderKind::kLbvh || kind == BuilderKind::kPloc || kind == BuilderKind::kHploc;
 }
 
 /// Whether `kind` clusters by PLOC's rule and so takes a search radius (ploc, hploc).
 inline bool uses_radius(BuilderKind kind) { return kind == BuilderKind::kPloc || kind == BuilderKind::kHploc; }
 
-/// "binned", "sweep", "sbvh", "lbvh", "ploc" or "hploc"; throws bvhlab::Error otherwise.
+/// "binned", "sweep", "sbvh", "lbvh", "ploc", "hploc" or "gpu-binned"; throws bvhlab::Error otherwise.
 BuilderKind parse_builder_kind(const std::string& name);
 const char* builder_name(BuilderKind kind);
 

@@ -34,7 +34,7 @@ struct Header {
     uint64_t index_count;   // uint32 primitive indices that follow the nodes
     uint32_t spatial_bins;  // SBVH spatial bins
     uint32_t reinsertion;   // BVH files: reinsertion passes run after the build (was reserved, 0)
-    // The GPU builders (lbvh, ploc, hploc) have no bins: num_bins holds their Morton bits and
+    // The GPU builders (lbvh, ploc, hploc, gpu-binned) have no bin option: num_bins holds their Morton bits and
     // spatial_bins H-PLOC's search radius.
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
@@ -75,7 +75,8 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
       << " max_depth=" << o.config.max_depth << " Ct=" << o.config.traversal_cost
       << " Ci=" << o.config.intersection_cost;
     if (runs_on_gpu(kind)) {
-        s << " morton=" << o.morton_bits;
+        if (uses_morton(kind)) s << " morton=" << o.morton_bits;
+        if (kind == BuilderKind::kGpuBinned) s << " bins=32";
         if (uses_radius(kind)) s << " radius=" << o.ploc_radius;
         if (const int r = reinsertion_passes(kind, o); r > 0) s << " reinsert=" << r;  // older records have none
         return s.str();
@@ -137,7 +138,7 @@ TreeFile read_tree_file(const std::string& path) {
     const uint32_t b = h.builder;
     if (b != uint32_t(BuilderKind::kBinned) && b != uint32_t(BuilderKind::kSweep) &&
         b != uint32_t(BuilderKind::kSbvh) && b != uint32_t(BuilderKind::kLbvh) && b != uint32_t(BuilderKind::kPloc) &&
-        b != uint32_t(BuilderKind::kHploc) && b != kKdTreeCode)
+        b != uint32_t(BuilderKind::kHploc) && b != uint32_t(BuilderKind::kGpuBinned) && b != kKdTreeCode)
         throw Error("structure file '" + path + "' names an unknown builder (" + std::to_string(h.builder) + ")");
     const bool kd = h.builder == kKdTreeCode;
     const uint64_t node_bytes = kd ? sizeof(KdNode) : sizeof(BuildNode);

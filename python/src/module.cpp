@@ -404,7 +404,8 @@ PYBIND11_MODULE(_bvhlab, m) {
             return st;
         },
         py::arg("scene"), py::arg("builder") = "binned", py::arg("layout") = "bvh2",
-        "Builds a structure: builder binned|sweep|sbvh|kdtree on the CPU or lbvh|ploc|hploc on the GPU, layout "
+        "Builds a structure: builder binned|sweep|sbvh|kdtree on the CPU or lbvh|ploc|hploc|gpu-binned on the GPU, "
+        "layout "
         "bvh2|cwbvh, options as keywords "
         "(bins, max_leaf, min_leaf, alpha, budget, spatial_bins, reinsertion_passes, collapse, cw_tris, kd_stack, "
         "build_device, morton_bits, radius, "

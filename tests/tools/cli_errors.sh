@@ -220,11 +220,11 @@ expect_error bad-reinsert "reinsert" build "$data/cornell_box.obj" --builder sbv
 cb=$data/cornell_box.obj
 expect_error gpu-builder-on-cpu "--build-device cpu does not apply: builder hploc runs on the GPU" build "$cb" \
     --builder hploc --build-device cpu
-expect_error cpu-builder-on-gpu "--build-device gpu applies to the GPU builders [(]lbvh, ploc, hploc[)], not binned" build "$cb" \
+expect_error cpu-builder-on-gpu "--build-device gpu applies to the GPU builders [(]lbvh, ploc, hploc, gpu-binned[)], not binned" build "$cb" \
     --build-device gpu
 expect_error kdtree-on-gpu "--build-device gpu applies to the GPU builders" build "$cb" --structure kdtree \
     --build-device gpu
-expect_error morton-cpu-builder "--morton-bits applies to the GPU builders [(]lbvh, ploc, hploc[)], not sbvh" build "$cb" \
+expect_error morton-cpu-builder "--morton-bits applies to --builder lbvh, ploc or hploc, not sbvh" build "$cb" \
     --builder sbvh --morton-bits 60
 expect_error radius-lbvh "--radius applies to --builder ploc or hploc, not lbvh" build "$cb" --builder lbvh --radius 4
 expect_error bins-gpu "--bins does not apply to the GPU builders" build "$cb" --builder hploc --bins 8

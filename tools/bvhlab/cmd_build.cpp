@@ -126,7 +126,8 @@ void register_build(CLI::App& app, Globals& g) {
         if (runs->count() &&
             (!o->build.structure_file().empty() || o->build.is_kdtree() || !accel::runs_on_gpu(o->build.kind())))
             throw Error(
-                "--runs applies to a GPU builder (--builder lbvh, ploc or hploc): it times the build of one mesh, or "
+                "--runs applies to a GPU builder (--builder lbvh, ploc, hploc or gpu-binned): it times the build of "
+                "one mesh, or "
                 "the TLAS rebuild of an instanced scene");
         if (runs->count() && s.placed && o->build.layout != "bvh2")
             throw Error(

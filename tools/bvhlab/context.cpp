@@ -354,19 +354,21 @@ Scene load_scene(const std::string& spec, const Globals& g) {
 void BuildOptions::add_to(CLI::App& app) {
     builder_flag = app.add_option("--builder", builder,
                                   "BVH builder: binned (binned SAH), sweep (full-sweep SAH) or sbvh (spatial splits) "
-                                  "on the CPU; lbvh (Karras 2012), ploc (Meister & Bittner 2018) or hploc (H-PLOC, "
-                                  "Benthin et al. 2024) on the GPU")
-                       ->check(CLI::IsMember({"binned", "sweep", "sbvh", "lbvh", "ploc", "hploc"}))
+                                  "on the CPU; lbvh (Karras 2012), ploc (Meister & Bittner 2018), hploc (H-PLOC, "
+                                  "Benthin et al. 2024) or gpu-binned (binned SAH, top down) on the GPU")
+                       ->check(CLI::IsMember({"binned", "sweep", "sbvh", "lbvh", "ploc", "hploc", "gpu-binned"}))
                        ->capture_default_str();
     build_device_flag =
-        app.add_option("--build-device", build_device,
-                       "where the builder runs: cpu (binned, sweep, sbvh), gpu (lbvh, ploc, hploc), or auto "
-                       "(the builder's own)")
+        app.add_option(
+               "--build-device", build_device,
+               "where the builder runs: cpu (binned, sweep, sbvh), gpu (lbvh, ploc, hploc, gpu-binned), or auto "
+               "(the builder's own)")
             ->check(CLI::IsMember({"auto", "cpu", "gpu"}))
             ->capture_default_str();
     auto* st = structure_flag = app.add_option(
         "--structure", structure,
-        "what to build: binned (or bvh), sweep, sbvh, lbvh, ploc, hploc or kdtree; or a structure file from `bvhlab "
+        "what to build: binned (or bvh), sweep, sbvh, lbvh, ploc, hploc, gpu-binned or kdtree; or a structure file "
+        "from `bvhlab "
         "build --out` to load instead of building (verify also takes all: every structure and its tracers). "
         "--builder NAME is the same for the BVH builders");
     st->excludes(builder_flag);
@@ -403,7 +405,7 @@ void BuildOptions::add_to(CLI::App& app) {
                "every pass run); -1 = the builder's default (3 for sbvh, 0 for the others)")
             ->check(CLI::Range(-1, 16))
             ->capture_default_str(),
-        app.add_option("--morton-bits", opts.morton_bits, "GPU builders: bits of the Morton codes (30 or 60)")
+        app.add_option("--morton-bits", opts.morton_bits, "lbvh, ploc, hploc: bits of the Morton codes (30 or 60)")
             ->check(CLI::IsMember({30, 60}))
             ->capture_default_str(),
         app.add_option("--radius", opts.ploc_radius,
@@ -415,7 +417,7 @@ void BuildOptions::add_to(CLI::App& app) {
     st->each([this](const std::string& v) {
         if (v == "bvh" || v == "binned")
             builder = "binned";
-        else if (v == "sweep" || v == "sbvh" || v == "lbvh" || v == "ploc" || v == "hploc")
+        else if (v == "sweep" || v == "sbvh" || v == "lbvh" || v == "ploc" || v == "hploc" || v == "gpu-binned")
             builder = v;
     });
     layout_flag =
@@ -458,7 +460,7 @@ void BuildOptions::add_to(CLI::App& app) {
 std::string BuildOptions::structure_file() const {
     if (structure.empty() || structure == "bvh" || structure == "binned" || structure == "sweep" ||
         structure == "sbvh" || structure == "lbvh" || structure == "ploc" || structure == "hploc" ||
-        structure == "kdtree" || structure == "all")
+        structure == "gpu-binned" || structure == "kdtree" || structure == "all")
         return {};
     return structure;
 }
@@ -483,11 +485,12 @@ void BuildOptions::check_applicable() const {
     if (!structure_file().empty()) {
         std::error_code ec;
         if (!fs::exists(structure_file(), ec))
-            throw Error("--structure '" + structure_file() +
-                        "' is neither a structure (binned, sweep, sbvh, lbvh, ploc, hploc, kdtree) nor an existing "
-                        "file" +
-                        did_you_mean(structure_file(),
-                                     {"binned", "bvh", "sweep", "sbvh", "lbvh", "ploc", "hploc", "kdtree", "all"}));
+            throw Error(
+                "--structure '" + structure_file() +
+                "' is neither a structure (binned, sweep, sbvh, lbvh, ploc, hploc, gpu-binned, kdtree) nor an existing "
+                "file" +
+                did_you_mean(structure_file(), {"binned", "bvh", "sweep", "sbvh", "lbvh", "ploc", "hploc", "gpu-binned",
+                                                "kdtree", "all"}));
         if (build_device_flag->count())
             throw Error("--build-device applies when a structure is built, not to structure file '" + structure_file() +
                         "'");
@@ -501,7 +504,7 @@ void BuildOptions::check_applicable() const {
         for (const CLI::Option* f : config_flags) refuse(f, "applies to BVH builders, not --structure kdtree");
         refuse(layout_flag, "applies to BVHs; a kd-tree has its own layout");
         if (build_device == "gpu")
-            throw Error("--build-device gpu applies to the GPU builders (lbvh, ploc, hploc), not kdtree");
+            throw Error("--build-device gpu applies to the GPU builders (lbvh, ploc, hploc, gpu-binned), not kdtree");
         return;
     }
     for (const CLI::Option* f : kd_flags) refuse(f, "applies to --structure kdtree, not a BVH");
@@ -516,14 +519,16 @@ void BuildOptions::check_applicable() const {
         refuse(config_flags[0], "does not apply to the sweep builder (it has no bins)");
     const bool gpu = accel::runs_on_gpu(k);
     if (gpu) {
-        refuse(config_flags[0], "does not apply to the GPU builders (they have no bins)");
+        refuse(config_flags[0],
+               "does not apply to the GPU builders (gpu-binned's are 32 a side, the others have none)");
         if (build_device == "cpu")
             throw Error("--build-device cpu does not apply: builder " + builder + " runs on the GPU");
     } else {
-        refuse(config_flags[7], "applies to the GPU builders (lbvh, ploc, hploc), not " + builder);
         if (build_device == "gpu")
-            throw Error("--build-device gpu applies to the GPU builders (lbvh, ploc, hploc), not " + builder);
+            throw Error("--build-device gpu applies to the GPU builders (lbvh, ploc, hploc, gpu-binned), not " +
+                        builder);
     }
+    if (!accel::uses_morton(k)) refuse(config_flags[7], "applies to --builder lbvh, ploc or hploc, not " + builder);
     if (!accel::uses_radius(k)) refuse(config_flags[8], "applies to --builder ploc or hploc, not " + builder);
 }
 

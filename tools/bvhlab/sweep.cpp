@@ -54,7 +54,7 @@ bool needs_gpu(const std::vector<std::string>& args) {
         const std::string& a = args[i];
         const std::string& v = args[i + 1];
         if ((a == "--device" || a == "--build-device") && v == "gpu") return true;
-        if (a == "--builder" && (v == "lbvh" || v == "ploc" || v == "hploc")) return true;
+        if (a == "--builder" && (v == "lbvh" || v == "ploc" || v == "hploc" || v == "gpu-binned")) return true;
     }
     return false;
 }

@@ -777,6 +777,554 @@ __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, cons
     tris[k] = w;
 }
 
+// --- Binned SAH, top down (Wald 2007), split as BinnedSahBuilder splits: 32 centroid bins per
+// axis, the same bin mapping, sweep and ties, and an exact sweep over sorted centroids at <= 16
+// triangles (its sweep_threshold). Nodes split down to single triangles; the leaves are then
+// chosen bottom-up by SAH, like the other GPU builders'. Interior node n + m - 1 splits its range
+// of the order at m (a range's split is unique), so a subtree is a range of final_ids, as the
+// LBVH's are of the sorted keys.
+// Large tasks (more than kSahWarpTask triangles) are split level by level, every kernel over all
+// of a level's tasks: their triangles binned in chunks (a block each, bins in shared memory, then
+// added to the task's bins), one warp per task sweeps, and the chunks partition stably (a count,
+// CUB's scan, a scatter) into the other order buffer. The host reads each level's task and chunk
+// counts. Then one warp per small task builds its whole subtree in shared memory.
+
+constexpr int kSahBins = 32;  ///< a warp sweeps one axis, a lane per bin
+static_assert(kSahBins == int(kWarp), "one lane per bin");
+constexpr uint32_t kSahWarpTask = 512;                  ///< tasks of at most this many: one warp
+constexpr uint32_t kSahPerThread = 8;                   ///< a large task's triangles per thread
+constexpr uint32_t kSahChunk = kSahPerThread * kBlock;  ///< and per block
+constexpr uint32_t kSahSweep = 16;                      ///< exact sweep at or below (BinnedSahBuilder's)
+constexpr int kSahWarps = 4;                            ///< warps per block of the small tasks
+constexpr int kSahStack = 12;                           ///< > log2(kSahWarpTask): the smaller child first
+
+struct SahTask {
+    uint32_t b, e;  ///< positions in the order buffers
+    uint32_t slot;  ///< parent << 1 | side, or kInvalid for the root
+    uint32_t buf;   ///< the order buffer holding the range
+    AABB cb;        ///< its centroids' bounds (added to by the parent's partition)
+};
+
+struct SahSplit {
+    int axis;  ///< -1: every centroid equal, split at the range's middle
+    int bin;   ///< bins <= bin go left
+    uint32_t m;
+    uint32_t pad;
+    AABB* child_cb[2];  ///< the children's tasks' centroid bounds; null for a one-triangle child
+};
+
+struct SahBin {
+    float lo[3], hi[3];
+    uint32_t count, pad;
+};
+
+struct SahOrder {
+    uint32_t* buf[2];
+};
+
+/// BinMapping on the device: the same float operations, so the same bins.
+struct SahMap {
+    Vec3 origin, scale;
+    __device__ explicit SahMap(const AABB& cb) : origin(cb.lo) {
+        const Vec3 e = cb.extent();
+        const float k = float(kSahBins) * (1.0f - 1e-6f);
+        scale = {e.x > 0.0f ? k / e.x : 0.0f, e.y > 0.0f ? k / e.y : 0.0f, e.z > 0.0f ? k / e.z : 0.0f};
+    }
+    __device__ int bin(float c, int axis) const {
+        return min(max(int((c - origin[axis]) * scale[axis]), 0), kSahBins - 1);
+    }
+};
+
+__device__ void set_link(uint2* children, uint32_t* root, uint32_t slot, uint32_t node) {
+    if (slot == kInvalid)
+        *root = node;
+    else
+        reinterpret_cast<uint32_t*>(children + (slot >> 1))[slot & 1] = node;
+}
+
+__device__ AABB shfl_box(const AABB& b, int src) {
+    return {{__shfl_sync(~0u, b.lo.x, src), __shfl_sync(~0u, b.lo.y, src), __shfl_sync(~0u, b.lo.z, src)},
+            {__shfl_sync(~0u, b.hi.x, src), __shfl_sync(~0u, b.hi.y, src), __shfl_sync(~0u, b.hi.z, src)}};
+}
+
+__device__ AABB shfl_up_box(const AABB& b, unsigned d) {
+    return {{__shfl_up_sync(~0u, b.lo.x, d), __shfl_up_sync(~0u, b.lo.y, d), __shfl_up_sync(~0u, b.lo.z, d)},
+            {__shfl_up_sync(~0u, b.hi.x, d), __shfl_up_sync(~0u, b.hi.y, d), __shfl_up_sync(~0u, b.hi.z, d)}};
+}
+
+__device__ AABB shfl_down_box(const AABB& b, unsigned d) {
+    return {{__shfl_down_sync(~0u, b.lo.x, d), __shfl_down_sync(~0u, b.lo.y, d), __shfl_down_sync(~0u, b.lo.z, d)},
+            {__shfl_down_sync(~0u, b.hi.x, d), __shfl_down_sync(~0u, b.hi.y, d), __shfl_down_sync(~0u, b.hi.z, d)}};
+}
+
+/// The box over every lane's box.
+__device__ AABB warp_union(AABB b) {
+    for (int d = 16; d > 0; d >>= 1) b = merge(b, shfl_box(b, int((threadIdx.x & 31) ^ d)));
+    return b;
+}
+
+/// The warp's lowest weight and, among equal ones, the lowest lane's (every lane gets both).
+__device__ void warp_argmin(float& w, int& at) {
+    for (int d = 16; d > 0; d >>= 1) {
+        const float ow = __shfl_xor_sync(~0u, w, d);
+        const int oa = __shfl_xor_sync(~0u, at, d);
+        if (ow < w || (ow == w && oa < at)) {
+            w = ow;
+            at = oa;
+        }
+    }
+}
+
+/// The best split of one axis's bins (lane i holds bin i), as sweep_bins finds it: between bins
+/// i and i + 1, both sides non-empty, by A_L N_L + A_R N_R, the lowest i on ties. Every lane gets
+/// the winner; `w` is +inf when nothing separates the triangles.
+struct WarpSplit {
+    float w;
+    int bin;
+    uint32_t left;
+};
+
+__device__ WarpSplit sweep_bins_warp(const AABB& box, uint32_t count) {
+    const unsigned lane = threadIdx.x & 31;
+    AABB l = box, r = box;
+    uint32_t nl = count, nr = count;
+    for (unsigned d = 1; d < 32; d <<= 1) {
+        const AABB ol = shfl_up_box(l, d), orr = shfl_down_box(r, d);
+        const uint32_t cl = __shfl_up_sync(~0u, nl, d), cr = __shfl_down_sync(~0u, nr, d);
+        if (lane >= d) {
+            l = merge(l, ol);
+            nl += cl;
+        }
+        if (lane + d < 32) {
+            r = merge(r, orr);
+            nr += cr;
+        }
+    }
+    const AABB right = shfl_down_box(r, 1);  // bins lane + 1 and up
+    const uint32_t n_right = __shfl_down_sync(~0u, nr, 1);
+    float w = __int_as_float(0x7f800000);
+    if (lane < 31 && nl > 0 && n_right > 0) w = l.half_area() * float(nl) + right.half_area() * float(n_right);
+    int at = int(lane);
+    warp_argmin(w, at);
+    return {w, at, __shfl_sync(~0u, nl, at)};
+}
+
+/// Triangle t's centroid, as the CPU builders compute it.
+__device__ Vec3 centroid_of(const AABB* tri_boxes, uint32_t t) { return tri_boxes[t].center(); }
+
+/// The root task (or, for a small mesh, the first small task), and every large task's bins empty.
+__global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
+                          uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
+                          uint32_t bin_count) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    for (uint32_t k = i; k < bin_count; k += gridDim.x * blockDim.x)
+        bins[k] = {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0, 0};
+    if (i != 0) return;
+    const SahTask root{0, n, kInvalid, 0, *bounds};
+    if (n > kSahWarpTask) {
+        large[0] = root;
+        first[0] = 0;
+        first[1] = (n + kSahChunk - 1) / kSahChunk;
+    } else {
+        small[0] = root;
+        words[1] = 1;
+    }
+}
+
+/// The task of chunk k: the last t with first[t] <= k (first[tasks] is the chunk count).
+__device__ uint32_t sah_task_of(const uint32_t* first, uint32_t tasks, uint32_t k) {
+    uint32_t lo = 0, hi = tasks;
+    while (hi - lo > 1) {
+        const uint32_t mid = (lo + hi) / 2;
+        (first[mid] <= k ? lo : hi) = mid;
+    }
+    return lo;
+}
+
+/// A block's chunk of a large task: its task and range.
+struct SahChunk {
+    uint32_t task, b, e;
+    __device__ SahChunk(const SahTask* tasks, const uint32_t* first, uint32_t count) {
+        task = sah_task_of(first, count, blockIdx.x);
+        const SahTask& t = tasks[task];
+        b = t.b + (blockIdx.x - first[task]) * kSahChunk;
+        e = min(b + kSahChunk, t.e);
+    }
+};
+
+/// Bins each chunk's triangles in shared memory, then adds them to its task's bins.
+__global__ void __launch_bounds__(kBlock)
+    sah_bin(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, SahOrder order,
+            const AABB* __restrict__ tri_boxes, SahBin* bins) {
+    __shared__ float lo[3 * kSahBins][3], hi[3 * kSahBins][3];
+    __shared__ uint32_t num[3 * kSahBins];
+    for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
+        for (int j = 0; j < 3; ++j) {
+            lo[k][j] = FLT_MAX;
+            hi[k][j] = -FLT_MAX;
+        }
+        num[k] = 0;
+    }
+    const SahChunk c(tasks, first, count);
+    const SahTask& t = tasks[c.task];
+    const SahMap map(t.cb);
+    const uint32_t* in = order.buf[t.buf];
+    __syncthreads();
+    for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) {
+        const AABB box = tri_boxes[in[i]];
+        const Vec3 ct = box.center();
+        for (int a = 0; a < 3; ++a) {
+            const int k = a * kSahBins + map.bin(ct[a], a);
+            atomic_min(&lo[k][0], box.lo.x);
+            atomic_min(&lo[k][1], box.lo.y);
+            atomic_min(&lo[k][2], box.lo.z);
+            atomic_max(&hi[k][0], box.hi.x);
+            atomic_max(&hi[k][1], box.hi.y);
+            atomic_max(&hi[k][2], box.hi.z);
+            atomicAdd(&num[k], 1u);
+        }
+    }
+    __syncthreads();
+    for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
+        if (!num[k]) continue;
+        SahBin* g = bins + size_t(c.task) * 3 * kSahBins + k;
+        for (int j = 0; j < 3; ++j) {
+            atomic_min(&g->lo[j], lo[k][j]);
+            atomic_max(&g->hi[j], hi[k][j]);
+        }
+        atomicAdd(&g->count, num[k]);
+    }
+}
+
+/// Appends a child task (two or more triangles) to `list`; returns its centroid bounds to add to.
+__device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e, uint32_t slot, uint32_t buf) {
+    const uint32_t k = atomicAdd(count, 1u);
+    list[k] = {b, e, slot, buf, AABB::empty()};
+    return &list[k].cb;
+}
+
+/// One warp per large task: the best split over its bins (the bins made empty again for the next
+/// level), the node linked to its parent, the children queued (large, small) or linked (leaves).
+__global__ void __launch_bounds__(kBlock)
+    sah_split(const SahTask* __restrict__ tasks, uint32_t count, SahBin* bins, SahSplit* __restrict__ splits,
+              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root) {
+    const uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
+    if (task >= count) return;  // whole warps
+    const SahTask t = tasks[task];
+    const SahMap map(t.cb);
+    float best = __int_as_float(0x7f800000);
+    int axis = -1, bin = -1;
+    uint32_t left = 0;
+    for (int a = 0; a < 3; ++a) {
+        SahBin* g = bins + (size_t(task) * 3 + a) * kSahBins + lane;
+        const SahBin sb = *g;
+        *g = {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0, 0};
+        if (!(map.scale[a] > 0.0f)) continue;
+        const WarpSplit s = sweep_bins_warp({{sb.lo[0], sb.lo[1], sb.lo[2]}, {sb.hi[0], sb.hi[1], sb.hi[2]}}, sb.count);
+        if (s.w < best) {
+            best = s.w;
+            axis = a;
+            bin = s.bin;
+            left = s.left;
+        }
+    }
+    if (lane != 0) return;
+    const uint32_t m = axis >= 0 ? t.b + left : t.b + (t.e - t.b) / 2;
+    const uint32_t id = n + m - 1;
+    set_link(children, root, t.slot, id);
+    SahSplit s{axis, bin, m, 0, {nullptr, nullptr}};
+    const uint32_t range[3] = {t.b, m, t.e};
+    for (int side = 0; side < 2; ++side) {
+        const uint32_t b = range[side], e = range[side + 1], slot = id << 1 | uint32_t(side);
+        if (e - b == 1)
+            set_link(children, root, slot, b);
+        else if (e - b > kSahWarpTask)
+            s.child_cb[side] = sah_push(next, words, b, e, slot, 1 - t.buf);
+        else
+            s.child_cb[side] = sah_push(small, words + 1, b, e, slot, 1 - t.buf);
+    }
+    splits[task] = s;
+}
+
+/// Whether the triangle at position i goes left.
+__device__ bool sah_goes_left(const SahSplit& s, const SahMap& map, const AABB* tri_boxes, uint32_t id, uint32_t i) {
+    if (s.axis < 0) return i < s.m;
+    return map.bin(centroid_of(tri_boxes, id)[s.axis], s.axis) <= s.bin;
+}
+
+/// Each chunk's count of triangles going left.
+__global__ void __launch_bounds__(kBlock)
+    sah_count(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first,
+              const SahSplit* __restrict__ splits, SahOrder order, const AABB* __restrict__ tri_boxes,
+              uint32_t* __restrict__ lefts) {
+    const SahChunk c(tasks, first, count);
+    const SahTask& t = tasks[c.task];
+    const SahSplit s = splits[c.task];
+    const SahMap map(t.cb);
+    const uint32_t* in = order.buf[t.buf];
+    uint32_t k = 0;
+    for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) k += sah_goes_left(s, map, tri_boxes, in[i], i);
+    using Reduce = cub::BlockReduce<uint32_t, kBlock>;
+    __shared__ typename Reduce::TempStorage scratch;
+    k = Reduce(scratch).Sum(k);
+    if (threadIdx.x == 0) lefts[blockIdx.x] = k;
+}
+
+/// The stable partition of each chunk into the other order buffer (left side from the task's
+/// first position, right side from m; `lefts` scanned over all chunks), the children's centroid
+/// bounds added to, and one-triangle children's triangles written to final_ids.
+__global__ void __launch_bounds__(kBlock)
+    sah_scatter(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first,
+                const SahSplit* __restrict__ splits, SahOrder order, const AABB* __restrict__ tri_boxes,
+                const uint32_t* __restrict__ lefts_before, uint32_t* __restrict__ final_ids) {
+    const SahChunk c(tasks, first, count);
+    const SahTask& t = tasks[c.task];
+    const SahSplit s = splits[c.task];
+    const SahMap map(t.cb);
+    const uint32_t* in = order.buf[t.buf];
+    uint32_t* out = order.buf[1 - t.buf];
+    const uint32_t i0 = c.b + threadIdx.x * kSahPerThread;
+    uint32_t ids[kSahPerThread];
+    Vec3 cs[kSahPerThread];
+    unsigned go_left = 0;
+    uint32_t k = 0;
+    for (uint32_t j = 0; j < kSahPerThread; ++j) {
+        const uint32_t i = i0 + j;
+        if (i >= c.e) break;
+        ids[j] = in[i];
+        cs[j] = centroid_of(tri_boxes, ids[j]);
+        const bool l = s.axis < 0 ? i < s.m : map.bin(cs[j][s.axis], s.axis) <= s.bin;
+        go_left |= unsigned(l) << j;
+        k += l;
+    }
+    using Scan = cub::BlockScan<uint32_t, kBlock>;
+    using Reduce = cub::BlockReduce<AABB, kBlock>;
+    __shared__ union {
+        typename Scan::TempStorage scan;
+        typename Reduce::TempStorage reduce[2];
+    } scratch;
+    uint32_t before;
+    Scan(scratch.scan).ExclusiveSum(k, before);
+    // Lefts before this thread's first triangle, within its task.
+    uint32_t l = lefts_before[blockIdx.x] - lefts_before[first[c.task]] + before;
+    AABB side[2] = {AABB::empty(), AABB::empty()};
+    for (uint32_t j = 0; j < kSahPerThread; ++j) {
+        const uint32_t i = i0 + j;
+        if (i >= c.e) break;
+        const bool is_left = (go_left >> j) & 1;
+        const uint32_t at = is_left ? t.b + l : s.m + (i - t.b - l);
+        l += is_left;
+        out[at] = ids[j];
+        if (!s.child_cb[is_left ? 0 : 1]) final_ids[at] = ids[j];
+        side[is_left ? 0 : 1].extend(cs[j]);
+    }
+    __syncthreads();  // the scan's storage is reused
+    for (int j = 0; j < 2; ++j) {
+        const AABB b = Reduce(scratch.reduce[j]).Reduce(side[j], BoxUnion{});
+        if (threadIdx.x == 0 && s.child_cb[j] && !b.is_empty()) {
+            AABB* cb = s.child_cb[j];
+            atomic_min(&cb->lo.x, b.lo.x);
+            atomic_min(&cb->lo.y, b.lo.y);
+            atomic_min(&cb->lo.z, b.lo.z);
+            atomic_max(&cb->hi.x, b.hi.x);
+            atomic_max(&cb->hi.y, b.hi.y);
+            atomic_max(&cb->hi.z, b.hi.z);
+        }
+    }
+}
+
+/// The next level's chunks: each large task's first chunk (first[count] = the chunk count, also
+/// in words[2]). One block.
+__global__ void __launch_bounds__(1024)
+    sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, uint32_t* __restrict__ first,
+               uint32_t* __restrict__ total) {
+    using Scan = cub::BlockScan<uint32_t, 1024>;
+    __shared__ typename Scan::TempStorage scratch;
+    const uint32_t count = words[0];
+    uint32_t base = 0;
+    for (uint32_t k0 = 0; k0 < count; k0 += 1024) {
+        const uint32_t k = k0 + threadIdx.x;
+        const uint32_t chunks = k < count ? (tasks[k].e - tasks[k].b + kSahChunk - 1) / kSahChunk : 0;
+        uint32_t before, sum;
+        Scan(scratch).ExclusiveSum(chunks, before, sum);
+        if (k < count) first[k] = base + before;
+        base += sum;
+        __syncthreads();
+    }
+    if (threadIdx.x == 0) {
+        first[count] = base;
+        *total = base;
+    }
+}
+
+/// One warp per small task: its whole subtree, the triangle ids in shared memory. Each node is
+/// split by an exact sweep (<= kSahSweep triangles) or by 32 bins per axis, then the smaller child
+/// goes on and the larger waits on a stack (so it stays short).
+__global__ void __launch_bounds__(kSahWarps* kWarp)
+    sah_small(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, SahOrder order,
+              const AABB* __restrict__ tri_boxes, uint32_t n, uint2* children, uint32_t* root,
+              uint32_t* __restrict__ final_ids) {
+    __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
+    __shared__ float lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];
+    __shared__ uint32_t num_of[kSahWarps][3 * kSahBins], perm_of[kSahWarps][kWarp];
+    const uint32_t w = threadIdx.x / kWarp, lane = threadIdx.x & 31;
+    uint32_t* ids = ids_of[w];
+    uint32_t* tmp = tmp_of[w];
+    float(*lo)[3] = lo_of[w];
+    float(*hi)[3] = hi_of[w];
+    uint32_t* num = num_of[w];
+    const uint32_t count = words[1];
+    const unsigned lt = (1u << lane) - 1;
+    for (uint32_t task = blockIdx.x * kSahWarps + w; task < count; task += gridDim.x * kSahWarps) {
+        const SahTask t = tasks[task];
+        const uint32_t* in = order.buf[t.buf];
+        for (uint32_t i = lane; i < t.e - t.b; i += kWarp) ids[i] = in[t.b + i];
+        __syncwarp();
+        uint3 stack[kSahStack];
+        int sp = 0;
+        uint32_t b = 0, e = t.e - t.b, slot = t.slot;
+        for (;;) {
+            const uint32_t size = e - b;
+            if (size == 1) {
+                if (lane == 0) {
+                    set_link(children, root, slot, t.b + b);
+                    final_ids[t.b + b] = ids[b];
+                }
+                if (sp == 0) break;
+                const uint3 top = stack[--sp];
+                b = top.x;
+                e = top.y;
+                slot = top.z;
+                continue;
+            }
+            uint32_t m;  // the left child's size
+            if (size <= kSahSweep) {
+                // Exact sweep: each lane holds one triangle; per axis, its rank by (centroid, id)
+                // places it, prefix and suffix boxes give every plane's weight.
+                const bool live = lane < size;
+                const uint32_t id = live ? ids[b + lane] : 0;
+                const AABB box = live ? tri_boxes[id] : AABB::empty();
+                const Vec3 ct = box.center();
+                const AABB cb = warp_union(live ? AABB::of_point(ct) : AABB::empty());
+                float best = __int_as_float(0x7f800000);
+                int axis = -1;
+                uint32_t rank = lane, best_rank = lane;
+                m = size / 2;
+                for (int a = 0; a < 3; ++a) {
+                    if (cb.extent()[a] <= 0.0f) continue;
+                    const float c = ct[a];
+                    rank = 0;
+                    for (uint32_t j = 0; j < size; ++j) {
+                        const float cj = __shfl_sync(~0u, c, int(j));
+                        const uint32_t idj = __shfl_sync(~0u, id, int(j));
+                        rank += cj < c || (cj == c && idj < id);
+                    }
+                    if (live) perm_of[w][rank] = lane;
+                    __syncwarp();
+                    const int src = live ? int(perm_of[w][lane]) : int(lane);
+                    __syncwarp();
+                    const AABB sb = shfl_box(box, src);
+                    const float sc = __shfl_sync(~0u, c, src);
+                    AABB pre = live ? sb : AABB::empty(), suf = pre;
+                    for (unsigned d = 1; d < 32; d <<= 1) {
+                        const AABB o = shfl_up_box(pre, d), q = shfl_down_box(suf, d);
+                        if (lane >= d) pre = merge(pre, o);
+                        if (lane + d < 32) suf = merge(suf, q);
+                    }
+                    const AABB left = shfl_up_box(pre, 1);  // positions < lane
+                    const float prev_c = __shfl_up_sync(~0u, sc, 1);
+                    float wt = __int_as_float(0x7f800000);
+                    if (lane >= 1 && lane < size && prev_c != sc)
+                        wt = left.half_area() * float(lane) + suf.half_area() * float(size - lane);
+                    int at = int(lane);
+                    warp_argmin(wt, at);
+                    if (wt < best) {
+                        best = wt;
+                        axis = a;
+                        m = uint32_t(at);
+                        best_rank = rank;
+                    }
+                }
+                if (axis >= 0 && live) ids[b + best_rank] = id;  // every lane read its id above
+                __syncwarp();
+            } else {
+                // 32 bins per axis over the centroids' bounds, in shared memory.
+                AABB cb = AABB::empty();
+                for (uint32_t i = b + lane; i < e; i += kWarp) cb.extend(centroid_of(tri_boxes, ids[i]));
+                cb = warp_union(cb);
+                const SahMap map(cb);
+                for (uint32_t k = lane; k < 3 * kSahBins; k += kWarp) {
+                    for (int j = 0; j < 3; ++j) {
+                        lo[k][j] = FLT_MAX;
+                        hi[k][j] = -FLT_MAX;
+                    }
+                    num[k] = 0;
+                }
+                __syncwarp();
+                for (uint32_t i = b + lane; i < e; i += kWarp) {
+                    const AABB box = tri_boxes[ids[i]];
+                    const Vec3 ct = box.center();
+                    for (int a = 0; a < 3; ++a) {
+                        const int k = a * kSahBins + map.bin(ct[a], a);
+                        atomic_min(&lo[k][0], box.lo.x);
+                        atomic_min(&lo[k][1], box.lo.y);
+                        atomic_min(&lo[k][2], box.lo.z);
+                        atomic_max(&hi[k][0], box.hi.x);
+                        atomic_max(&hi[k][1], box.hi.y);
+                        atomic_max(&hi[k][2], box.hi.z);
+                        atomicAdd(&num[k], 1u);
+                    }
+                }
+                __syncwarp();
+                float best = __int_as_float(0x7f800000);
+                int axis = -1, bin = -1;
+                m = size / 2;
+                for (int a = 0; a < 3; ++a) {
+                    if (!(map.scale[a] > 0.0f)) continue;
+                    const int k = a * kSahBins + int(lane);
+                    const WarpSplit s =
+                        sweep_bins_warp({{lo[k][0], lo[k][1], lo[k][2]}, {hi[k][0], hi[k][1], hi[k][2]}}, num[k]);
+                    if (s.w < best) {
+                        best = s.w;
+                        axis = a;
+                        bin = s.bin;
+                        m = s.left;
+                    }
+                }
+                __syncwarp();
+                if (axis >= 0) {  // stable partition through tmp
+                    uint32_t nl = 0, nr = 0;
+                    for (uint32_t i0 = b; i0 < e; i0 += kWarp) {
+                        const uint32_t i = i0 + lane;
+                        const bool live = i < e;
+                        const uint32_t id = live ? ids[i] : 0;
+                        const bool l = live && map.bin(centroid_of(tri_boxes, id)[axis], axis) <= bin;
+                        const unsigned bl = __ballot_sync(~0u, l), br = __ballot_sync(~0u, live && !l);
+                        if (l) tmp[b + nl + __popc(bl & lt)] = id;
+                        if (live && !l) tmp[b + m + nr + __popc(br & lt)] = id;
+                        nl += __popc(bl);
+                        nr += __popc(br);
+                    }
+                    __syncwarp();
+                    for (uint32_t i = b + lane; i < e; i += kWarp) ids[i] = tmp[i];
+                    __syncwarp();
+                }
+            }
+            const uint32_t id = n + t.b + b + m - 1;
+            if (lane == 0) set_link(children, root, slot, id);
+            // The smaller child next, the larger on the stack.
+            const uint3 l{b, b + m, id << 1}, r{b + m, e, id << 1 | 1u};
+            const bool left_first = m <= size - m;
+            stack[sp++] = left_first ? r : l;
+            const uint3 go = left_first ? l : r;
+            b = go.x;
+            e = go.y;
+            slot = go.z;
+        }
+        __syncwarp();
+    }
+}
+
 struct Layout {
     Bvh2Node* nodes;
     WoopTriangle* tris;
@@ -920,6 +1468,11 @@ __global__ void refit_leaves(detail::RefitInput in) {
 
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
 
+__global__ void iota(uint32_t n, uint32_t* __restrict__ out) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i < n) out[i] = i;
+}
+
 class Events {
 public:
     explicit Events(int n) : e_(size_t(n)) {
@@ -960,6 +1513,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const uint32_t n = prims.n;
     const int bits = options.morton_bits;
     const bool lbvh = kind == accel::BuilderKind::kLbvh, ploc = kind == accel::BuilderKind::kPloc;
+    const bool sah = kind == accel::BuilderKind::kGpuBinned;
     const int passes = n >= 3 ? accel::reinsertion_passes(kind, options) : 0;
     const LeafRule rule{options.config.traversal_cost, options.config.intersection_cost, options.config.min_leaf_size,
                         options.config.max_leaf_size};
@@ -978,17 +1532,27 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // Everything the pipeline needs, before its first event.
     const size_t nodes = 2 * size_t(n) - 1, inner = std::max<size_t>(n - 1, 1);
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
-    DeviceBuffer<Key> keys(n), keys_alt(n);
+    DeviceBuffer<Key> keys(sah ? 0 : n), keys_alt(sah ? 0 : n);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
-    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || passes ? inner : 0), clusters(lbvh ? 0 : n);
+    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || sah || passes ? inner : 0), clusters(lbvh || sah ? 0 : n);
     DeviceBuffer<int32_t> parent_ids(kind == accel::BuilderKind::kHploc ? inner : 0);
     // PLOC's second cluster list, nearest neighbours, flags and their scan.
     DeviceBuffer<uint32_t> clusters_alt(ploc ? n : 0), nn(ploc ? n : 0);
     DeviceBuffer<unsigned long long> flags(ploc ? n : 0), flag_scan(ploc ? n : 0);
     DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, (unused), PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
+    // Binned SAH: two lists of a level's large tasks, their splits, bins and chunks (each chunk's
+    // lefts and their scan), the small tasks, the triangles' final order, and three counters:
+    // the next level's large tasks, the small tasks, the next level's chunks.
+    const size_t s_large = sah ? n / (kSahWarpTask + 1) + 1 : 0;
+    const size_t s_chunks = sah ? n / kSahChunk + s_large + 1 : 0;
+    DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
+    DeviceBuffer<SahSplit> s_splits(s_large);
+    DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
+    DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
+    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0);
     DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
     // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
     // per node, the hierarchy before the passes (restored if they are undone) and the root's
@@ -1006,9 +1570,15 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
-    BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
+    if (sah) {
+        size_t b = 0;
+        BVHLAB_CUDA_CHECK(
+            cub::DeviceScan::ExclusiveSum(nullptr, b, s_lefts.data(), s_lefts_scan.data(), int(s_chunks)));
+        scan_bytes = std::max(scan_bytes, b);
+    }
     if (passes) {
         BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(nullptr, select_bytes, thrust::counting_iterator<uint32_t>(0),
                                                 r_list.data(), r_count.data(), int(nodes), Movable{r_role.data()}));
@@ -1025,6 +1595,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
+    if (sah) detail::fill_device_bytes(s_words.data(), 0, s_words.bytes());
 
     // The boxes' kernel: a few blocks per SM, each primitive a grid apart (few atomics on the bounds).
     const unsigned box_grid = std::min(grid_for(n), unsigned(4 * gpu_sm_count()));
@@ -1036,14 +1607,20 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(3);
-    morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
-    BVHLAB_CHECK_LAUNCH();
+    if (!sah) {
+        morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
+        BVHLAB_CHECK_LAUNCH();
+    }
     ev.record(4);
-    BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
     ev.record(5);
     const Key* sorted_keys = dk.Current();
-    const uint32_t* sorted_ids = dv.Current();
-    if (!lbvh || n == 1) {  // the LBVH's climb makes its leaves
+    const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
+    if (sah && n == 1) {
+        iota<<<1, 1>>>(1, final_ids.data());
+        BVHLAB_CHECK_LAUNCH();
+    }
+    if ((!lbvh && !sah) || n == 1) {  // the LBVH's climb makes its leaves, binned SAH's come last
         make_leaves<<<grid_for(n), kBlock>>>(n, sorted_ids, tri_boxes.data(), boxes.data(), meta.data(),
                                              lbvh ? nullptr : clusters.data(), rule);
         BVHLAB_CHECK_LAUNCH();
@@ -1054,6 +1631,48 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         lbvh_climb<Key><<<grid_for(n), kBlock>>>(n, sorted_keys, sorted_ids, tri_boxes.data(), boxes.data(),
                                                  meta.data(), children.data(), parent.data(), visits.data(), root,
                                                  rule);
+        BVHLAB_CHECK_LAUNCH();
+    } else if (sah) {
+        iota<<<grid_for(n), kBlock>>>(n, ids.data());
+        const SahOrder order{{ids.data(), ids_alt.data()}};
+        const uint32_t bin_count = uint32_t(s_bins.size());
+        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
+            n, bounds.data(), s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
+        BVHLAB_CHECK_LAUNCH();
+        // Large tasks level by level; the host reads each level's task and chunk counts.
+        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = (n + kSahChunk - 1) / kSahChunk;
+        SahTask* level = s_tasks.data();
+        SahTask* next = s_tasks.data() + s_large;
+        while (tasks) {
+            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data());
+            set_word<<<1, 1>>>(s_words.data(), 0);
+            sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), n, children.data(),
+                root);
+            sah_count<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, tri_boxes.data(),
+                                          s_lefts.data());
+            BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
+                                                            s_lefts_scan.data(), int(chunks)));
+            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, tri_boxes.data(),
+                                            s_lefts_scan.data(), final_ids.data());
+            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
+            BVHLAB_CHECK_LAUNCH();
+            uint32_t w[3];  // large tasks, small tasks, chunks
+            detail::copy_to_host(w, s_words.data(), sizeof w);
+            tasks = w[0];
+            chunks = w[2];
+            std::swap(level, next);
+        }
+        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
+            s_small.data(), s_words.data(), order, tri_boxes.data(), n, children.data(), root, final_ids.data());
+        make_leaves<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), boxes.data(), meta.data(), nullptr,
+                                             rule);
+        parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
+        BVHLAB_CHECK_LAUNCH();
+        detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+        fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(), visits.data(),
+                                           rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
         // Rounds over the whole list until a block can finish it; the host reads each round's
@@ -1085,7 +1704,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                             rule);
         BVHLAB_CHECK_LAUNCH();
     }
-    if (!lbvh && n > 1) {  // PLOC and H-PLOC record no parents while they merge
+    if (!lbvh && !sah && n > 1) {  // PLOC and H-PLOC record no parents while they merge
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
     }
@@ -1154,7 +1773,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // The layout, flat: each node's place from a scan over every node's flag (no round trip).
     const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
     const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
-    const LayoutOrder order{uint32_t(nodes), !lbvh, lbvh && (!passes || g.reinsertion_undone), root};
+    const LayoutOrder order{uint32_t(nodes), !lbvh && !sah, (lbvh || sah) && (!passes || g.reinsertion_undone), root};
     {
         layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(),
                                                   layout_flags_.data());
@@ -1206,9 +1825,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     if (keep_raw) {
         accel::RawHierarchy& raw = g.raw;
         raw.root = w[0];
-        std::vector<Key> k;
-        download(k, sorted_keys, n);
-        raw.keys.assign(k.begin(), k.end());
+        if (!sah) {  // binned SAH sorts no keys
+            std::vector<Key> k;
+            download(k, sorted_keys, n);
+            raw.keys.assign(k.begin(), k.end());
+        }
         download(raw.sorted_ids, sorted_ids, n);
         std::vector<uint2> c;
         download(c, children.data(), nodes);
