@@ -1157,16 +1157,15 @@ __global__ void __launch_bounds__(1024)
     }
 }
 
-/// One warp per small task: its whole subtree, the triangle ids in shared memory. Each node is
-/// split by an exact sweep (<= kSahSweep triangles) or by 32 bins per axis, then the smaller child
-/// goes on and the larger waits on a stack (so it stays short).
+/// One warp per small task: its subtree down to tiny tasks (at most kSahSweep triangles, left to
+/// sah_tiny), the triangle ids in shared memory. Each node is split by 32 bins per axis, then the
+/// smaller child goes on and the larger waits on a stack (so it stays short).
 __global__ void __launch_bounds__(kSahWarps* kWarp)
-    sah_small(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, SahOrder order,
-              const AABB* __restrict__ tri_boxes, uint32_t n, uint2* children, uint32_t* root,
-              uint32_t* __restrict__ final_ids) {
+    sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
+              uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
     __shared__ float lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];
-    __shared__ uint32_t num_of[kSahWarps][3 * kSahBins], perm_of[kSahWarps][kWarp];
+    __shared__ uint32_t num_of[kSahWarps][3 * kSahBins];
     const uint32_t w = threadIdx.x / kWarp, lane = threadIdx.x & 31;
     uint32_t* ids = ids_of[w];
     uint32_t* tmp = tmp_of[w];
@@ -1185,10 +1184,13 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
         uint32_t b = 0, e = t.e - t.b, slot = t.slot;
         for (;;) {
             const uint32_t size = e - b;
-            if (size == 1) {
+            if (size <= kSahSweep) {  // a tiny task for sah_tiny, its ids in final_ids
+                for (uint32_t i = b + lane; i < e; i += kWarp) final_ids[t.b + i] = ids[i];
                 if (lane == 0) {
-                    set_link(children, root, slot, t.b + b);
-                    final_ids[t.b + b] = ids[b];
+                    if (size == 1)
+                        set_link(children, root, slot, t.b + b);
+                    else
+                        tiny[atomicAdd(words + 3, 1u)] = make_uint3(t.b + b, t.b + e, slot);
                 }
                 if (sp == 0) break;
                 const uint3 top = stack[--sp];
@@ -1198,56 +1200,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                 continue;
             }
             uint32_t m;  // the left child's size
-            if (size <= kSahSweep) {
-                // Exact sweep: each lane holds one triangle; per axis, its rank by (centroid, id)
-                // places it, prefix and suffix boxes give every plane's weight.
-                const bool live = lane < size;
-                const uint32_t id = live ? ids[b + lane] : 0;
-                const AABB box = live ? tri_boxes[id] : AABB::empty();
-                const Vec3 ct = box.center();
-                const AABB cb = warp_union(live ? AABB::of_point(ct) : AABB::empty());
-                float best = __int_as_float(0x7f800000);
-                int axis = -1;
-                uint32_t rank = lane, best_rank = lane;
-                m = size / 2;
-                for (int a = 0; a < 3; ++a) {
-                    if (cb.extent()[a] <= 0.0f) continue;
-                    const float c = ct[a];
-                    rank = 0;
-                    for (uint32_t j = 0; j < size; ++j) {
-                        const float cj = __shfl_sync(~0u, c, int(j));
-                        const uint32_t idj = __shfl_sync(~0u, id, int(j));
-                        rank += cj < c || (cj == c && idj < id);
-                    }
-                    if (live) perm_of[w][rank] = lane;
-                    __syncwarp();
-                    const int src = live ? int(perm_of[w][lane]) : int(lane);
-                    __syncwarp();
-                    const AABB sb = shfl_box(box, src);
-                    const float sc = __shfl_sync(~0u, c, src);
-                    AABB pre = live ? sb : AABB::empty(), suf = pre;
-                    for (unsigned d = 1; d < 32; d <<= 1) {
-                        const AABB o = shfl_up_box(pre, d), q = shfl_down_box(suf, d);
-                        if (lane >= d) pre = merge(pre, o);
-                        if (lane + d < 32) suf = merge(suf, q);
-                    }
-                    const AABB left = shfl_up_box(pre, 1);  // positions < lane
-                    const float prev_c = __shfl_up_sync(~0u, sc, 1);
-                    float wt = __int_as_float(0x7f800000);
-                    if (lane >= 1 && lane < size && prev_c != sc)
-                        wt = left.half_area() * float(lane) + suf.half_area() * float(size - lane);
-                    int at = int(lane);
-                    warp_argmin(wt, at);
-                    if (wt < best) {
-                        best = wt;
-                        axis = a;
-                        m = uint32_t(at);
-                        best_rank = rank;
-                    }
-                }
-                if (axis >= 0 && live) ids[b + best_rank] = id;  // every lane read its id above
-                __syncwarp();
-            } else {
+            {
                 // 32 bins per axis over the centroids' bounds, in shared memory.
                 AABB cb = AABB::empty();
                 for (uint32_t i = b + lane; i < e; i += kWarp) cb.extend(centroid_of(tri_boxes, ids[i]));
@@ -1322,6 +1275,101 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
             slot = go.z;
         }
         __syncwarp();
+    }
+}
+
+/// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
+/// BinnedSahBuilder's exact sweep: per axis the triangles sorted by (centroid, id), each plane
+/// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
+/// first plane on ties) taken, the range reordered by that axis.
+__global__ void __launch_bounds__(kBlock)
+    sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ words, const AABB* __restrict__ tri_boxes,
+             uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= words[3]) return;
+    const uint3 t = tiny[k];
+    uint32_t ids[kSahSweep];
+    AABB box[kSahSweep];
+    for (uint32_t i = 0; i < t.y - t.x; ++i) {
+        ids[i] = final_ids[t.x + i];
+        box[i] = tri_boxes[ids[i]];
+    }
+    uint3 stack[8];
+    int sp = 0;
+    uint32_t b = 0, e = t.y - t.x, slot = t.z;
+    for (;;) {
+        const uint32_t size = e - b;
+        if (size == 1) {
+            set_link(children, root, slot, t.x + b);
+            final_ids[t.x + b] = ids[b];
+            if (sp == 0) break;
+            const uint3 top = stack[--sp];
+            b = top.x;
+            e = top.y;
+            slot = top.z;
+            continue;
+        }
+        AABB cb = AABB::empty();
+        for (uint32_t i = b; i < e; ++i) cb.extend(box[i].center());
+        float best = __int_as_float(0x7f800000);
+        uint32_t m = size / 2;
+        uint8_t order[kSahSweep], best_order[kSahSweep];
+        bool split = false;
+        for (int a = 0; a < 3; ++a) {
+            if (cb.extent()[a] <= 0.0f) continue;
+            // Insertion sort of the range's places by (centroid, id).
+            for (uint32_t i = 0; i < size; ++i) {
+                const uint32_t x = b + i;
+                const float cx = box[x].center()[a];
+                uint32_t j = i;
+                for (; j > 0; --j) {
+                    const uint32_t y = order[j - 1];
+                    const float cy = box[y].center()[a];
+                    if (cy < cx || (cy == cx && ids[y] < ids[x])) break;
+                    order[j] = order[j - 1];
+                }
+                order[j] = uint8_t(x);
+            }
+            float right_area[kSahSweep];
+            AABB acc = AABB::empty();
+            for (uint32_t i = size - 1; i > 0; --i) {
+                acc.extend(box[order[i]]);
+                right_area[i] = acc.half_area();
+            }
+            acc = AABB::empty();
+            for (uint32_t i = 1; i < size; ++i) {
+                acc.extend(box[order[i - 1]]);
+                if (box[order[i - 1]].center()[a] == box[order[i]].center()[a]) continue;
+                const float w = acc.half_area() * float(i) + right_area[i] * float(size - i);
+                if (w < best) {
+                    best = w;
+                    m = i;
+                    split = true;
+                    for (uint32_t j = 0; j < size; ++j) best_order[j] = order[j];
+                }
+            }
+        }
+        if (split) {
+            uint32_t new_ids[kSahSweep];
+            AABB new_box[kSahSweep];
+            for (uint32_t j = 0; j < size; ++j) {
+                new_ids[j] = ids[best_order[j]];
+                new_box[j] = box[best_order[j]];
+            }
+            for (uint32_t j = 0; j < size; ++j) {
+                ids[b + j] = new_ids[j];
+                box[b + j] = new_box[j];
+            }
+        }
+        const uint32_t id = n + t.x + b + m - 1;
+        set_link(children, root, slot, id);
+        const uint3 l{b, b + m, id << 1}, r{b + m, e, id << 1 | 1u};
+        const bool left_first = m <= size - m;
+        stack[sp++] = left_first ? r : l;
+        const uint3 go = left_first ? l : r;
+        b = go.x;
+        e = go.y;
+        slot = go.z;
     }
 }
 
@@ -1544,8 +1592,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, (unused), PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     // Binned SAH: two lists of a level's large tasks, their splits, bins and chunks (each chunk's
-    // lefts and their scan), the small tasks, the triangles' final order, and three counters:
-    // the next level's large tasks, the small tasks, the next level's chunks.
+    // lefts and their scan), the small and tiny tasks, the triangles' final order, and four
+    // counters: the next level's large tasks, the small tasks, the next level's chunks, the tiny tasks.
     const size_t s_large = sah ? n / (kSahWarpTask + 1) + 1 : 0;
     const size_t s_chunks = sah ? n / kSahChunk + s_large + 1 : 0;
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
@@ -1553,6 +1601,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
     DeviceBuffer<uint32_t> s_words(sah ? 4 : 0);
+    DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
     // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
     // per node, the hierarchy before the passes (restored if they are undone) and the root's
@@ -1664,8 +1713,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             chunks = w[2];
             std::swap(level, next);
         }
-        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
-            s_small.data(), s_words.data(), order, tri_boxes.data(), n, children.data(), root, final_ids.data());
+        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(s_small.data(), s_words.data(), order,
+                                                                       tri_boxes.data(), n, children.data(), root,
+                                                                       final_ids.data(), s_tiny.data());
+        sah_tiny<<<grid_for(s_tiny.size()), kBlock>>>(s_tiny.data(), s_words.data(), tri_boxes.data(), n,
+                                                      children.data(), root, final_ids.data());
+        BVHLAB_CHECK_LAUNCH();
         make_leaves<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), boxes.data(), meta.data(), nullptr,
                                              rule);
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
