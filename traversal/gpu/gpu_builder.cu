@@ -952,47 +952,60 @@ struct SahChunk {
     }
 };
 
-/// Bins each chunk's triangles in shared memory, then adds them to its task's bins.
+/// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
+/// address), then adds them to its task's bins.
+constexpr int kBinSets = kBlock / int(kWarp);
+
 __global__ void __launch_bounds__(kBlock)
     sah_bin(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, SahOrder order,
             const AABB* __restrict__ tri_boxes, SahBin* bins) {
-    __shared__ float lo[3 * kSahBins][3], hi[3 * kSahBins][3];
-    __shared__ uint32_t num[3 * kSahBins];
-    for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
+    __shared__ float lo[kBinSets][3 * kSahBins][3], hi[kBinSets][3 * kSahBins][3];
+    __shared__ uint32_t num[kBinSets][3 * kSahBins];
+    for (uint32_t k = threadIdx.x; k < kBinSets * 3 * kSahBins; k += blockDim.x) {
         for (int j = 0; j < 3; ++j) {
-            lo[k][j] = FLT_MAX;
-            hi[k][j] = -FLT_MAX;
+            lo[0][k][j] = FLT_MAX;  // the sets are contiguous: k runs over all of them
+            hi[0][k][j] = -FLT_MAX;
         }
-        num[k] = 0;
+        num[0][k] = 0;
     }
     const SahChunk c(tasks, first, count);
     const SahTask& t = tasks[c.task];
     const SahMap map(t.cb);
     const uint32_t* in = order.buf[t.buf];
+    const uint32_t set = threadIdx.x / kWarp;
     __syncthreads();
     for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) {
         const AABB box = tri_boxes[in[i]];
         const Vec3 ct = box.center();
         for (int a = 0; a < 3; ++a) {
             const int k = a * kSahBins + map.bin(ct[a], a);
-            atomic_min(&lo[k][0], box.lo.x);
-            atomic_min(&lo[k][1], box.lo.y);
-            atomic_min(&lo[k][2], box.lo.z);
-            atomic_max(&hi[k][0], box.hi.x);
-            atomic_max(&hi[k][1], box.hi.y);
-            atomic_max(&hi[k][2], box.hi.z);
-            atomicAdd(&num[k], 1u);
+            atomic_min(&lo[set][k][0], box.lo.x);
+            atomic_min(&lo[set][k][1], box.lo.y);
+            atomic_min(&lo[set][k][2], box.lo.z);
+            atomic_max(&hi[set][k][0], box.hi.x);
+            atomic_max(&hi[set][k][1], box.hi.y);
+            atomic_max(&hi[set][k][2], box.hi.z);
+            atomicAdd(&num[set][k], 1u);
         }
     }
     __syncthreads();
     for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
-        if (!num[k]) continue;
+        float l[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, h[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+        uint32_t total = 0;
+        for (int w = 0; w < kBinSets; ++w) {
+            for (int j = 0; j < 3; ++j) {
+                l[j] = fminf(l[j], lo[w][k][j]);
+                h[j] = fmaxf(h[j], hi[w][k][j]);
+            }
+            total += num[w][k];
+        }
+        if (!total) continue;
         SahBin* g = bins + size_t(c.task) * 3 * kSahBins + k;
         for (int j = 0; j < 3; ++j) {
-            atomic_min(&g->lo[j], lo[k][j]);
-            atomic_max(&g->hi[j], hi[k][j]);
+            atomic_min(&g->lo[j], l[j]);
+            atomic_max(&g->hi[j], h[j]);
         }
-        atomicAdd(&g->count, num[k]);
+        atomicAdd(&g->count, total);
     }
 }
 
@@ -1281,18 +1294,36 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
 /// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
 /// BinnedSahBuilder's exact sweep: per axis the triangles sorted by (centroid, id), each plane
 /// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
-/// first plane on ties) taken, the range reordered by that axis.
-__global__ void __launch_bounds__(kBlock)
+/// first plane on ties) taken, the range reordered by that axis. The triangles' boxes and ids stay
+/// in shared memory (a column per thread, so a warp's accesses fall in distinct banks); a node
+/// reorders only its list of places.
+constexpr int kTinyBlock = 64;
+
+__global__ void __launch_bounds__(kTinyBlock)
     sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ words, const AABB* __restrict__ tri_boxes,
              uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
+    __shared__ float corner[6][kSahSweep][kTinyBlock];
+    __shared__ uint32_t tri[kSahSweep][kTinyBlock];
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= words[3]) return;
+    const unsigned me = threadIdx.x;
     const uint3 t = tiny[k];
-    uint32_t ids[kSahSweep];
-    AABB box[kSahSweep];
+    auto lo = [&](uint32_t x, int a) { return corner[a][x][me]; };
+    auto hi = [&](uint32_t x, int a) { return corner[3 + a][x][me]; };
+    auto box_of = [&](uint32_t x) { return AABB{{lo(x, 0), lo(x, 1), lo(x, 2)}, {hi(x, 0), hi(x, 1), hi(x, 2)}}; };
+    auto centre = [&](uint32_t x, int a) { return (lo(x, a) + hi(x, a)) * 0.5f; };
+    uint8_t place[kSahSweep];  // the node ranges' triangles, as places in the columns
     for (uint32_t i = 0; i < t.y - t.x; ++i) {
-        ids[i] = final_ids[t.x + i];
-        box[i] = tri_boxes[ids[i]];
+        const uint32_t id = final_ids[t.x + i];
+        const AABB bx = tri_boxes[id];
+        tri[i][me] = id;
+        corner[0][i][me] = bx.lo.x;
+        corner[1][i][me] = bx.lo.y;
+        corner[2][i][me] = bx.lo.z;
+        corner[3][i][me] = bx.hi.x;
+        corner[4][i][me] = bx.hi.y;
+        corner[5][i][me] = bx.hi.z;
+        place[i] = uint8_t(i);
     }
     uint3 stack[8];
     int sp = 0;
@@ -1301,7 +1332,7 @@ __global__ void __launch_bounds__(kBlock)
         const uint32_t size = e - b;
         if (size == 1) {
             set_link(children, root, slot, t.x + b);
-            final_ids[t.x + b] = ids[b];
+            final_ids[t.x + b] = tri[place[b]][me];
             if (sp == 0) break;
             const uint3 top = stack[--sp];
             b = top.x;
@@ -1309,23 +1340,29 @@ __global__ void __launch_bounds__(kBlock)
             slot = top.z;
             continue;
         }
-        AABB cb = AABB::empty();
-        for (uint32_t i = b; i < e; ++i) cb.extend(box[i].center());
+        Vec3 clo{FLT_MAX, FLT_MAX, FLT_MAX}, chi{-FLT_MAX, -FLT_MAX, -FLT_MAX};
+        for (uint32_t i = b; i < e; ++i) {
+            for (int a = 0; a < 3; ++a) {
+                clo[a] = fminf(clo[a], centre(place[i], a));
+                chi[a] = fmaxf(chi[a], centre(place[i], a));
+            }
+        }
         float best = __int_as_float(0x7f800000);
         uint32_t m = size / 2;
         uint8_t order[kSahSweep], best_order[kSahSweep];
         bool split = false;
         for (int a = 0; a < 3; ++a) {
-            if (cb.extent()[a] <= 0.0f) continue;
-            // Insertion sort of the range's places by (centroid, id).
+            if (chi[a] - clo[a] <= 0.0f) continue;
+            // Insertion sort of the node's places by (centroid, id).
             for (uint32_t i = 0; i < size; ++i) {
-                const uint32_t x = b + i;
-                const float cx = box[x].center()[a];
+                const uint32_t x = place[b + i];
+                const float cx = centre(x, a);
+                const uint32_t idx = tri[x][me];
                 uint32_t j = i;
                 for (; j > 0; --j) {
                     const uint32_t y = order[j - 1];
-                    const float cy = box[y].center()[a];
-                    if (cy < cx || (cy == cx && ids[y] < ids[x])) break;
+                    const float cy = centre(y, a);
+                    if (cy < cx || (cy == cx && tri[y][me] < idx)) break;
                     order[j] = order[j - 1];
                 }
                 order[j] = uint8_t(x);
@@ -1333,13 +1370,13 @@ __global__ void __launch_bounds__(kBlock)
             float right_area[kSahSweep];
             AABB acc = AABB::empty();
             for (uint32_t i = size - 1; i > 0; --i) {
-                acc.extend(box[order[i]]);
+                acc.extend(box_of(order[i]));
                 right_area[i] = acc.half_area();
             }
             acc = AABB::empty();
             for (uint32_t i = 1; i < size; ++i) {
-                acc.extend(box[order[i - 1]]);
-                if (box[order[i - 1]].center()[a] == box[order[i]].center()[a]) continue;
+                acc.extend(box_of(order[i - 1]));
+                if (centre(order[i - 1], a) == centre(order[i], a)) continue;
                 const float w = acc.half_area() * float(i) + right_area[i] * float(size - i);
                 if (w < best) {
                     best = w;
@@ -1349,18 +1386,8 @@ __global__ void __launch_bounds__(kBlock)
                 }
             }
         }
-        if (split) {
-            uint32_t new_ids[kSahSweep];
-            AABB new_box[kSahSweep];
-            for (uint32_t j = 0; j < size; ++j) {
-                new_ids[j] = ids[best_order[j]];
-                new_box[j] = box[best_order[j]];
-            }
-            for (uint32_t j = 0; j < size; ++j) {
-                ids[b + j] = new_ids[j];
-                box[b + j] = new_box[j];
-            }
-        }
+        if (split)
+            for (uint32_t j = 0; j < size; ++j) place[b + j] = best_order[j];
         const uint32_t id = n + t.x + b + m - 1;
         set_link(children, root, slot, id);
         const uint3 l{b, b + m, id << 1}, r{b + m, e, id << 1 | 1u};
@@ -1716,8 +1743,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(s_small.data(), s_words.data(), order,
                                                                        tri_boxes.data(), n, children.data(), root,
                                                                        final_ids.data(), s_tiny.data());
-        sah_tiny<<<grid_for(s_tiny.size()), kBlock>>>(s_tiny.data(), s_words.data(), tri_boxes.data(), n,
-                                                      children.data(), root, final_ids.data());
+        sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
+            s_tiny.data(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
         BVHLAB_CHECK_LAUNCH();
         make_leaves<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), boxes.data(), meta.data(), nullptr,
                                              rule);
