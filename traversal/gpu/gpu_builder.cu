@@ -952,60 +952,72 @@ struct SahChunk {
     }
 };
 
-/// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
-/// address), then adds them to its task's bins.
-constexpr int kBinSets = kBlock / int(kWarp);
+/// A float's bits as an unsigned that orders as the float does (-0 made +0 first), so that
+/// integer minima and maxima (atomics, warp reductions) are the floats' own.
+__device__ uint32_t ordered_bits(float v) {
+    const uint32_t u = __float_as_uint(v + 0.0f);
+    return u & 0x80000000u ? ~u : u | 0x80000000u;
+}
 
+__device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80000000u ? u & 0x7fffffffu : ~u); }
+
+/// Bins each chunk's triangles in shared memory, then adds them to its task's bins and keeps the
+/// chunk's counts per bin (its lefts, once the split is known). The lanes of a warp that fall in
+/// one bin are reduced first (match, then one reduction per corner), so that one of them adds
+/// to the shared bin.
 __global__ void __launch_bounds__(kBlock)
     sah_bin(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, SahOrder order,
-            const AABB* __restrict__ tri_boxes, SahBin* bins) {
-    __shared__ float lo[kBinSets][3 * kSahBins][3], hi[kBinSets][3 * kSahBins][3];
-    __shared__ uint32_t num[kBinSets][3 * kSahBins];
-    for (uint32_t k = threadIdx.x; k < kBinSets * 3 * kSahBins; k += blockDim.x) {
+            const AABB* __restrict__ tri_boxes, SahBin* bins, uint32_t* __restrict__ chunk_counts) {
+    __shared__ uint32_t lo[3 * kSahBins][3], hi[3 * kSahBins][3], num[3 * kSahBins];
+    for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
         for (int j = 0; j < 3; ++j) {
-            lo[0][k][j] = FLT_MAX;  // the sets are contiguous: k runs over all of them
-            hi[0][k][j] = -FLT_MAX;
+            lo[k][j] = ~0u;
+            hi[k][j] = 0u;
         }
-        num[0][k] = 0;
+        num[k] = 0;
     }
     const SahChunk c(tasks, first, count);
     const SahTask& t = tasks[c.task];
     const SahMap map(t.cb);
     const uint32_t* in = order.buf[t.buf];
-    const uint32_t set = threadIdx.x / kWarp;
+    const uint32_t lane = threadIdx.x & 31;
     __syncthreads();
-    for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) {
+    for (uint32_t i0 = c.b; i0 < c.e; i0 += blockDim.x) {  // the same trips for the whole block
+        const uint32_t i = i0 + threadIdx.x;
+        const bool live = i < c.e;
+        const unsigned active = __ballot_sync(~0u, live);
+        if (!live) continue;
         const AABB box = tri_boxes[in[i]];
         const Vec3 ct = box.center();
+        const uint32_t corner[6] = {ordered_bits(box.lo.x), ordered_bits(box.lo.y), ordered_bits(box.lo.z),
+                                    ordered_bits(box.hi.x), ordered_bits(box.hi.y), ordered_bits(box.hi.z)};
         for (int a = 0; a < 3; ++a) {
             const int k = a * kSahBins + map.bin(ct[a], a);
-            atomic_min(&lo[set][k][0], box.lo.x);
-            atomic_min(&lo[set][k][1], box.lo.y);
-            atomic_min(&lo[set][k][2], box.lo.z);
-            atomic_max(&hi[set][k][0], box.hi.x);
-            atomic_max(&hi[set][k][1], box.hi.y);
-            atomic_max(&hi[set][k][2], box.hi.z);
-            atomicAdd(&num[set][k], 1u);
+            const unsigned same = __match_any_sync(active, k);
+            uint32_t r[6];
+            for (int j = 0; j < 3; ++j) {
+                r[j] = __reduce_min_sync(same, corner[j]);
+                r[3 + j] = __reduce_max_sync(same, corner[3 + j]);
+            }
+            if (lane == uint32_t(__ffs(same) - 1)) {
+                for (int j = 0; j < 3; ++j) {
+                    atomicMin(&lo[k][j], r[j]);
+                    atomicMax(&hi[k][j], r[3 + j]);
+                }
+                atomicAdd(&num[k], uint32_t(__popc(same)));
+            }
         }
     }
     __syncthreads();
     for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
-        float l[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, h[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
-        uint32_t total = 0;
-        for (int w = 0; w < kBinSets; ++w) {
-            for (int j = 0; j < 3; ++j) {
-                l[j] = fminf(l[j], lo[w][k][j]);
-                h[j] = fmaxf(h[j], hi[w][k][j]);
-            }
-            total += num[w][k];
-        }
-        if (!total) continue;
+        chunk_counts[size_t(blockIdx.x) * 3 * kSahBins + k] = num[k];
+        if (!num[k]) continue;
         SahBin* g = bins + size_t(c.task) * 3 * kSahBins + k;
         for (int j = 0; j < 3; ++j) {
-            atomic_min(&g->lo[j], l[j]);
-            atomic_max(&g->hi[j], h[j]);
+            atomic_min(&g->lo[j], from_ordered_bits(lo[k][j]));
+            atomic_max(&g->hi[j], from_ordered_bits(hi[k][j]));
         }
-        atomicAdd(&g->count, total);
+        atomicAdd(&g->count, num[k]);
     }
 }
 
@@ -1065,83 +1077,101 @@ __device__ bool sah_goes_left(const SahSplit& s, const SahMap& map, const AABB* 
     return map.bin(centroid_of(tri_boxes, id)[s.axis], s.axis) <= s.bin;
 }
 
-/// Each chunk's count of triangles going left.
+/// Each chunk's count of triangles going left, from its counts per bin (one warp per chunk).
 __global__ void __launch_bounds__(kBlock)
-    sah_count(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first,
-              const SahSplit* __restrict__ splits, SahOrder order, const AABB* __restrict__ tri_boxes,
+    sah_lefts(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, uint32_t chunks,
+              const SahSplit* __restrict__ splits, const uint32_t* __restrict__ chunk_counts,
               uint32_t* __restrict__ lefts) {
-    const SahChunk c(tasks, first, count);
-    const SahTask& t = tasks[c.task];
-    const SahSplit s = splits[c.task];
-    const SahMap map(t.cb);
-    const uint32_t* in = order.buf[t.buf];
-    uint32_t k = 0;
-    for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) k += sah_goes_left(s, map, tri_boxes, in[i], i);
-    using Reduce = cub::BlockReduce<uint32_t, kBlock>;
-    __shared__ typename Reduce::TempStorage scratch;
-    k = Reduce(scratch).Sum(k);
-    if (threadIdx.x == 0) lefts[blockIdx.x] = k;
+    const uint32_t chunk = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
+    if (chunk >= chunks) return;  // whole warps
+    const uint32_t task = sah_task_of(first, count, chunk);
+    const SahSplit s = splits[task];
+    if (s.axis < 0) {  // by place
+        const uint32_t b = tasks[task].b + (chunk - first[task]) * kSahChunk, e = min(b + kSahChunk, tasks[task].e);
+        if (lane == 0) lefts[chunk] = s.m > b ? min(s.m, e) - b : 0;
+        return;
+    }
+    uint32_t k = lane <= uint32_t(s.bin) ? chunk_counts[(size_t(chunk) * 3 + s.axis) * kSahBins + lane] : 0;
+    k = __reduce_add_sync(~0u, k);
+    if (lane == 0) lefts[chunk] = k;
 }
 
 /// The stable partition of each chunk into the other order buffer (left side from the task's
 /// first position, right side from m; `lefts` scanned over all chunks), the children's centroid
-/// bounds added to, and one-triangle children's triangles written to final_ids.
+/// bounds added to, and one-triangle children's triangles written to final_ids. The block reads
+/// its chunk in kSahPerThread coalesced rounds; each triangle's place among the lefts comes from
+/// the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
     sah_scatter(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first,
                 const SahSplit* __restrict__ splits, SahOrder order, const AABB* __restrict__ tri_boxes,
                 const uint32_t* __restrict__ lefts_before, uint32_t* __restrict__ final_ids) {
+    constexpr uint32_t kWarps = kBlock / kWarp;
+    __shared__ uint32_t before[kSahPerThread][kWarps];  // lefts counted before each round and warp
+    __shared__ uint32_t side_box[2][6];                 // the children's centroid bounds, ordered bits
     const SahChunk c(tasks, first, count);
     const SahTask& t = tasks[c.task];
     const SahSplit s = splits[c.task];
     const SahMap map(t.cb);
     const uint32_t* in = order.buf[t.buf];
     uint32_t* out = order.buf[1 - t.buf];
-    const uint32_t i0 = c.b + threadIdx.x * kSahPerThread;
+    const uint32_t lane = threadIdx.x & 31, warp = threadIdx.x / kWarp;
+    const unsigned lt = (1u << lane) - 1;
+    if (threadIdx.x < 12) side_box[threadIdx.x / 6][threadIdx.x % 6] = threadIdx.x % 6 < 3 ? ~0u : 0u;
     uint32_t ids[kSahPerThread];
     Vec3 cs[kSahPerThread];
-    unsigned go_left = 0;
-    uint32_t k = 0;
-    for (uint32_t j = 0; j < kSahPerThread; ++j) {
-        const uint32_t i = i0 + j;
-        if (i >= c.e) break;
-        ids[j] = in[i];
-        cs[j] = centroid_of(tri_boxes, ids[j]);
-        const bool l = s.axis < 0 ? i < s.m : map.bin(cs[j][s.axis], s.axis) <= s.bin;
-        go_left |= unsigned(l) << j;
-        k += l;
+    unsigned ballots[kSahPerThread];
+    for (uint32_t r = 0; r < kSahPerThread; ++r) {
+        const uint32_t i = c.b + r * kBlock + threadIdx.x;
+        bool l = false;
+        if (i < c.e) {
+            ids[r] = in[i];
+            cs[r] = centroid_of(tri_boxes, ids[r]);
+            l = s.axis < 0 ? i < s.m : map.bin(cs[r][s.axis], s.axis) <= s.bin;
+        }
+        ballots[r] = __ballot_sync(~0u, l);
+        if (lane == 0) before[r][warp] = __popc(ballots[r]);
     }
-    using Scan = cub::BlockScan<uint32_t, kBlock>;
-    using Reduce = cub::BlockReduce<AABB, kBlock>;
-    __shared__ union {
-        typename Scan::TempStorage scan;
-        typename Reduce::TempStorage reduce[2];
-    } scratch;
-    uint32_t before;
-    Scan(scratch.scan).ExclusiveSum(k, before);
-    // Lefts before this thread's first triangle, within its task.
-    uint32_t l = lefts_before[blockIdx.x] - lefts_before[first[c.task]] + before;
+    __syncthreads();
+    if (threadIdx.x == 0) {  // exclusive scan over rounds, then warps
+        uint32_t sum = lefts_before[blockIdx.x] - lefts_before[first[c.task]];
+        for (uint32_t r = 0; r < kSahPerThread; ++r)
+            for (uint32_t w = 0; w < kWarps; ++w) {
+                const uint32_t k = before[r][w];
+                before[r][w] = sum;
+                sum += k;
+            }
+    }
+    __syncthreads();
     AABB side[2] = {AABB::empty(), AABB::empty()};
-    for (uint32_t j = 0; j < kSahPerThread; ++j) {
-        const uint32_t i = i0 + j;
+    for (uint32_t r = 0; r < kSahPerThread; ++r) {
+        const uint32_t i = c.b + r * kBlock + threadIdx.x;
         if (i >= c.e) break;
-        const bool is_left = (go_left >> j) & 1;
+        const bool is_left = (ballots[r] >> lane) & 1;
+        const uint32_t l = before[r][warp] + __popc(ballots[r] & lt);  // lefts before i in its task
         const uint32_t at = is_left ? t.b + l : s.m + (i - t.b - l);
-        l += is_left;
-        out[at] = ids[j];
-        if (!s.child_cb[is_left ? 0 : 1]) final_ids[at] = ids[j];
-        side[is_left ? 0 : 1].extend(cs[j]);
+        out[at] = ids[r];
+        if (!s.child_cb[is_left ? 0 : 1]) final_ids[at] = ids[r];
+        side[is_left ? 0 : 1].extend(cs[r]);
     }
-    __syncthreads();  // the scan's storage is reused
     for (int j = 0; j < 2; ++j) {
-        const AABB b = Reduce(scratch.reduce[j]).Reduce(side[j], BoxUnion{});
-        if (threadIdx.x == 0 && s.child_cb[j] && !b.is_empty()) {
-            AABB* cb = s.child_cb[j];
-            atomic_min(&cb->lo.x, b.lo.x);
-            atomic_min(&cb->lo.y, b.lo.y);
-            atomic_min(&cb->lo.z, b.lo.z);
-            atomic_max(&cb->hi.x, b.hi.x);
-            atomic_max(&cb->hi.y, b.hi.y);
-            atomic_max(&cb->hi.z, b.hi.z);
+        const uint32_t v[6] = {ordered_bits(side[j].lo.x), ordered_bits(side[j].lo.y), ordered_bits(side[j].lo.z),
+                               ordered_bits(side[j].hi.x), ordered_bits(side[j].hi.y), ordered_bits(side[j].hi.z)};
+        for (int q = 0; q < 6; ++q) {
+            const uint32_t x = q < 3 ? __reduce_min_sync(~0u, v[q]) : __reduce_max_sync(~0u, v[q]);
+            if (lane == 0) (q < 3 ? atomicMin(&side_box[j][q], x) : atomicMax(&side_box[j][q], x));
+        }
+    }
+    __syncthreads();
+    if (threadIdx.x < 2 && s.child_cb[threadIdx.x]) {
+        const uint32_t* q = side_box[threadIdx.x];
+        if (q[0] != ~0u) {  // not empty
+            AABB* cb = s.child_cb[threadIdx.x];
+            atomic_min(&cb->lo.x, from_ordered_bits(q[0]));
+            atomic_min(&cb->lo.y, from_ordered_bits(q[1]));
+            atomic_min(&cb->lo.z, from_ordered_bits(q[2]));
+            atomic_max(&cb->hi.x, from_ordered_bits(q[3]));
+            atomic_max(&cb->hi.y, from_ordered_bits(q[4]));
+            atomic_max(&cb->hi.z, from_ordered_bits(q[5]));
         }
     }
 }
@@ -1627,7 +1657,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0);
+    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
     // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
@@ -1720,13 +1750,14 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         SahTask* level = s_tasks.data();
         SahTask* next = s_tasks.data() + s_large;
         while (tasks) {
-            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data());
+            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
+                                        s_chunk_counts.data());
             set_word<<<1, 1>>>(s_words.data(), 0);
             sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
                 level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), n, children.data(),
                 root);
-            sah_count<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, tri_boxes.data(),
-                                          s_lefts.data());
+            sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
                                                             s_lefts_scan.data(), int(chunks)));
