@@ -961,63 +961,61 @@ __device__ uint32_t ordered_bits(float v) {
 
 __device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80000000u ? u & 0x7fffffffu : ~u); }
 
-/// Bins each chunk's triangles in shared memory, then adds them to its task's bins and keeps the
-/// chunk's counts per bin (its lefts, once the split is known). The lanes of a warp that fall in
-/// one bin are reduced first (match, then one reduction per corner), so that one of them adds
-/// to the shared bin.
+/// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
+/// address), then adds them to its task's bins and keeps the chunk's counts per bin (its lefts,
+/// once the split is known).
+constexpr int kBinSets = kBlock / int(kWarp);
+
 __global__ void __launch_bounds__(kBlock)
     sah_bin(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, SahOrder order,
             const AABB* __restrict__ tri_boxes, SahBin* bins, uint32_t* __restrict__ chunk_counts) {
-    __shared__ uint32_t lo[3 * kSahBins][3], hi[3 * kSahBins][3], num[3 * kSahBins];
-    for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
+    __shared__ uint32_t lo[kBinSets][3 * kSahBins][3], hi[kBinSets][3 * kSahBins][3];
+    __shared__ uint32_t num[kBinSets][3 * kSahBins];
+    for (uint32_t k = threadIdx.x; k < kBinSets * 3 * kSahBins; k += blockDim.x) {
         for (int j = 0; j < 3; ++j) {
-            lo[k][j] = ~0u;
-            hi[k][j] = 0u;
+            lo[0][k][j] = ~0u;  // the sets are contiguous: k runs over all of them
+            hi[0][k][j] = 0u;
         }
-        num[k] = 0;
+        num[0][k] = 0;
     }
     const SahChunk c(tasks, first, count);
     const SahTask& t = tasks[c.task];
     const SahMap map(t.cb);
     const uint32_t* in = order.buf[t.buf];
-    const uint32_t lane = threadIdx.x & 31;
+    const uint32_t set = threadIdx.x / kWarp;
     __syncthreads();
-    for (uint32_t i0 = c.b; i0 < c.e; i0 += blockDim.x) {  // the same trips for the whole block
-        const uint32_t i = i0 + threadIdx.x;
-        const bool live = i < c.e;
-        const unsigned active = __ballot_sync(~0u, live);
-        if (!live) continue;
+    for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) {
         const AABB box = tri_boxes[in[i]];
         const Vec3 ct = box.center();
         const uint32_t corner[6] = {ordered_bits(box.lo.x), ordered_bits(box.lo.y), ordered_bits(box.lo.z),
                                     ordered_bits(box.hi.x), ordered_bits(box.hi.y), ordered_bits(box.hi.z)};
         for (int a = 0; a < 3; ++a) {
             const int k = a * kSahBins + map.bin(ct[a], a);
-            const unsigned same = __match_any_sync(active, k);
-            uint32_t r[6];
             for (int j = 0; j < 3; ++j) {
-                r[j] = __reduce_min_sync(same, corner[j]);
-                r[3 + j] = __reduce_max_sync(same, corner[3 + j]);
+                atomicMin(&lo[set][k][j], corner[j]);
+                atomicMax(&hi[set][k][j], corner[3 + j]);
             }
-            if (lane == uint32_t(__ffs(same) - 1)) {
-                for (int j = 0; j < 3; ++j) {
-                    atomicMin(&lo[k][j], r[j]);
-                    atomicMax(&hi[k][j], r[3 + j]);
-                }
-                atomicAdd(&num[k], uint32_t(__popc(same)));
-            }
+            atomicAdd(&num[set][k], 1u);
         }
     }
     __syncthreads();
     for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
-        chunk_counts[size_t(blockIdx.x) * 3 * kSahBins + k] = num[k];
-        if (!num[k]) continue;
+        uint32_t l[3] = {~0u, ~0u, ~0u}, h[3] = {0u, 0u, 0u}, total = 0;
+        for (int w = 0; w < kBinSets; ++w) {
+            for (int j = 0; j < 3; ++j) {
+                l[j] = min(l[j], lo[w][k][j]);
+                h[j] = max(h[j], hi[w][k][j]);
+            }
+            total += num[w][k];
+        }
+        chunk_counts[size_t(blockIdx.x) * 3 * kSahBins + k] = total;
+        if (!total) continue;
         SahBin* g = bins + size_t(c.task) * 3 * kSahBins + k;
         for (int j = 0; j < 3; ++j) {
-            atomic_min(&g->lo[j], from_ordered_bits(lo[k][j]));
-            atomic_max(&g->hi[j], from_ordered_bits(hi[k][j]));
+            atomic_min(&g->lo[j], from_ordered_bits(l[j]));
+            atomic_max(&g->hi[j], from_ordered_bits(h[j]));
         }
-        atomicAdd(&g->count, num[k]);
+        atomicAdd(&g->count, total);
     }
 }
 
@@ -1207,13 +1205,13 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
     sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
               uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
-    __shared__ float lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];
+    __shared__ uint32_t lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];  // ordered bits
     __shared__ uint32_t num_of[kSahWarps][3 * kSahBins];
     const uint32_t w = threadIdx.x / kWarp, lane = threadIdx.x & 31;
     uint32_t* ids = ids_of[w];
     uint32_t* tmp = tmp_of[w];
-    float(*lo)[3] = lo_of[w];
-    float(*hi)[3] = hi_of[w];
+    uint32_t(*lo)[3] = lo_of[w];
+    uint32_t(*hi)[3] = hi_of[w];
     uint32_t* num = num_of[w];
     const uint32_t count = words[1];
     const unsigned lt = (1u << lane) - 1;
@@ -1251,8 +1249,8 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                 const SahMap map(cb);
                 for (uint32_t k = lane; k < 3 * kSahBins; k += kWarp) {
                     for (int j = 0; j < 3; ++j) {
-                        lo[k][j] = FLT_MAX;
-                        hi[k][j] = -FLT_MAX;
+                        lo[k][j] = ordered_bits(FLT_MAX);  // empty: read back as AABB::empty()
+                        hi[k][j] = ordered_bits(-FLT_MAX);
                     }
                     num[k] = 0;
                 }
@@ -1262,12 +1260,12 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                     const Vec3 ct = box.center();
                     for (int a = 0; a < 3; ++a) {
                         const int k = a * kSahBins + map.bin(ct[a], a);
-                        atomic_min(&lo[k][0], box.lo.x);
-                        atomic_min(&lo[k][1], box.lo.y);
-                        atomic_min(&lo[k][2], box.lo.z);
-                        atomic_max(&hi[k][0], box.hi.x);
-                        atomic_max(&hi[k][1], box.hi.y);
-                        atomic_max(&hi[k][2], box.hi.z);
+                        atomicMin(&lo[k][0], ordered_bits(box.lo.x));
+                        atomicMin(&lo[k][1], ordered_bits(box.lo.y));
+                        atomicMin(&lo[k][2], ordered_bits(box.lo.z));
+                        atomicMax(&hi[k][0], ordered_bits(box.hi.x));
+                        atomicMax(&hi[k][1], ordered_bits(box.hi.y));
+                        atomicMax(&hi[k][2], ordered_bits(box.hi.z));
                         atomicAdd(&num[k], 1u);
                     }
                 }
@@ -1278,8 +1276,10 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                 for (int a = 0; a < 3; ++a) {
                     if (!(map.scale[a] > 0.0f)) continue;
                     const int k = a * kSahBins + int(lane);
-                    const WarpSplit s =
-                        sweep_bins_warp({{lo[k][0], lo[k][1], lo[k][2]}, {hi[k][0], hi[k][1], hi[k][2]}}, num[k]);
+                    const WarpSplit s = sweep_bins_warp(
+                        {{from_ordered_bits(lo[k][0]), from_ordered_bits(lo[k][1]), from_ordered_bits(lo[k][2])},
+                         {from_ordered_bits(hi[k][0]), from_ordered_bits(hi[k][1]), from_ordered_bits(hi[k][2])}},
+                        num[k]);
                     if (s.w < best) {
                         best = s.w;
                         axis = a;
@@ -1322,11 +1322,11 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
 }
 
 /// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
-/// BinnedSahBuilder's exact sweep: per axis the triangles sorted by (centroid, id), each plane
+/// BinnedSahBuilder's exact sweep: per axis the triangles in order of (centroid, id), each plane
 /// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
-/// first plane on ties) taken, the range reordered by that axis. The triangles' boxes and ids stay
-/// in shared memory (a column per thread, so a warp's accesses fall in distinct banks); a node
-/// reorders only its list of places.
+/// first plane on ties) taken. The task's triangles are sorted once per axis; a node is a mask of
+/// them, and walks the sorted orders skipping the others. Boxes and ids stay in shared memory (a
+/// column per thread, so a warp's accesses fall in distinct banks).
 constexpr int kTinyBlock = 64;
 
 __global__ void __launch_bounds__(kTinyBlock)
@@ -1338,12 +1338,13 @@ __global__ void __launch_bounds__(kTinyBlock)
     if (k >= words[3]) return;
     const unsigned me = threadIdx.x;
     const uint3 t = tiny[k];
-    auto lo = [&](uint32_t x, int a) { return corner[a][x][me]; };
-    auto hi = [&](uint32_t x, int a) { return corner[3 + a][x][me]; };
-    auto box_of = [&](uint32_t x) { return AABB{{lo(x, 0), lo(x, 1), lo(x, 2)}, {hi(x, 0), hi(x, 1), hi(x, 2)}}; };
-    auto centre = [&](uint32_t x, int a) { return (lo(x, a) + hi(x, a)) * 0.5f; };
-    uint8_t place[kSahSweep];  // the node ranges' triangles, as places in the columns
-    for (uint32_t i = 0; i < t.y - t.x; ++i) {
+    const uint32_t count = t.y - t.x;
+    auto box_of = [&](uint32_t x) {
+        return AABB{{corner[0][x][me], corner[1][x][me], corner[2][x][me]},
+                    {corner[3][x][me], corner[4][x][me], corner[5][x][me]}};
+    };
+    auto centre = [&](uint32_t x, int a) { return (corner[a][x][me] + corner[3 + a][x][me]) * 0.5f; };
+    for (uint32_t i = 0; i < count; ++i) {
         const uint32_t id = final_ids[t.x + i];
         const AABB bx = tri_boxes[id];
         tri[i][me] = id;
@@ -1353,80 +1354,85 @@ __global__ void __launch_bounds__(kTinyBlock)
         corner[3][i][me] = bx.hi.x;
         corner[4][i][me] = bx.hi.y;
         corner[5][i][me] = bx.hi.z;
-        place[i] = uint8_t(i);
     }
-    uint3 stack[8];
+    uint8_t sorted[3][kSahSweep];  // the task's places in order of (centroid, id), per axis
+    for (int a = 0; a < 3; ++a) {
+        for (uint32_t i = 0; i < count; ++i) {
+            const float cx = centre(i, a);
+            const uint32_t idx = tri[i][me];
+            uint32_t j = i;
+            for (; j > 0; --j) {
+                const uint32_t y = sorted[a][j - 1];
+                const float cy = centre(y, a);
+                if (cy < cx || (cy == cx && tri[y][me] < idx)) break;
+                sorted[a][j] = sorted[a][j - 1];
+            }
+            sorted[a][j] = uint8_t(i);
+        }
+    }
+    struct Node {
+        uint32_t mask, b, slot;
+    };
+    Node stack[8];
     int sp = 0;
-    uint32_t b = 0, e = t.y - t.x, slot = t.z;
+    Node node{(1u << count) - 1, 0, t.z};
     for (;;) {
-        const uint32_t size = e - b;
+        const uint32_t size = __popc(node.mask), b = node.b;
         if (size == 1) {
-            set_link(children, root, slot, t.x + b);
-            final_ids[t.x + b] = tri[place[b]][me];
+            set_link(children, root, node.slot, t.x + b);
+            final_ids[t.x + b] = tri[__ffs(node.mask) - 1][me];
             if (sp == 0) break;
-            const uint3 top = stack[--sp];
-            b = top.x;
-            e = top.y;
-            slot = top.z;
+            node = stack[--sp];
             continue;
         }
-        Vec3 clo{FLT_MAX, FLT_MAX, FLT_MAX}, chi{-FLT_MAX, -FLT_MAX, -FLT_MAX};
-        for (uint32_t i = b; i < e; ++i) {
-            for (int a = 0; a < 3; ++a) {
-                clo[a] = fminf(clo[a], centre(place[i], a));
-                chi[a] = fmaxf(chi[a], centre(place[i], a));
-            }
-        }
         float best = __int_as_float(0x7f800000);
+        int best_axis = -1;
         uint32_t m = size / 2;
-        uint8_t order[kSahSweep], best_order[kSahSweep];
-        bool split = false;
         for (int a = 0; a < 3; ++a) {
-            if (chi[a] - clo[a] <= 0.0f) continue;
-            // Insertion sort of the node's places by (centroid, id).
-            for (uint32_t i = 0; i < size; ++i) {
-                const uint32_t x = place[b + i];
-                const float cx = centre(x, a);
-                const uint32_t idx = tri[x][me];
-                uint32_t j = i;
-                for (; j > 0; --j) {
-                    const uint32_t y = order[j - 1];
-                    const float cy = centre(y, a);
-                    if (cy < cx || (cy == cx && tri[y][me] < idx)) break;
-                    order[j] = order[j - 1];
-                }
-                order[j] = uint8_t(x);
-            }
+            const uint8_t* order = sorted[a];
+            uint8_t mine[kSahSweep];  // the node's places in this axis's order
+            uint32_t q = 0;
+            for (uint32_t j = 0; j < count; ++j)
+                if ((node.mask >> order[j]) & 1) mine[q++] = order[j];
+            if (centre(mine[size - 1], a) - centre(mine[0], a) <= 0.0f) continue;  // flat: no plane
             float right_area[kSahSweep];
             AABB acc = AABB::empty();
             for (uint32_t i = size - 1; i > 0; --i) {
-                acc.extend(box_of(order[i]));
+                acc.extend(box_of(mine[i]));
                 right_area[i] = acc.half_area();
             }
             acc = AABB::empty();
             for (uint32_t i = 1; i < size; ++i) {
-                acc.extend(box_of(order[i - 1]));
-                if (centre(order[i - 1], a) == centre(order[i], a)) continue;
+                acc.extend(box_of(mine[i - 1]));
+                if (centre(mine[i - 1], a) == centre(mine[i], a)) continue;
                 const float w = acc.half_area() * float(i) + right_area[i] * float(size - i);
                 if (w < best) {
                     best = w;
+                    best_axis = a;
                     m = i;
-                    split = true;
-                    for (uint32_t j = 0; j < size; ++j) best_order[j] = order[j];
                 }
             }
         }
-        if (split)
-            for (uint32_t j = 0; j < size; ++j) place[b + j] = best_order[j];
+        uint32_t left = 0;  // the first m of the node's places in the chosen order (by place: none)
+        if (best_axis >= 0) {
+            for (uint32_t j = 0, q = 0; q < m; ++j)
+                if ((node.mask >> sorted[best_axis][j]) & 1) {
+                    left |= 1u << sorted[best_axis][j];
+                    ++q;
+                }
+        } else {
+            for (uint32_t j = 0, q = 0; q < m; ++j)
+                if ((node.mask >> j) & 1) {
+                    left |= 1u << j;
+                    ++q;
+                }
+        }
         const uint32_t id = n + t.x + b + m - 1;
-        set_link(children, root, slot, id);
-        const uint3 l{b, b + m, id << 1}, r{b + m, e, id << 1 | 1u};
+        set_link(children, root, node.slot, id);
+        const Node l{left, b, id << 1}, r{node.mask & ~left, b + m, id << 1 | 1u};
         const bool left_first = m <= size - m;
         stack[sp++] = left_first ? r : l;
-        const uint3 go = left_first ? l : r;
-        b = go.x;
-        e = go.y;
-        slot = go.z;
+        node = left_first ? l : r;
     }
 }
 
