@@ -875,38 +875,56 @@ __device__ void warp_argmin(float& w, int& at) {
     }
 }
 
-/// The best split of one axis's bins (lane i holds bin i), as sweep_bins finds it: between bins
-/// i and i + 1, both sides non-empty, by A_L N_L + A_R N_R, the lowest i on ties. Every lane gets
-/// the winner; `w` is +inf when nothing separates the triangles.
+/// The best split over three axes' bins (lane i holds bin i of each), as best_bin_split finds it:
+/// between bins i and i + 1 of a splittable axis, both sides non-empty, by A_L N_L + A_R N_R; on
+/// equal weights the first axis, then the lowest i. The three axes' scans run side by side (their
+/// shuffles are independent). Every lane gets the winner; axis -1 when nothing separates the
+/// triangles.
 struct WarpSplit {
-    float w;
+    int axis;
     int bin;
-    uint32_t left;
+    uint32_t left;  ///< triangles in bins <= bin
 };
 
-__device__ WarpSplit sweep_bins_warp(const AABB& box, uint32_t count) {
+__device__ WarpSplit sweep_bins_warp(const AABB (&box)[3], const uint32_t (&count)[3], const bool (&splittable)[3]) {
     const unsigned lane = threadIdx.x & 31;
-    AABB l = box, r = box;
-    uint32_t nl = count, nr = count;
+    AABB l[3], r[3];
+    uint32_t nl[3], nr[3];
+    for (int a = 0; a < 3; ++a) {
+        l[a] = r[a] = box[a];
+        nl[a] = nr[a] = count[a];
+    }
     for (unsigned d = 1; d < 32; d <<= 1) {
-        const AABB ol = shfl_up_box(l, d), orr = shfl_down_box(r, d);
-        const uint32_t cl = __shfl_up_sync(~0u, nl, d), cr = __shfl_down_sync(~0u, nr, d);
-        if (lane >= d) {
-            l = merge(l, ol);
-            nl += cl;
-        }
-        if (lane + d < 32) {
-            r = merge(r, orr);
-            nr += cr;
+        for (int a = 0; a < 3; ++a) {
+            const AABB ol = shfl_up_box(l[a], d), orr = shfl_down_box(r[a], d);
+            const uint32_t cl = __shfl_up_sync(~0u, nl[a], d), cr = __shfl_down_sync(~0u, nr[a], d);
+            if (lane >= d) {
+                l[a] = merge(l[a], ol);
+                nl[a] += cl;
+            }
+            if (lane + d < 32) {
+                r[a] = merge(r[a], orr);
+                nr[a] += cr;
+            }
         }
     }
-    const AABB right = shfl_down_box(r, 1);  // bins lane + 1 and up
-    const uint32_t n_right = __shfl_down_sync(~0u, nr, 1);
     float w = __int_as_float(0x7f800000);
-    if (lane < 31 && nl > 0 && n_right > 0) w = l.half_area() * float(nl) + right.half_area() * float(n_right);
-    int at = int(lane);
+    int at = 3 * 32;  // axis * 32 + bin
+    uint32_t left = 0;
+    for (int a = 0; a < 3; ++a) {
+        const AABB right = shfl_down_box(r[a], 1);  // bins lane + 1 and up
+        const uint32_t n_right = __shfl_down_sync(~0u, nr[a], 1);
+        if (!splittable[a] || lane == 31 || nl[a] == 0 || n_right == 0) continue;
+        const float wa = l[a].half_area() * float(nl[a]) + right.half_area() * float(n_right);
+        if (wa < w) {  // strict: the first axis on ties
+            w = wa;
+            at = a * 32 + int(lane);
+            left = nl[a];
+        }
+    }
     warp_argmin(w, at);
-    return {w, at, __shfl_sync(~0u, nl, at)};
+    if (!(w < __int_as_float(0x7f800000))) return {-1, -1, 0};
+    return {at / 32, at % 32, __shfl_sync(~0u, left, at % 32)};
 }
 
 /// Triangle t's centroid, as the CPU builders compute it.
@@ -962,8 +980,8 @@ __device__ uint32_t ordered_bits(float v) {
 __device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80000000u ? u & 0x7fffffffu : ~u); }
 
 /// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
-/// address), then adds them to its task's bins and keeps the chunk's counts per bin (its lefts,
-/// once the split is known).
+/// address), runs of neighbours in one bin merged first, then adds them to its task's bins and keeps the chunk's counts
+/// per bin (its lefts, once the split is known).
 constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
@@ -984,20 +1002,51 @@ __global__ void __launch_bounds__(kBlock)
     const uint32_t* in = order.buf[t.buf];
     const uint32_t set = threadIdx.x / kWarp;
     __syncthreads();
-    for (uint32_t i = c.b + threadIdx.x; i < c.e; i += blockDim.x) {
+    // Each thread takes kSahPerThread neighbours in the order, which often share a bin (the
+    // order keeps the mesh's own within a node): a run in one bin is merged in registers and added
+    // once.
+    struct Run {
+        int bin;
+        uint32_t count;
+        uint32_t c[6];
+    };
+    Run run[3];
+    auto flush = [&](const Run& x, int a) {
+        if (!x.count) return;
+        const int k = a * kSahBins + x.bin;
+        for (int j = 0; j < 3; ++j) {
+            atomicMin(&lo[set][k][j], x.c[j]);
+            atomicMax(&hi[set][k][j], x.c[3 + j]);
+        }
+        atomicAdd(&num[set][k], x.count);
+    };
+    for (int a = 0; a < 3; ++a) run[a].count = 0;
+    const uint32_t i0 = c.b + threadIdx.x * kSahPerThread;
+    for (uint32_t j = 0; j < kSahPerThread; ++j) {
+        const uint32_t i = i0 + j;
+        if (i >= c.e) break;
         const AABB box = tri_boxes[in[i]];
         const Vec3 ct = box.center();
         const uint32_t corner[6] = {ordered_bits(box.lo.x), ordered_bits(box.lo.y), ordered_bits(box.lo.z),
                                     ordered_bits(box.hi.x), ordered_bits(box.hi.y), ordered_bits(box.hi.z)};
         for (int a = 0; a < 3; ++a) {
-            const int k = a * kSahBins + map.bin(ct[a], a);
-            for (int j = 0; j < 3; ++j) {
-                atomicMin(&lo[set][k][j], corner[j]);
-                atomicMax(&hi[set][k][j], corner[3 + j]);
+            const int bin = map.bin(ct[a], a);
+            Run& x = run[a];
+            if (x.count && x.bin == bin) {
+                for (int q = 0; q < 3; ++q) {
+                    x.c[q] = min(x.c[q], corner[q]);
+                    x.c[3 + q] = max(x.c[3 + q], corner[3 + q]);
+                }
+                ++x.count;
+            } else {
+                flush(x, a);
+                x.bin = bin;
+                x.count = 1;
+                for (int q = 0; q < 6; ++q) x.c[q] = corner[q];
             }
-            atomicAdd(&num[set][k], 1u);
         }
     }
+    for (int a = 0; a < 3; ++a) flush(run[a], a);
     __syncthreads();
     for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
         uint32_t l[3] = {~0u, ~0u, ~0u}, h[3] = {0u, 0u, 0u}, total = 0;
@@ -1035,22 +1084,20 @@ __global__ void __launch_bounds__(kBlock)
     if (task >= count) return;  // whole warps
     const SahTask t = tasks[task];
     const SahMap map(t.cb);
-    float best = __int_as_float(0x7f800000);
-    int axis = -1, bin = -1;
-    uint32_t left = 0;
+    AABB box[3];
+    uint32_t num[3];
+    bool splittable[3];
     for (int a = 0; a < 3; ++a) {
         SahBin* g = bins + (size_t(task) * 3 + a) * kSahBins + lane;
         const SahBin sb = *g;
         *g = {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0, 0};
-        if (!(map.scale[a] > 0.0f)) continue;
-        const WarpSplit s = sweep_bins_warp({{sb.lo[0], sb.lo[1], sb.lo[2]}, {sb.hi[0], sb.hi[1], sb.hi[2]}}, sb.count);
-        if (s.w < best) {
-            best = s.w;
-            axis = a;
-            bin = s.bin;
-            left = s.left;
-        }
+        box[a] = {{sb.lo[0], sb.lo[1], sb.lo[2]}, {sb.hi[0], sb.hi[1], sb.hi[2]}};
+        num[a] = sb.count;
+        splittable[a] = map.scale[a] > 0.0f;
     }
+    const WarpSplit best = sweep_bins_warp(box, num, splittable);
+    const int axis = best.axis, bin = best.bin;
+    const uint32_t left = best.left;
     if (lane != 0) return;
     const uint32_t m = axis >= 0 ? t.b + left : t.b + (t.e - t.b) / 2;
     const uint32_t id = n + m - 1;
@@ -1270,23 +1317,19 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                     }
                 }
                 __syncwarp();
-                float best = __int_as_float(0x7f800000);
-                int axis = -1, bin = -1;
-                m = size / 2;
+                AABB box[3];
+                uint32_t cnt[3];
+                bool splittable[3];
                 for (int a = 0; a < 3; ++a) {
-                    if (!(map.scale[a] > 0.0f)) continue;
                     const int k = a * kSahBins + int(lane);
-                    const WarpSplit s = sweep_bins_warp(
-                        {{from_ordered_bits(lo[k][0]), from_ordered_bits(lo[k][1]), from_ordered_bits(lo[k][2])},
-                         {from_ordered_bits(hi[k][0]), from_ordered_bits(hi[k][1]), from_ordered_bits(hi[k][2])}},
-                        num[k]);
-                    if (s.w < best) {
-                        best = s.w;
-                        axis = a;
-                        bin = s.bin;
-                        m = s.left;
-                    }
+                    box[a] = {{from_ordered_bits(lo[k][0]), from_ordered_bits(lo[k][1]), from_ordered_bits(lo[k][2])},
+                              {from_ordered_bits(hi[k][0]), from_ordered_bits(hi[k][1]), from_ordered_bits(hi[k][2])}};
+                    cnt[a] = num[k];
+                    splittable[a] = map.scale[a] > 0.0f;
                 }
+                const WarpSplit best = sweep_bins_warp(box, cnt, splittable);
+                const int axis = best.axis, bin = best.bin;
+                m = axis >= 0 ? best.left : size / 2;
                 __syncwarp();
                 if (axis >= 0) {  // stable partition through tmp
                     uint32_t nl = 0, nr = 0;
