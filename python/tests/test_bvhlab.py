@@ -138,10 +138,12 @@ def test_build_options_and_their_errors(cornell):
 
 @needs_gpu
 def test_gpu_builders(cornell):
-    for builder in ("lbvh", "ploc", "hploc"):
-        s = bvhlab.build(cornell, builder, radius=4) if builder != "lbvh" else bvhlab.build(cornell, builder)
+    for builder in ("lbvh", "ploc", "hploc", "gpu-binned"):
+        radius = builder in ("ploc", "hploc")
+        s = bvhlab.build(cornell, builder, radius=4) if radius else bvhlab.build(cornell, builder)
         assert s.stats["build_device"] == "gpu" and s.stats["gpu_build"]["total_ms"] > 0
-        assert s.stats.get("radius") == (4 if builder != "lbvh" else None)
+        assert s.stats.get("radius") == (4 if radius else None)
+        assert s.stats.get("bins") == (32 if builder == "gpu-binned" else None)
         rays, query = bvhlab.rays(cornell, "primary", width=40, height=30)
         hits, _ = bvhlab.trace(s, rays, query, device="gpu")
         assert bvhlab.verify(cornell, rays, hits, query)["mismatches"] == 0

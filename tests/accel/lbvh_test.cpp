@@ -410,6 +410,16 @@ TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
     EXPECT_EQ(describe_config(BuilderKind::kLbvh, o), "lbvh leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60");
     o.reinsertion_passes = 2;  // named only when run, as records before GPU reinsertion read
     EXPECT_EQ(describe_config(BuilderKind::kLbvh, o), "lbvh leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 reinsert=2");
+    // The GPU's binned SAH: no Morton codes, no radius, its 32 bins named.
+    EXPECT_EQ(parse_builder_kind("gpu-binned"), BuilderKind::kGpuBinned);
+    EXPECT_STREQ(builder_name(BuilderKind::kGpuBinned), "gpu-binned");
+    EXPECT_TRUE(runs_on_gpu(BuilderKind::kGpuBinned));
+    EXPECT_FALSE(uses_morton(BuilderKind::kGpuBinned));
+    EXPECT_TRUE(uses_morton(BuilderKind::kHploc));
+    EXPECT_FALSE(uses_radius(BuilderKind::kGpuBinned));
+    EXPECT_EQ(describe_config(BuilderKind::kGpuBinned, o),
+              "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32 reinsert=2");
+    EXPECT_THROW(run_builder(BuilderKind::kGpuBinned, mesh, o), Error);
 }
 
 TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
@@ -472,6 +482,20 @@ TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     EXPECT_EQ(a.figures["builder"], "ploc");
     EXPECT_EQ(a.figures["build_device"], "gpu");
     EXPECT_EQ(a.figures["radius"], 5);
+    // A gpu-binned file: its builder and bins come back, no Morton bits or radius are claimed.
+    meta.builder = BuilderKind::kGpuBinned;
+    meta.options = BuilderOptions{};
+    test::TempFile g("gpu-binned.tree");
+    write_tree_file(g.path(), tree, meta);
+    const TreeFile rg = read_tree_file(g.path());
+    EXPECT_EQ(rg.meta.builder, BuilderKind::kGpuBinned);
+    EXPECT_EQ(describe_config(rg.meta), "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32");
+    const trav::AccelStructure b = trav::load_structure(mesh, meta.scene_hash, g.path());
+    EXPECT_EQ(b.figures["builder"], "gpu-binned");
+    EXPECT_EQ(b.figures["build_device"], "gpu");
+    EXPECT_EQ(b.figures["bins"], 32);
+    EXPECT_FALSE(b.figures.contains("morton_bits"));
+    EXPECT_FALSE(b.figures.contains("radius"));
 }
 
 }  // namespace

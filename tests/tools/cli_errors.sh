@@ -228,6 +228,14 @@ expect_error morton-cpu-builder "--morton-bits applies to --builder lbvh, ploc o
     --builder sbvh --morton-bits 60
 expect_error radius-lbvh "--radius applies to --builder ploc or hploc, not lbvh" build "$cb" --builder lbvh --radius 4
 expect_error bins-gpu "--bins does not apply to the GPU builders" build "$cb" --builder hploc --bins 8
+expect_error bins-gpu-binned "--bins does not apply to the GPU builders [(]gpu-binned's are 32 a side" build "$cb" \
+    --builder gpu-binned --bins 16
+expect_error morton-gpu-binned "--morton-bits applies to --builder lbvh, ploc or hploc, not gpu-binned" build "$cb" \
+    --builder gpu-binned --morton-bits 60
+expect_error radius-gpu-binned "--radius applies to --builder ploc or hploc, not gpu-binned" build "$cb" \
+    --builder gpu-binned --radius 4
+expect_error gpu-binned-on-cpu "--build-device cpu does not apply: builder gpu-binned runs on the GPU" build "$cb" \
+    --builder gpu-binned --build-device cpu
 expect_error reinsert-17-gpu "--reinsert" build "$cb" --builder lbvh --reinsert 17
 expect_error morton-bits-31 "--morton-bits" build "$cb" --builder lbvh --morton-bits 31
 expect_error radius-0 "--radius" build "$cb" --builder hploc --radius 0
@@ -240,6 +248,8 @@ expect_error runs-tlas-cwbvh "--runs on an instanced scene rebuilds its TLAS on 
 if ! nvidia-smi >/dev/null 2>&1; then  # without a GPU the GPU builders say why
     expect_error gpu-builder-no-gpu "builder 'hploc' runs on the GPU, and there is none" build "$cb" --builder hploc
     expect_error ploc-no-gpu "builder 'ploc' runs on the GPU, and there is none" build "$cb" --builder ploc --radius 4
+    expect_error gpu-binned-no-gpu "builder 'gpu-binned' runs on the GPU, and there is none" build "$cb" \
+        --builder gpu-binned
 fi
 head -c 300 "$tmp/cb.tree" >"$tmp/trunc.tree"
 expect_error cache-truncated "truncated" verify "$data/cornell_box.obj" --structure "$tmp/trunc.tree"
