@@ -979,49 +979,9 @@ __device__ uint32_t ordered_bits(float v) {
 
 __device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80000000u ? u & 0x7fffffffu : ~u); }
 
-/// One thread's additions to bins over triangles it takes in order: a run of them in one bin (on
-/// an axis) is merged in registers and handed to `add(k, count, corners)` once (k = axis * 32 +
-/// bin, corners as ordered bits). Neighbours in a node's order often share a bin: the order keeps
-/// the mesh's own within a node.
-struct BinRuns {
-    int bin[3];
-    uint32_t count[3];
-    uint32_t c[3][6];
-
-    __device__ BinRuns() : count{0, 0, 0} {}
-
-    template <typename Add>
-    __device__ void add(const AABB& box, const SahMap& map, Add&& add_to) {
-        const Vec3 ct = box.center();
-        const uint32_t corner[6] = {ordered_bits(box.lo.x), ordered_bits(box.lo.y), ordered_bits(box.lo.z),
-                                    ordered_bits(box.hi.x), ordered_bits(box.hi.y), ordered_bits(box.hi.z)};
-        for (int a = 0; a < 3; ++a) {
-            const int k = map.bin(ct[a], a);
-            if (count[a] && bin[a] == k) {
-                for (int q = 0; q < 3; ++q) {
-                    c[a][q] = min(c[a][q], corner[q]);
-                    c[a][3 + q] = max(c[a][3 + q], corner[3 + q]);
-                }
-                ++count[a];
-            } else {
-                if (count[a]) add_to(a * kSahBins + bin[a], count[a], c[a]);
-                bin[a] = k;
-                count[a] = 1;
-                for (int q = 0; q < 6; ++q) c[a][q] = corner[q];
-            }
-        }
-    }
-
-    template <typename Add>
-    __device__ void finish(Add&& add_to) {
-        for (int a = 0; a < 3; ++a)
-            if (count[a]) add_to(a * kSahBins + bin[a], count[a], c[a]);
-    }
-};
-
 /// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
-/// address), runs of neighbours in one bin merged first (BinRuns), then adds them to its task's bins and keeps the
-/// chunk's counts per bin (its lefts, once the split is known).
+/// address), runs of neighbours in one bin merged first, then adds them to its task's bins and keeps the chunk's counts
+/// per bin (its lefts, once the split is known).
 constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
@@ -1042,25 +1002,51 @@ __global__ void __launch_bounds__(kBlock)
     const uint32_t* in = order.buf[t.buf];
     const uint32_t set = threadIdx.x / kWarp;
     __syncthreads();
-    // Each thread takes kSahPerThread neighbours in the order (BinRuns), read through shared
-    // memory so that the block's loads are coalesced (padded: a warp's reads hit distinct banks).
-    __shared__ uint32_t chunk_ids[kSahChunk + kSahChunk / kSahPerThread];
-    for (uint32_t k = threadIdx.x; k < c.e - c.b; k += blockDim.x) chunk_ids[k + k / kSahPerThread] = in[c.b + k];
-    __syncthreads();
-    auto add = [&](int k, uint32_t n, const uint32_t* x) {
-        for (int j = 0; j < 3; ++j) {
-            atomicMin(&lo[set][k][j], x[j]);
-            atomicMax(&hi[set][k][j], x[3 + j]);
-        }
-        atomicAdd(&num[set][k], n);
+    // Each thread takes kSahPerThread neighbours in the order, which often share a bin (the
+    // order keeps the mesh's own within a node): a run in one bin is merged in registers and added
+    // once.
+    struct Run {
+        int bin;
+        uint32_t count;
+        uint32_t c[6];
     };
-    BinRuns runs;
+    Run run[3];
+    auto flush = [&](const Run& x, int a) {
+        if (!x.count) return;
+        const int k = a * kSahBins + x.bin;
+        for (int j = 0; j < 3; ++j) {
+            atomicMin(&lo[set][k][j], x.c[j]);
+            atomicMax(&hi[set][k][j], x.c[3 + j]);
+        }
+        atomicAdd(&num[set][k], x.count);
+    };
+    for (int a = 0; a < 3; ++a) run[a].count = 0;
+    const uint32_t i0 = c.b + threadIdx.x * kSahPerThread;
     for (uint32_t j = 0; j < kSahPerThread; ++j) {
-        const uint32_t k = threadIdx.x * kSahPerThread + j;
-        if (c.b + k >= c.e) break;
-        runs.add(tri_boxes[chunk_ids[k + threadIdx.x]], map, add);
+        const uint32_t i = i0 + j;
+        if (i >= c.e) break;
+        const AABB box = tri_boxes[in[i]];
+        const Vec3 ct = box.center();
+        const uint32_t corner[6] = {ordered_bits(box.lo.x), ordered_bits(box.lo.y), ordered_bits(box.lo.z),
+                                    ordered_bits(box.hi.x), ordered_bits(box.hi.y), ordered_bits(box.hi.z)};
+        for (int a = 0; a < 3; ++a) {
+            const int bin = map.bin(ct[a], a);
+            Run& x = run[a];
+            if (x.count && x.bin == bin) {
+                for (int q = 0; q < 3; ++q) {
+                    x.c[q] = min(x.c[q], corner[q]);
+                    x.c[3 + q] = max(x.c[3 + q], corner[3 + q]);
+                }
+                ++x.count;
+            } else {
+                flush(x, a);
+                x.bin = bin;
+                x.count = 1;
+                for (int q = 0; q < 6; ++q) x.c[q] = corner[q];
+            }
+        }
     }
-    runs.finish(add);
+    for (int a = 0; a < 3; ++a) flush(run[a], a);
     __syncthreads();
     for (uint32_t k = threadIdx.x; k < 3 * kSahBins; k += blockDim.x) {
         uint32_t l[3] = {~0u, ~0u, ~0u}, h[3] = {0u, 0u, 0u}, total = 0;
@@ -1316,19 +1302,19 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                     num[k] = 0;
                 }
                 __syncwarp();
-                {  // each lane a run of neighbours (BinRuns)
-                    auto add = [&](int k, uint32_t n, const uint32_t* x) {
-                        for (int j = 0; j < 3; ++j) {
-                            atomicMin(&lo[k][j], x[j]);
-                            atomicMax(&hi[k][j], x[3 + j]);
-                        }
-                        atomicAdd(&num[k], n);
-                    };
-                    BinRuns runs;
-                    // An odd run length: the lanes' reads of ids fall in distinct banks.
-                    const uint32_t per = ((size + kWarp - 1) / kWarp) | 1u, from = b + lane * per;
-                    for (uint32_t i = from; i < min(from + per, e); ++i) runs.add(tri_boxes[ids[i]], map, add);
-                    runs.finish(add);
+                for (uint32_t i = b + lane; i < e; i += kWarp) {
+                    const AABB box = tri_boxes[ids[i]];
+                    const Vec3 ct = box.center();
+                    for (int a = 0; a < 3; ++a) {
+                        const int k = a * kSahBins + map.bin(ct[a], a);
+                        atomicMin(&lo[k][0], ordered_bits(box.lo.x));
+                        atomicMin(&lo[k][1], ordered_bits(box.lo.y));
+                        atomicMin(&lo[k][2], ordered_bits(box.lo.z));
+                        atomicMax(&hi[k][0], ordered_bits(box.hi.x));
+                        atomicMax(&hi[k][1], ordered_bits(box.hi.y));
+                        atomicMax(&hi[k][2], ordered_bits(box.hi.z));
+                        atomicAdd(&num[k], 1u);
+                    }
                 }
                 __syncwarp();
                 AABB box[3];
