@@ -1116,12 +1116,6 @@ __global__ void __launch_bounds__(kBlock)
     splits[task] = s;
 }
 
-/// Whether the triangle at position i goes left.
-__device__ bool sah_goes_left(const SahSplit& s, const SahMap& map, const AABB* tri_boxes, uint32_t id, uint32_t i) {
-    if (s.axis < 0) return i < s.m;
-    return map.bin(centroid_of(tri_boxes, id)[s.axis], s.axis) <= s.bin;
-}
-
 /// Each chunk's count of triangles going left, from its counts per bin (one warp per chunk).
 __global__ void __launch_bounds__(kBlock)
     sah_lefts(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, uint32_t chunks,
@@ -1248,7 +1242,7 @@ __global__ void __launch_bounds__(1024)
 /// One warp per small task: its subtree down to tiny tasks (at most kSahSweep triangles, left to
 /// sah_tiny), the triangle ids in shared memory. Each node is split by 32 bins per axis, then the
 /// smaller child goes on and the larger waits on a stack (so it stays short).
-__global__ void __launch_bounds__(kSahWarps* kWarp)
+__global__ void __launch_bounds__(kSahWarps* kWarp, 8)
     sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
               uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
@@ -1820,6 +1814,9 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             chunks = w[2];
             std::swap(level, next);
         }
+        // Eight blocks an SM (64 registers a thread, the most shared memory the SM can give).
+        BVHLAB_CUDA_CHECK(cudaFuncSetAttribute(sah_small, cudaFuncAttributePreferredSharedMemoryCarveout,
+                                               cudaSharedmemCarveoutMaxShared));
         sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(s_small.data(), s_words.data(), order,
                                                                        tri_boxes.data(), n, children.data(), root,
                                                                        final_ids.data(), s_tiny.data());
