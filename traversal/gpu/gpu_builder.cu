@@ -1242,7 +1242,7 @@ __global__ void __launch_bounds__(1024)
 /// One warp per small task: its subtree down to tiny tasks (at most kSahSweep triangles, left to
 /// sah_tiny), the triangle ids in shared memory. Each node is split by 32 bins per axis, then the
 /// smaller child goes on and the larger waits on a stack (so it stays short).
-__global__ void __launch_bounds__(kSahWarps* kWarp, 8)
+__global__ void __launch_bounds__(kSahWarps* kWarp)
     sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
               uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
@@ -1814,9 +1814,6 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             chunks = w[2];
             std::swap(level, next);
         }
-        // Eight blocks an SM (64 registers a thread, the most shared memory the SM can give).
-        BVHLAB_CUDA_CHECK(cudaFuncSetAttribute(sah_small, cudaFuncAttributePreferredSharedMemoryCarveout,
-                                               cudaSharedmemCarveoutMaxShared));
         sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(s_small.data(), s_words.data(), order,
                                                                        tri_boxes.data(), n, children.data(), root,
                                                                        final_ids.data(), s_tiny.data());
