@@ -30,8 +30,7 @@ namespace bvhlab::trav {
 
 /// What to build. The defaults are the CLI's: a binned SAH BVH in the BVH2 layout.
 struct StructureSpec {
-    std::string builder =
-        "binned";  ///< binned (also "bvh"), sweep, sbvh, kdtree; lbvh, ploc, hploc or gpu-binned on the GPU
+    std::string builder = "binned";   ///< binned (also "bvh"), sweep, sbvh, kdtree; lbvh, ploc, hploc, gpu-binned (GPU)
     std::string layout = "bvh2";      ///< a BVH's traversal layout: bvh2 or cwbvh (8-wide, compressed)
     accel::BuilderOptions options;    ///< the BVH builders' options (bins, leaf sizes, SBVH, reinsertion)
     accel::KdTreeBuilder::Config kd;  ///< the kd-tree builder's constants
