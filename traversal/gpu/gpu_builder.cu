@@ -1359,7 +1359,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
 }
 
 /// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
-/// BinnedSahBuilder's exact sweep: per axis the triangles in order of (centroid, id), each plane
+/// BinnedSahBuilder's exact sweep: per axis the triangles in order of centroid, each plane
 /// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
 /// first plane on ties) taken. The task's triangles are sorted once per axis; a node is a mask of
 /// them, and walks the sorted orders skipping the others. Boxes and ids stay in shared memory (a
@@ -1392,18 +1392,16 @@ __global__ void __launch_bounds__(kTinyBlock)
         corner[4][i][me] = bx.hi.y;
         corner[5][i][me] = bx.hi.z;
     }
-    uint8_t sorted[3][kSahSweep];  // the task's places in order of (centroid, id), per axis
+    // The task's places in order of centroid, per axis. Equal centroids may come in any order:
+    // no plane falls between them, so a node's planes, weights and sides are the same whatever
+    // their order (the CPU sorts by (centroid, id); its leaves of several triangles may list
+    // them in another order, its tree is the same).
+    uint8_t sorted[3][kSahSweep];
     for (int a = 0; a < 3; ++a) {
         for (uint32_t i = 0; i < count; ++i) {
             const float cx = centre(i, a);
-            const uint32_t idx = tri[i][me];
             uint32_t j = i;
-            for (; j > 0; --j) {
-                const uint32_t y = sorted[a][j - 1];
-                const float cy = centre(y, a);
-                if (cy < cx || (cy == cx && tri[y][me] < idx)) break;
-                sorted[a][j] = sorted[a][j - 1];
-            }
+            for (; j > 0 && centre(sorted[a][j - 1], a) > cx; --j) sorted[a][j] = sorted[a][j - 1];
             sorted[a][j] = uint8_t(i);
         }
     }
