@@ -9,18 +9,23 @@
 //  - hploc: H-PLOC (Benthin, Meister, Barczak, Mehalwal, Tsakok, Kensler, HPG 2024): Apetrei's
 //    bottom-up LBVH in which each warp, at every node with more than 16 clusters below it,
 //    merges them by PLOC's nearest-neighbour rule (Meister & Bittner 2018) within a search
-//    radius, down to 16 (to 1 at the root).
-// Any of the three may then run passes of parallel reinsertion (Meister & Bittner 2018; BuilderOptions::
+//    radius, down to 16 (to 1 at the root);
+//  - gpu-binned: the binned SAH (Wald 2007) as accel::BinnedSahBuilder splits, top down: nodes of
+//    more than 512 triangles level by level (chunks binned by blocks, a warp's sweep per node, a
+//    stable partition through CUB's scan), a warp per subtree of up to 512 in shared memory, and
+//    a thread per node of up to 16 for the exact sweep; with leaves of one triangle its tree is
+//    BinnedSahBuilder's, node for node.
+// Any of the four may then run passes of parallel reinsertion (Meister & Bittner 2018; BuilderOptions::
 // reinsertion_passes, 0 by default): each pass every leaf and interior node of the tree searches,
 // up to 16 levels above it and 64 nodes in all, for the sibling that saves the most interior
 // area; moves that change the same nodes' links are resolved by priority (the larger gain wins),
 // a move whose X lies below another move's node is dropped (no subtree is carried into itself),
 // the rest are made at once, and boxes and leaf choices are fitted again. Passes that leave the
 // tree as deep as max_depth are undone.
-// All three end the same way on the device: each node's SAH cost decides, bottom-up, where leaves of
+// All four end the same way on the device: each node's SAH cost decides, bottom-up, where leaves of
 // up to max_leaf triangles replace subtrees, and the BVH2 layout is written flat: every node's
 // place from one scan over all nodes' flags (nodes in the order of their ids, the LBVH's leaves
-// in Morton order), then the Woop triangles in leaf order. The result
+// in Morton order, gpu-binned's in its final order), then the Woop triangles in leaf order. The result
 // stays on the device for the kernels; a host copy is downloaded for the CPU tracers, the
 // figures and structure files.
 #pragma once
@@ -69,7 +74,8 @@ struct GpuBuild {
 /// costs, Morton bits and (H-)PLOC search radius. `keep_raw` also downloads the hierarchy before
 /// the leaves are chosen, after any reinsertion passes (the LBVH's and PLOC's are comparable bit
 /// for bit with accel::lbvh_reference and accel::ploc_reference, passes with
-/// accel::parallel_reinsertion_reference).
+/// accel::parallel_reinsertion_reference; gpu-binned's has no keys and its sorted_ids are its
+/// final order).
 /// Throws bvhlab::Error without a GPU, for a CPU builder, for leaves larger than the BVH2
 /// layout's 16 triangles, or for a mesh past its 2^27 triangle references.
 GpuBuild build_on_gpu(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
