@@ -785,9 +785,11 @@ __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, cons
 // LBVH's are of the sorted keys.
 // Large tasks (more than kSahWarpTask triangles) are split level by level, every kernel over all
 // of a level's tasks: their triangles binned in chunks (a block each, bins in shared memory, then
-// added to the task's bins), one warp per task sweeps, and the chunks partition stably (a count,
-// CUB's scan, a scatter) into the other order buffer. The host reads each level's task and chunk
-// counts. Then one warp per small task builds its whole subtree in shared memory.
+// added to the task's bins, the chunk's counts per bin kept), one warp per task sweeps, and the
+// chunks partition stably (their lefts from those counts, CUB's scan, a scatter) into the other
+// order buffer. The host reads each level's task and chunk counts. Then one warp per small task
+// builds its subtree in shared memory down to tiny tasks (at most kSahSweep triangles), which one
+// thread each sweeps exactly. The tiers' costs on furball: experiments/NOTES.md, session 33.
 
 constexpr int kSahBins = 32;  ///< a warp sweeps one axis, a lane per bin
 static_assert(kSahBins == int(kWarp), "one lane per bin");
