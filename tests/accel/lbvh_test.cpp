@@ -489,6 +489,19 @@ TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     write_tree_file(g.path(), tree, meta);
     const TreeFile rg = read_tree_file(g.path());
     EXPECT_EQ(rg.meta.builder, BuilderKind::kGpuBinned);
+    // The header's builder field holds the codes docs/formats.md gives: 5 ploc, 7 gpu-binned.
+    auto builder_code = [](const std::string& path) {
+        uint32_t code = 0;
+        std::FILE* fp = std::fopen(path.c_str(), "rb");
+        EXPECT_NE(fp, nullptr);
+        if (!fp) return code;
+        EXPECT_EQ(std::fseek(fp, 12, SEEK_SET), 0);
+        EXPECT_EQ(std::fread(&code, sizeof code, 1, fp), 1u);
+        std::fclose(fp);
+        return code;
+    };
+    EXPECT_EQ(builder_code(f.path()), 5u);
+    EXPECT_EQ(builder_code(g.path()), 7u);
     EXPECT_EQ(describe_config(rg.meta), "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32");
     const trav::AccelStructure b = trav::load_structure(mesh, meta.scene_hash, g.path());
     EXPECT_EQ(b.figures["builder"], "gpu-binned");
@@ -496,6 +509,21 @@ TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     EXPECT_EQ(b.figures["bins"], 32);
     EXPECT_FALSE(b.figures.contains("morton_bits"));
     EXPECT_FALSE(b.figures.contains("radius"));
+    // A file of another version, older or newer, is refused with its version named.
+    for (const uint32_t version : {kTreeFileVersion - 1, kTreeFileVersion + 1}) {
+        std::FILE* fp = std::fopen(g.path().c_str(), "r+b");
+        ASSERT_NE(fp, nullptr);
+        ASSERT_EQ(std::fseek(fp, 8, SEEK_SET), 0);
+        ASSERT_EQ(std::fwrite(&version, sizeof version, 1, fp), 1u);
+        std::fclose(fp);
+        try {
+            read_tree_file(g.path());
+            ADD_FAILURE() << "version " << version << " was read";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("has version " + std::to_string(version)), std::string::npos)
+                << e.what();
+        }
+    }
 }
 
 }  // namespace
