@@ -114,6 +114,16 @@ __device__ void atomic_max(float* at, float v) {
         atomicMin(reinterpret_cast<unsigned*>(at), __float_as_uint(v));
 }
 
+/// *at grown to hold `b`, by atomics on each corner.
+__device__ void atomic_merge(AABB* at, const AABB& b) {
+    atomic_min(&at->lo.x, b.lo.x);
+    atomic_min(&at->lo.y, b.lo.y);
+    atomic_min(&at->lo.z, b.lo.z);
+    atomic_max(&at->hi.x, b.hi.x);
+    atomic_max(&at->hi.y, b.hi.y);
+    atomic_max(&at->hi.z, b.hi.z);
+}
+
 __global__ void set_empty(AABB* box) { *box = AABB::empty(); }
 
 /// boxes[t] = box_of(t) for every primitive t, and the bounds of their centres added to *bounds
@@ -131,14 +141,7 @@ __global__ void __launch_bounds__(kBlock)
     using Reduce = cub::BlockReduce<AABB, kBlock>;
     __shared__ typename Reduce::TempStorage scratch;
     c = Reduce(scratch).Reduce(c, BoxUnion{});
-    if (threadIdx.x == 0 && !c.is_empty()) {
-        atomic_min(&bounds->lo.x, c.lo.x);
-        atomic_min(&bounds->lo.y, c.lo.y);
-        atomic_min(&bounds->lo.z, c.lo.z);
-        atomic_max(&bounds->hi.x, c.hi.x);
-        atomic_max(&bounds->hi.y, c.hi.y);
-        atomic_max(&bounds->hi.z, c.hi.z);
-    }
+    if (threadIdx.x == 0 && !c.is_empty()) atomic_merge(bounds, c);
 }
 
 /// A triangle's box.
@@ -818,6 +821,8 @@ struct SahSplit {
 struct SahBin {
     float lo[3], hi[3];
     uint32_t count, pad;
+
+    __device__ static SahBin empty() { return {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0, 0}; }
 };
 
 struct SahOrder {
@@ -937,8 +942,7 @@ __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* 
                           uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
                           uint32_t bin_count) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    for (uint32_t k = i; k < bin_count; k += gridDim.x * blockDim.x)
-        bins[k] = {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0, 0};
+    for (uint32_t k = i; k < bin_count; k += gridDim.x * blockDim.x) bins[k] = SahBin::empty();
     if (i != 0) return;
     const SahTask root{0, n, kInvalid, 0, *bounds};
     if (n > kSahWarpTask) {
@@ -961,13 +965,13 @@ __device__ uint32_t sah_task_of(const uint32_t* first, uint32_t tasks, uint32_t 
     return lo;
 }
 
-/// A block's chunk of a large task: its task and range.
+/// Chunk k of a level's large tasks (by default the block's own): its task and range.
 struct SahChunk {
     uint32_t task, b, e;
-    __device__ SahChunk(const SahTask* tasks, const uint32_t* first, uint32_t count) {
-        task = sah_task_of(first, count, blockIdx.x);
+    __device__ SahChunk(const SahTask* tasks, const uint32_t* first, uint32_t count, uint32_t k = blockIdx.x) {
+        task = sah_task_of(first, count, k);
         const SahTask& t = tasks[task];
-        b = t.b + (blockIdx.x - first[task]) * kSahChunk;
+        b = t.b + (k - first[task]) * kSahChunk;
         e = min(b + kSahChunk, t.e);
     }
 };
@@ -1092,7 +1096,7 @@ __global__ void __launch_bounds__(kBlock)
     for (int a = 0; a < 3; ++a) {
         SahBin* g = bins + (size_t(task) * 3 + a) * kSahBins + lane;
         const SahBin sb = *g;
-        *g = {{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}, 0, 0};
+        *g = SahBin::empty();
         box[a] = {{sb.lo[0], sb.lo[1], sb.lo[2]}, {sb.hi[0], sb.hi[1], sb.hi[2]}};
         num[a] = sb.count;
         splittable[a] = map.scale[a] > 0.0f;
@@ -1125,11 +1129,10 @@ __global__ void __launch_bounds__(kBlock)
               uint32_t* __restrict__ lefts) {
     const uint32_t chunk = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
     if (chunk >= chunks) return;  // whole warps
-    const uint32_t task = sah_task_of(first, count, chunk);
-    const SahSplit s = splits[task];
+    const SahChunk c(tasks, first, count, chunk);
+    const SahSplit s = splits[c.task];
     if (s.axis < 0) {  // by place
-        const uint32_t b = tasks[task].b + (chunk - first[task]) * kSahChunk, e = min(b + kSahChunk, tasks[task].e);
-        if (lane == 0) lefts[chunk] = s.m > b ? min(s.m, e) - b : 0;
+        if (lane == 0) lefts[chunk] = s.m > c.b ? min(s.m, c.e) - c.b : 0;
         return;
     }
     uint32_t k = lane <= uint32_t(s.bin) ? chunk_counts[(size_t(chunk) * 3 + s.axis) * kSahBins + lane] : 0;
@@ -1205,15 +1208,10 @@ __global__ void __launch_bounds__(kBlock)
     __syncthreads();
     if (threadIdx.x < 2 && s.child_cb[threadIdx.x]) {
         const uint32_t* q = side_box[threadIdx.x];
-        if (q[0] != ~0u) {  // not empty
-            AABB* cb = s.child_cb[threadIdx.x];
-            atomic_min(&cb->lo.x, from_ordered_bits(q[0]));
-            atomic_min(&cb->lo.y, from_ordered_bits(q[1]));
-            atomic_min(&cb->lo.z, from_ordered_bits(q[2]));
-            atomic_max(&cb->hi.x, from_ordered_bits(q[3]));
-            atomic_max(&cb->hi.y, from_ordered_bits(q[4]));
-            atomic_max(&cb->hi.z, from_ordered_bits(q[5]));
-        }
+        if (q[0] != ~0u)  // not empty
+            atomic_merge(s.child_cb[threadIdx.x],
+                         {{from_ordered_bits(q[0]), from_ordered_bits(q[1]), from_ordered_bits(q[2])},
+                          {from_ordered_bits(q[3]), from_ordered_bits(q[4]), from_ordered_bits(q[5])}});
     }
 }
 
