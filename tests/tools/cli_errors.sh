@@ -213,6 +213,10 @@ expect_error tree-header-nan-ct "nan-ct.tree' has a header value out of range: c
 patch_tree "$tmp/cb.tree" "$tmp/depth0.tree" 44 I 0
 expect_error tree-header-depth-0 "header value out of range: max_depth 0 is not in [[]1, 64[]]" bench \
     "$data/cornell_box.obj" --structure "$tmp/depth0.tree" --runs 1
+# Builder codes past the last (7, gpu-binned) are refused by number, with the checksum intact.
+patch_tree "$tmp/cb.tree" "$tmp/builder8.tree" 12 I 8
+expect_error tree-header-builder-8 "builder8.tree' names an unknown builder [(]8[)]" verify \
+    "$data/cornell_box.obj" --structure "$tmp/builder8.tree"
 expect_error cache-other-config "stale structure file.*asked for" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --max-leaf 2
 expect_error cache-other-reinsertion "stale structure file.*reinsert=3.*reinsert=0" bench "$data/cornell_box.obj" --structure "$tmp/cb.tree" --reinsert 0
 expect_error bad-reinsert "reinsert" build "$data/cornell_box.obj" --builder sbvh --reinsert 99
