@@ -1361,16 +1361,19 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
 /// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
 /// BinnedSahBuilder's exact sweep: per axis the triangles in order of centroid, each plane
 /// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
-/// first plane on ties) taken. The task's triangles are sorted once per axis; a node is a mask of
-/// them, and walks the sorted orders skipping the others. Boxes and ids stay in shared memory (a
-/// column per thread, so a warp's accesses fall in distinct banks).
+/// first plane on ties) taken. The task's triangles are ranked once per axis (the orders packed
+/// four bits a place); a node is a mask of them. Loops run over the kSahSweep places unrolled, so
+/// that every array but the boxes lives in registers; the boxes stay in shared memory (a column
+/// per thread, so a warp's accesses fall in distinct banks).
 constexpr int kTinyBlock = 64;
+static_assert(kSahSweep <= 16, "an order's places are four bits, a node a 16-bit mask");
+
+__device__ __forceinline__ uint32_t place(uint64_t order, int j) { return uint32_t(order >> (4 * j)) & 15u; }
 
 __global__ void __launch_bounds__(kTinyBlock)
     sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ words, const AABB* __restrict__ tri_boxes,
              uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
     __shared__ float corner[6][kSahSweep][kTinyBlock];
-    __shared__ uint32_t tri[kSahSweep][kTinyBlock];
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= words[3]) return;
     const unsigned me = threadIdx.x;
@@ -1381,93 +1384,152 @@ __global__ void __launch_bounds__(kTinyBlock)
                     {corner[3][x][me], corner[4][x][me], corner[5][x][me]}};
     };
     auto centre = [&](uint32_t x, int a) { return (corner[a][x][me] + corner[3 + a][x][me]) * 0.5f; };
-    for (uint32_t i = 0; i < count; ++i) {
-        const uint32_t id = final_ids[t.x + i];
-        const AABB bx = tri_boxes[id];
-        tri[i][me] = id;
-        corner[0][i][me] = bx.lo.x;
-        corner[1][i][me] = bx.lo.y;
-        corner[2][i][me] = bx.lo.z;
-        corner[3][i][me] = bx.hi.x;
-        corner[4][i][me] = bx.hi.y;
-        corner[5][i][me] = bx.hi.z;
-    }
-    // The task's places in order of centroid, per axis. Equal centroids may come in any order:
-    // no plane falls between them, so a node's planes, weights and sides are the same whatever
-    // their order (the CPU sorts by (centroid, id); its leaves of several triangles may list
-    // them in another order, its tree is the same).
-    uint8_t sorted[3][kSahSweep];
-    for (int a = 0; a < 3; ++a) {
-        for (uint32_t i = 0; i < count; ++i) {
-            const float cx = centre(i, a);
-            uint32_t j = i;
-            for (; j > 0 && centre(sorted[a][j - 1], a) > cx; --j) sorted[a][j] = sorted[a][j - 1];
-            sorted[a][j] = uint8_t(i);
+    uint32_t ids[kSahSweep];
+    BVHLAB_UNROLL
+    for (uint32_t i = 0; i < kSahSweep; ++i) {
+        ids[i] = 0;
+        if (i < count) {
+            ids[i] = final_ids[t.x + i];
+            const AABB bx = tri_boxes[ids[i]];
+            corner[0][i][me] = bx.lo.x;
+            corner[1][i][me] = bx.lo.y;
+            corner[2][i][me] = bx.lo.z;
+            corner[3][i][me] = bx.hi.x;
+            corner[4][i][me] = bx.hi.y;
+            corner[5][i][me] = bx.hi.z;
         }
     }
-    struct Node {
-        uint32_t mask, b, slot;
+    // The task's places in order of centroid, per axis: place i goes to its rank. Equal
+    // centroids may come in any order: no plane falls between them, so a node's planes, weights
+    // and sides are the same whatever their order (the CPU sorts by (centroid, id); its leaves
+    // of several triangles may list them in another order, its tree is the same).
+    uint64_t order[3];
+    BVHLAB_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        float c[kSahSweep];
+        BVHLAB_UNROLL
+        for (uint32_t i = 0; i < kSahSweep; ++i) c[i] = i < count ? centre(i, a) : 0.0f;
+        uint64_t o = 0;
+        BVHLAB_UNROLL
+        for (uint32_t i = 0; i < kSahSweep; ++i) {
+            if (i >= count) break;
+            uint32_t r = 0;
+            BVHLAB_UNROLL
+            for (uint32_t j = 0; j < kSahSweep; ++j)
+                r += j < count && (c[j] < c[i] || (c[j] == c[i] && j < i)) ? 1u : 0u;
+            o |= uint64_t(i) << (4 * r);
+        }
+        order[a] = o;
+    }
+    // The best plane of axis a for the node (mask, size): its weight (+inf for none) and the
+    // members left of it. Forward over the places: the left box's area, members and last
+    // centroid at each place; backward: the right box, and each plane's weight (<= keeps the
+    // first plane of equal weights).
+    auto sweep = [&](int a, uint32_t mask, uint32_t size, uint32_t& m_out) {
+        const uint64_t o = order[a];
+        float left_area[kSahSweep], last_c[kSahSweep];
+        uint32_t left_n[kSahSweep];
+        AABB acc = AABB::empty();
+        uint32_t q = 0;
+        float first = 0.0f, last = 0.0f;
+        BVHLAB_UNROLL
+        for (uint32_t j = 0; j < kSahSweep; ++j) {
+            if (j < count) {
+                const uint32_t x = place(o, int(j));
+                if ((mask >> x) & 1u) {
+                    acc.extend(box_of(x));
+                    last = centre(x, a);
+                    if (q == 0) first = last;
+                    ++q;
+                }
+            }
+            left_area[j] = acc.half_area();
+            left_n[j] = q;
+            last_c[j] = last;
+        }
+        float w = __int_as_float(0x7f800000);
+        if (!(last - first > 0.0f)) return w;  // flat: no plane
+        acc = AABB::empty();
+        BVHLAB_UNROLL
+        for (uint32_t j = kSahSweep - 1; j >= 1; --j) {
+            if (j >= count) continue;
+            const uint32_t x = place(o, int(j));
+            if (!((mask >> x) & 1u)) continue;
+            acc.extend(box_of(x));
+            const uint32_t i = left_n[j - 1];
+            if (i == 0 || last_c[j - 1] == centre(x, a)) continue;
+            const float wi = left_area[j - 1] * float(i) + acc.half_area() * float(size - i);
+            if (wi <= w) {
+                w = wi;
+                m_out = i;
+            }
+        }
+        return w;
     };
-    Node stack[8];
-    int sp = 0;
-    Node node{(1u << count) - 1, 0, t.z};
+    // The stack of nodes waiting (mask | first place << 16, slot), in registers: the smaller
+    // child goes first, so at most log2(kSahSweep) wait.
+    uint32_t wait_node[4], wait_slot[4];
+    int waiting = 0;
+    uint32_t node = (1u << count) - 1, slot = t.z;
     for (;;) {
-        const uint32_t size = __popc(node.mask), b = node.b;
+        const uint32_t mask = node & 0xffffu, b = node >> 16, size = __popc(mask);
         if (size == 1) {
-            set_link(children, root, node.slot, t.x + b);
-            final_ids[t.x + b] = tri[__ffs(node.mask) - 1][me];
-            if (sp == 0) break;
-            node = stack[--sp];
+            const uint32_t x = __ffs(mask) - 1;
+            uint32_t id = 0;
+            BVHLAB_UNROLL
+            for (uint32_t i = 0; i < kSahSweep; ++i) id = i == x ? ids[i] : id;
+            set_link(children, root, slot, t.x + b);
+            final_ids[t.x + b] = id;
+            if (waiting == 0) break;
+            node = wait_node[0];
+            slot = wait_slot[0];
+            BVHLAB_UNROLL
+            for (int s = 0; s < 3; ++s) {
+                wait_node[s] = wait_node[s + 1];
+                wait_slot[s] = wait_slot[s + 1];
+            }
+            --waiting;
             continue;
         }
         float best = __int_as_float(0x7f800000);
         int best_axis = -1;
         uint32_t m = size / 2;
+        BVHLAB_UNROLL
         for (int a = 0; a < 3; ++a) {
-            const uint8_t* order = sorted[a];
-            uint8_t mine[kSahSweep];  // the node's places in this axis's order
-            uint32_t q = 0;
-            for (uint32_t j = 0; j < count; ++j)
-                if ((node.mask >> order[j]) & 1) mine[q++] = order[j];
-            if (centre(mine[size - 1], a) - centre(mine[0], a) <= 0.0f) continue;  // flat: no plane
-            float right_area[kSahSweep];
-            AABB acc = AABB::empty();
-            for (uint32_t i = size - 1; i > 0; --i) {
-                acc.extend(box_of(mine[i]));
-                right_area[i] = acc.half_area();
-            }
-            acc = AABB::empty();
-            for (uint32_t i = 1; i < size; ++i) {
-                acc.extend(box_of(mine[i - 1]));
-                if (centre(mine[i - 1], a) == centre(mine[i], a)) continue;
-                const float w = acc.half_area() * float(i) + right_area[i] * float(size - i);
-                if (w < best) {
-                    best = w;
-                    best_axis = a;
-                    m = i;
-                }
+            uint32_t ma = 0;
+            const float w = sweep(a, mask, size, ma);
+            if (w < best) {
+                best = w;
+                best_axis = a;
+                m = ma;
             }
         }
-        uint32_t left = 0;  // the first m of the node's places in the chosen order (by place: none)
-        if (best_axis >= 0) {
-            for (uint32_t j = 0, q = 0; q < m; ++j)
-                if ((node.mask >> sorted[best_axis][j]) & 1) {
-                    left |= 1u << sorted[best_axis][j];
-                    ++q;
-                }
-        } else {
-            for (uint32_t j = 0, q = 0; q < m; ++j)
-                if ((node.mask >> j) & 1) {
-                    left |= 1u << j;
-                    ++q;
-                }
+        // The first m of the node's places in the chosen order (by place: in task order).
+        const uint64_t o = best_axis == 0 ? order[0] : best_axis == 1 ? order[1] : order[2];
+        uint32_t left = 0, q = 0;
+        BVHLAB_UNROLL
+        for (uint32_t j = 0; j < kSahSweep; ++j) {
+            if (j >= count || q >= m) break;
+            const uint32_t x = best_axis >= 0 ? place(o, int(j)) : j;
+            if ((mask >> x) & 1u) {
+                left |= 1u << x;
+                ++q;
+            }
         }
         const uint32_t id = n + t.x + b + m - 1;
-        set_link(children, root, node.slot, id);
-        const Node l{left, b, id << 1}, r{node.mask & ~left, b + m, id << 1 | 1u};
+        set_link(children, root, slot, id);
+        const uint32_t l = left | b << 16, r = (mask & ~left) | (b + m) << 16;
         const bool left_first = m <= size - m;
-        stack[sp++] = left_first ? r : l;
+        BVHLAB_UNROLL
+        for (int s = 3; s > 0; --s) {
+            wait_node[s] = wait_node[s - 1];
+            wait_slot[s] = wait_slot[s - 1];
+        }
+        wait_node[0] = left_first ? r : l;
+        wait_slot[0] = left_first ? id << 1 | 1u : id << 1;
+        ++waiting;
         node = left_first ? l : r;
+        slot = left_first ? id << 1 : id << 1 | 1u;
     }
 }
 
