@@ -1361,19 +1361,21 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
 /// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
 /// BinnedSahBuilder's exact sweep: per axis the triangles in order of centroid, each plane
 /// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
-/// first plane on ties) taken. The task's triangles are ranked once per axis (the orders packed
-/// four bits a place); a node is a mask of them. Loops run over the kSahSweep places unrolled, so
-/// that every array but the boxes lives in registers; the boxes stay in shared memory (a column
-/// per thread, so a warp's accesses fall in distinct banks).
+/// first plane on ties) taken. The task's triangles are ranked once per axis, the orders packed
+/// four bits a place (place to triangle, triangle to place); a node is a mask of its triangles,
+/// and per axis a mask of their places, whose set bits the sweeps walk. Boxes and the forward
+/// sweep's areas stay in shared memory (a column per thread, so a warp's accesses fall in
+/// distinct banks); everything else in registers.
 constexpr int kTinyBlock = 64;
 static_assert(kSahSweep <= 16, "an order's places are four bits, a node a 16-bit mask");
 
-__device__ __forceinline__ uint32_t place(uint64_t order, int j) { return uint32_t(order >> (4 * j)) & 15u; }
+__device__ __forceinline__ uint32_t nibble(uint64_t packed, uint32_t j) { return uint32_t(packed >> (4 * j)) & 15u; }
 
 __global__ void __launch_bounds__(kTinyBlock)
     sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ words, const AABB* __restrict__ tri_boxes,
              uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
     __shared__ float corner[6][kSahSweep][kTinyBlock];
+    __shared__ float left_area[kSahSweep][kTinyBlock];
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= words[3]) return;
     const unsigned me = threadIdx.x;
@@ -1399,17 +1401,17 @@ __global__ void __launch_bounds__(kTinyBlock)
             corner[5][i][me] = bx.hi.z;
         }
     }
-    // The task's places in order of centroid, per axis: place i goes to its rank. Equal
-    // centroids may come in any order: no plane falls between them, so a node's planes, weights
-    // and sides are the same whatever their order (the CPU sorts by (centroid, id); its leaves
-    // of several triangles may list them in another order, its tree is the same).
-    uint64_t order[3];
+    // The task's triangles in order of centroid, per axis: triangle i goes to place rank(i).
+    // Equal centroids may come in any order: no plane falls between them, so a node's planes,
+    // weights and sides are the same whatever their order (the CPU sorts by (centroid, id); its
+    // leaves of several triangles may list them in another order, its tree is the same).
+    uint64_t order[3], place[3];  // place -> triangle, triangle -> place
     BVHLAB_UNROLL
     for (int a = 0; a < 3; ++a) {
         float c[kSahSweep];
         BVHLAB_UNROLL
         for (uint32_t i = 0; i < kSahSweep; ++i) c[i] = i < count ? centre(i, a) : 0.0f;
-        uint64_t o = 0;
+        uint64_t o = 0, p = 0;
         BVHLAB_UNROLL
         for (uint32_t i = 0; i < kSahSweep; ++i) {
             if (i >= count) break;
@@ -1418,55 +1420,52 @@ __global__ void __launch_bounds__(kTinyBlock)
             for (uint32_t j = 0; j < kSahSweep; ++j)
                 r += j < count && (c[j] < c[i] || (c[j] == c[i] && j < i)) ? 1u : 0u;
             o |= uint64_t(i) << (4 * r);
+            p |= uint64_t(r) << (4 * i);
         }
         order[a] = o;
+        place[a] = p;
     }
-    // The best plane of axis a for the node (mask, size): its weight (+inf for none) and the
-    // members left of it. Forward over the places: the left box's area, members and last
-    // centroid at each place; backward: the right box, and each plane's weight (<= keeps the
-    // first plane of equal weights).
-    auto sweep = [&](int a, uint32_t mask, uint32_t size, uint32_t& m_out) {
+    // The best plane of axis a for a node whose places in this axis's order are `places` (size
+    // of them): its weight (+inf for none) and the triangles left of it. Forward: each member's
+    // left area; backward: the right box, and each plane's weight (<= keeps the first plane of
+    // equal weights).
+    auto sweep = [&](int a, uint32_t places, uint32_t size, uint32_t& m_out) {
         const uint64_t o = order[a];
-        float left_area[kSahSweep], last_c[kSahSweep];
-        uint32_t left_n[kSahSweep];
         AABB acc = AABB::empty();
         uint32_t q = 0;
         float first = 0.0f, last = 0.0f;
-        BVHLAB_UNROLL
-        for (uint32_t j = 0; j < kSahSweep; ++j) {
-            if (j < count) {
-                const uint32_t x = place(o, int(j));
-                if ((mask >> x) & 1u) {
-                    acc.extend(box_of(x));
-                    last = centre(x, a);
-                    if (q == 0) first = last;
-                    ++q;
-                }
-            }
-            left_area[j] = acc.half_area();
-            left_n[j] = q;
-            last_c[j] = last;
+        for (uint32_t p = places; p; p &= p - 1) {
+            const uint32_t x = nibble(o, __ffs(p) - 1);
+            acc.extend(box_of(x));
+            left_area[q][me] = acc.half_area();
+            last = centre(x, a);
+            if (q == 0) first = last;
+            ++q;
         }
         float w = __int_as_float(0x7f800000);
         if (!(last - first > 0.0f)) return w;  // flat: no plane
         acc = AABB::empty();
-        BVHLAB_UNROLL
-        for (uint32_t j = kSahSweep - 1; j >= 1; --j) {
-            if (j >= count) continue;
-            const uint32_t x = place(o, int(j));
-            if (!((mask >> x) & 1u)) continue;
-            acc.extend(box_of(x));
-            const uint32_t i = left_n[j - 1];
-            if (i == 0 || last_c[j - 1] == centre(x, a)) continue;
-            const float wi = left_area[j - 1] * float(i) + acc.half_area() * float(size - i);
-            if (wi <= w) {
-                w = wi;
-                m_out = i;
+        float next = 0.0f;  // the centroid of the member after this one
+        q = size;
+        for (uint32_t p = places; p;) {
+            const uint32_t j = 31 - __clz(p);
+            p &= ~(1u << j);
+            const uint32_t x = nibble(o, j);
+            const float c = centre(x, a);
+            --q;  // members left of the plane above this one: q + 1
+            if (q + 1 < size && c != next) {
+                const float wi = left_area[q][me] * float(q + 1) + acc.half_area() * float(size - q - 1);
+                if (wi <= w) {
+                    w = wi;
+                    m_out = q + 1;
+                }
             }
+            acc.extend(box_of(x));
+            next = c;
         }
         return w;
     };
-    // The stack of nodes waiting (mask | first place << 16, slot), in registers: the smaller
+    // The stack of nodes waiting (mask | first position << 16, slot), in registers: the smaller
     // child goes first, so at most log2(kSahSweep) wait.
     uint32_t wait_node[4], wait_slot[4];
     int waiting = 0;
@@ -1491,30 +1490,34 @@ __global__ void __launch_bounds__(kTinyBlock)
             --waiting;
             continue;
         }
+        uint32_t places[3] = {0, 0, 0};
+        for (uint32_t p = mask; p; p &= p - 1) {
+            const uint32_t x = __ffs(p) - 1;
+            BVHLAB_UNROLL
+            for (int a = 0; a < 3; ++a) places[a] |= 1u << nibble(place[a], x);
+        }
         float best = __int_as_float(0x7f800000);
         int best_axis = -1;
         uint32_t m = size / 2;
         BVHLAB_UNROLL
         for (int a = 0; a < 3; ++a) {
             uint32_t ma = 0;
-            const float w = sweep(a, mask, size, ma);
+            const float w = sweep(a, places[a], size, ma);
             if (w < best) {
                 best = w;
                 best_axis = a;
                 m = ma;
             }
         }
-        // The first m of the node's places in the chosen order (by place: in task order).
-        const uint64_t o = best_axis == 0 ? order[0] : best_axis == 1 ? order[1] : order[2];
-        uint32_t left = 0, q = 0;
-        BVHLAB_UNROLL
-        for (uint32_t j = 0; j < kSahSweep; ++j) {
-            if (j >= count || q >= m) break;
-            const uint32_t x = best_axis >= 0 ? place(o, int(j)) : j;
-            if ((mask >> x) & 1u) {
-                left |= 1u << x;
-                ++q;
-            }
+        // The first m of the node's triangles in the chosen order (by place: in task order).
+        uint32_t left = 0;
+        if (best_axis >= 0) {
+            const uint64_t o = best_axis == 0 ? order[0] : best_axis == 1 ? order[1] : order[2];
+            uint32_t p = best_axis == 0 ? places[0] : best_axis == 1 ? places[1] : places[2];
+            for (uint32_t q = 0; q < m; ++q, p &= p - 1) left |= 1u << nibble(o, __ffs(p) - 1);
+        } else {
+            uint32_t p = mask;
+            for (uint32_t q = 0; q < m; ++q, p &= p - 1) left |= 1u << (__ffs(p) - 1);
         }
         const uint32_t id = n + t.x + b + m - 1;
         set_link(children, root, slot, id);
