@@ -1358,6 +1358,15 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
     }
 }
 
+/// The tiny tasks' sort keys (the largest first; past the last task, last) and their numbers.
+__global__ void tiny_keys(uint32_t total, const uint3* __restrict__ tiny, const uint32_t* __restrict__ words,
+                          uint8_t* __restrict__ keys, uint32_t* __restrict__ index) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= total) return;
+    keys[k] = k < words[3] ? uint8_t(kSahSweep - (tiny[k].y - tiny[k].x)) : uint8_t(kSahSweep);
+    index[k] = k;
+}
+
 /// One thread per tiny task (2 to kSahSweep triangles, its ids in final_ids): its whole subtree by
 /// BinnedSahBuilder's exact sweep: per axis the triangles in order of centroid, each plane
 /// between unequal centroids weighed by A_L N_L + A_R N_R, the lowest weight (the first axis, the
@@ -1372,14 +1381,15 @@ static_assert(kSahSweep <= 16, "an order's places are four bits, a node a 16-bit
 __device__ __forceinline__ uint32_t nibble(uint64_t packed, uint32_t j) { return uint32_t(packed >> (4 * j)) & 15u; }
 
 __global__ void __launch_bounds__(kTinyBlock)
-    sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ words, const AABB* __restrict__ tri_boxes,
-             uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
+    sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ by_size, const uint32_t* __restrict__ words,
+             const AABB* __restrict__ tri_boxes, uint32_t n, uint2* children, uint32_t* root,
+             uint32_t* __restrict__ final_ids) {
     __shared__ float corner[6][kSahSweep][kTinyBlock];
     __shared__ float left_area[kSahSweep][kTinyBlock];
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= words[3]) return;
     const unsigned me = threadIdx.x;
-    const uint3 t = tiny[k];
+    const uint3 t = tiny[by_size[k]];
     const uint32_t count = t.y - t.x;
     auto box_of = [&](uint32_t x) {
         return AABB{{corner[0][x][me], corner[1][x][me], corner[2][x][me]},
@@ -1765,6 +1775,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
     DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
+    // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
+    DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
+    DeviceBuffer<uint32_t> t_index(s_tiny.size()), t_index_alt(s_tiny.size());
+    cub::DoubleBuffer<uint8_t> tk(t_keys.data(), t_keys_alt.data());
+    cub::DoubleBuffer<uint32_t> ti(t_index.data(), t_index_alt.data());
     DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
     // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
     // per node, the hierarchy before the passes (restored if they are undone) and the root's
@@ -1790,6 +1805,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CUDA_CHECK(
             cub::DeviceScan::ExclusiveSum(nullptr, b, s_lefts.data(), s_lefts_scan.data(), int(s_chunks)));
         scan_bytes = std::max(scan_bytes, b);
+        BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, b, tk, ti, int(s_tiny.size()), 0, 5));
+        sort_bytes = std::max(sort_bytes, b);
     }
     if (passes) {
         BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(nullptr, select_bytes, thrust::counting_iterator<uint32_t>(0),
@@ -1880,8 +1897,13 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(s_small.data(), s_words.data(), order,
                                                                        tri_boxes.data(), n, children.data(), root,
                                                                        final_ids.data(), s_tiny.data());
+        tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
+                                                       tk.Current(), ti.Current());
+        BVHLAB_CHECK_LAUNCH();
+        BVHLAB_CUDA_CHECK(
+            cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
         sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
-            s_tiny.data(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
+            s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
         BVHLAB_CHECK_LAUNCH();
         make_leaves<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), boxes.data(), meta.data(), nullptr,
                                              rule);
