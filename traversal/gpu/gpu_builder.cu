@@ -882,10 +882,11 @@ __device__ void warp_argmin(float& w, int& at) {
     }
 }
 
-/// The best split over three axes' bins (lane i holds bin i of each), as best_bin_split finds it:
-/// between bins i and i + 1 of a splittable axis, both sides non-empty, by A_L N_L + A_R N_R; on
-/// equal weights the first axis, then the lowest i. The three axes' scans run side by side (their
-/// shuffles are independent). Every lane gets the winner; axis -1 when nothing separates the
+/// The best split over three axes' bins (lane i holds bin i of each; bin_of(axis, box, count)
+/// reads the lane's), as best_bin_split finds it: between bins i and i + 1 of a splittable axis,
+/// both sides non-empty, by A_L N_L + A_R N_R; on equal weights the first axis, then the lowest i.
+/// kTogether axes' scans run side by side (3: their shuffles are independent; 1: an axis at a
+/// time, fewer registers). Every lane gets the winner; axis -1 when nothing separates the
 /// triangles.
 struct WarpSplit {
     int axis;
@@ -893,40 +894,46 @@ struct WarpSplit {
     uint32_t left;  ///< triangles in bins <= bin
 };
 
-__device__ WarpSplit sweep_bins_warp(const AABB (&box)[3], const uint32_t (&count)[3], const bool (&splittable)[3]) {
+template <int kTogether, typename BinOf>
+__device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) {
+    static_assert(3 % kTogether == 0, "the axes in equal groups");
     const unsigned lane = threadIdx.x & 31;
-    AABB l[3], r[3];
-    uint32_t nl[3], nr[3];
-    for (int a = 0; a < 3; ++a) {
-        l[a] = r[a] = box[a];
-        nl[a] = nr[a] = count[a];
-    }
-    for (unsigned d = 1; d < 32; d <<= 1) {
-        for (int a = 0; a < 3; ++a) {
-            const AABB ol = shfl_up_box(l[a], d), orr = shfl_down_box(r[a], d);
-            const uint32_t cl = __shfl_up_sync(~0u, nl[a], d), cr = __shfl_down_sync(~0u, nr[a], d);
-            if (lane >= d) {
-                l[a] = merge(l[a], ol);
-                nl[a] += cl;
-            }
-            if (lane + d < 32) {
-                r[a] = merge(r[a], orr);
-                nr[a] += cr;
-            }
-        }
-    }
     float w = __int_as_float(0x7f800000);
     int at = 3 * 32;  // axis * 32 + bin
     uint32_t left = 0;
-    for (int a = 0; a < 3; ++a) {
-        const AABB right = shfl_down_box(r[a], 1);  // bins lane + 1 and up
-        const uint32_t n_right = __shfl_down_sync(~0u, nr[a], 1);
-        if (!splittable[a] || lane == 31 || nl[a] == 0 || n_right == 0) continue;
-        const float wa = l[a].half_area() * float(nl[a]) + right.half_area() * float(n_right);
-        if (wa < w) {  // strict: the first axis on ties
-            w = wa;
-            at = a * 32 + int(lane);
-            left = nl[a];
+    for (int a0 = 0; a0 < 3; a0 += kTogether) {
+        AABB l[kTogether], r[kTogether];
+        uint32_t nl[kTogether], nr[kTogether];
+        for (int j = 0; j < kTogether; ++j) {
+            bin_of(a0 + j, l[j], nl[j]);
+            r[j] = l[j];
+            nr[j] = nl[j];
+        }
+        for (unsigned d = 1; d < 32; d <<= 1) {
+            for (int j = 0; j < kTogether; ++j) {
+                const AABB ol = shfl_up_box(l[j], d), orr = shfl_down_box(r[j], d);
+                const uint32_t cl = __shfl_up_sync(~0u, nl[j], d), cr = __shfl_down_sync(~0u, nr[j], d);
+                if (lane >= d) {
+                    l[j] = merge(l[j], ol);
+                    nl[j] += cl;
+                }
+                if (lane + d < 32) {
+                    r[j] = merge(r[j], orr);
+                    nr[j] += cr;
+                }
+            }
+        }
+        for (int j = 0; j < kTogether; ++j) {
+            const int a = a0 + j;
+            const AABB right = shfl_down_box(r[j], 1);  // bins lane + 1 and up
+            const uint32_t n_right = __shfl_down_sync(~0u, nr[j], 1);
+            if (!splittable[a] || lane == 31 || nl[j] == 0 || n_right == 0) continue;
+            const float wa = l[j].half_area() * float(nl[j]) + right.half_area() * float(n_right);
+            if (wa < w) {  // strict: the first axis on ties
+                w = wa;
+                at = a * 32 + int(lane);
+                left = nl[j];
+            }
         }
     }
     warp_argmin(w, at);
@@ -1101,7 +1108,12 @@ __global__ void __launch_bounds__(kBlock)
         num[a] = sb.count;
         splittable[a] = map.scale[a] > 0.0f;
     }
-    const WarpSplit best = sweep_bins_warp(box, num, splittable);
+    const WarpSplit best = sweep_bins_warp<3>(
+        [&](int a, AABB& bx, uint32_t& c) {
+            bx = box[a];
+            c = num[a];
+        },
+        splittable);
     const int axis = best.axis, bin = best.bin;
     const uint32_t left = best.left;
     if (lane != 0) return;
@@ -1311,17 +1323,15 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                     }
                 }
                 __syncwarp();
-                AABB box[3];
-                uint32_t cnt[3];
-                bool splittable[3];
-                for (int a = 0; a < 3; ++a) {
-                    const int k = a * kSahBins + int(lane);
-                    box[a] = {{from_ordered_bits(lo[k][0]), from_ordered_bits(lo[k][1]), from_ordered_bits(lo[k][2])},
+                const bool splittable[3] = {map.scale[0] > 0.0f, map.scale[1] > 0.0f, map.scale[2] > 0.0f};
+                const WarpSplit best = sweep_bins_warp<1>(
+                    [&](int a, AABB& bx, uint32_t& c) {
+                        const int k = a * kSahBins + int(lane);
+                        bx = {{from_ordered_bits(lo[k][0]), from_ordered_bits(lo[k][1]), from_ordered_bits(lo[k][2])},
                               {from_ordered_bits(hi[k][0]), from_ordered_bits(hi[k][1]), from_ordered_bits(hi[k][2])}};
-                    cnt[a] = num[k];
-                    splittable[a] = map.scale[a] > 0.0f;
-                }
-                const WarpSplit best = sweep_bins_warp(box, cnt, splittable);
+                        c = num[k];
+                    },
+                    splittable);
                 const int axis = best.axis, bin = best.bin;
                 m = axis >= 0 ? best.left : size / 2;
                 __syncwarp();
