@@ -128,15 +128,17 @@ __global__ void set_empty(AABB* box) { *box = AABB::empty(); }
 
 /// boxes[t] = box_of(t) for every primitive t, and the bounds of their centres added to *bounds
 /// (set empty before): each thread takes primitives a grid apart, a block's bounds are reduced
-/// in shared memory and added with one atomic per side and axis.
+/// in shared memory and added with one atomic per side and axis. With `centres`, each centre is
+/// written too (binned SAH reads them more often than the boxes).
 template <typename BoxOf>
-__global__ void __launch_bounds__(kBlock)
-    prim_boxes(uint32_t n, BoxOf box_of, AABB* __restrict__ boxes, AABB* __restrict__ bounds) {
+__global__ void __launch_bounds__(kBlock) prim_boxes(uint32_t n, BoxOf box_of, AABB* __restrict__ boxes,
+                                                     AABB* __restrict__ bounds, Vec3* __restrict__ centres) {
     AABB c = AABB::empty();
     for (uint32_t t = blockIdx.x * blockDim.x + threadIdx.x; t < n; t += gridDim.x * blockDim.x) {
         const AABB b = box_of(t);
         boxes[t] = b;
         c.extend(b.center());
+        if (centres) centres[t] = b.center();
     }
     using Reduce = cub::BlockReduce<AABB, kBlock>;
     __shared__ typename Reduce::TempStorage scratch;
@@ -941,9 +943,6 @@ __device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) 
     return {at / 32, at % 32, __shfl_sync(~0u, left, at % 32)};
 }
 
-/// Triangle t's centroid, as the CPU builders compute it.
-__device__ Vec3 centroid_of(const AABB* tri_boxes, uint32_t t) { return tri_boxes[t].center(); }
-
 /// The root task (or, for a small mesh, the first small task), and every large task's bins empty.
 __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
                           uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
@@ -1159,7 +1158,7 @@ __global__ void __launch_bounds__(kBlock)
 /// the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
     sah_scatter(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first,
-                const SahSplit* __restrict__ splits, SahOrder order, const AABB* __restrict__ tri_boxes,
+                const SahSplit* __restrict__ splits, SahOrder order, const Vec3* __restrict__ centres,
                 const uint32_t* __restrict__ lefts_before, uint32_t* __restrict__ final_ids) {
     constexpr uint32_t kWarps = kBlock / kWarp;
     __shared__ uint32_t before[kSahPerThread][kWarps];  // lefts counted before each round and warp
@@ -1181,7 +1180,7 @@ __global__ void __launch_bounds__(kBlock)
         bool l = false;
         if (i < c.e) {
             ids[r] = in[i];
-            cs[r] = centroid_of(tri_boxes, ids[r]);
+            cs[r] = centres[ids[r]];
             l = s.axis < 0 ? i < s.m : map.bin(cs[r][s.axis], s.axis) <= s.bin;
         }
         ballots[r] = __ballot_sync(~0u, l);
@@ -1256,7 +1255,8 @@ __global__ void __launch_bounds__(1024)
 /// smaller child goes on and the larger waits on a stack (so it stays short).
 __global__ void __launch_bounds__(kSahWarps* kWarp)
     sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
-              uint32_t n, uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
+              const Vec3* __restrict__ centres, uint32_t n, uint2* children, uint32_t* root,
+              uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
     __shared__ uint32_t lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];  // ordered bits
     __shared__ uint32_t num_of[kSahWarps][3 * kSahBins];
@@ -1297,7 +1297,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
             {
                 // 32 bins per axis over the centroids' bounds, in shared memory.
                 AABB cb = AABB::empty();
-                for (uint32_t i = b + lane; i < e; i += kWarp) cb.extend(centroid_of(tri_boxes, ids[i]));
+                for (uint32_t i = b + lane; i < e; i += kWarp) cb.extend(centres[ids[i]]);
                 cb = warp_union(cb);
                 const SahMap map(cb);
                 for (uint32_t k = lane; k < 3 * kSahBins; k += kWarp) {
@@ -1341,7 +1341,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                         const uint32_t i = i0 + lane;
                         const bool live = i < e;
                         const uint32_t id = live ? ids[i] : 0;
-                        const bool l = live && map.bin(centroid_of(tri_boxes, id)[axis], axis) <= bin;
+                        const bool l = live && map.bin(centres[id][axis], axis) <= bin;
                         const unsigned bl = __ballot_sync(~0u, l), br = __ballot_sync(~0u, live && !l);
                         if (l) tmp[b + nl + __popc(bl & lt)] = id;
                         if (live && !l) tmp[b + m + nr + __popc(br & lt)] = id;
@@ -1765,6 +1765,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
     DeviceBuffer<Key> keys(sah ? 0 : n), keys_alt(sah ? 0 : n);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
+    DeviceBuffer<Vec3> centres(sah ? n : 0);  // binned SAH: the triangles' centroids
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
     DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || sah || passes ? inner : 0), clusters(lbvh || sah ? 0 : n);
@@ -1841,9 +1842,10 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     ev.record(2);
     set_empty<<<1, 1>>>(bounds.data());
     if (prims.mesh)
-        prim_boxes<<<box_grid, kBlock>>>(n, TriangleBox{verts.data(), idx.data()}, tri_boxes.data(), bounds.data());
+        prim_boxes<<<box_grid, kBlock>>>(n, TriangleBox{verts.data(), idx.data()}, tri_boxes.data(), bounds.data(),
+                                         centres.data());
     else
-        prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data());
+        prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data(), centres.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(3);
     if (!sah) {
@@ -1894,7 +1896,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
                                                             s_lefts_scan.data(), int(chunks)));
-            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, tri_boxes.data(),
+            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
                                             s_lefts_scan.data(), final_ids.data());
             sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
             BVHLAB_CHECK_LAUNCH();
@@ -1904,9 +1906,9 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             chunks = w[2];
             std::swap(level, next);
         }
-        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(s_small.data(), s_words.data(), order,
-                                                                       tri_boxes.data(), n, children.data(), root,
-                                                                       final_ids.data(), s_tiny.data());
+        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
+            s_small.data(), s_words.data(), order, tri_boxes.data(), centres.data(), n, children.data(), root,
+            final_ids.data(), s_tiny.data());
         tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
                                                        tk.Current(), ti.Current());
         BVHLAB_CHECK_LAUNCH();
