@@ -298,6 +298,35 @@ __global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2
     if (k < n) climb(k, n, parent, children, boxes, meta, visits, rule);
 }
 
+/// Thread s makes leaf s (triangle sorted_ids[s]) and climbs a hierarchy whose links and parents
+/// are made: the second of two siblings to arrive boxes their parent and goes on. As the LBVH's
+/// climb, a node's box and meta stay in registers, so each step loads only the sibling's.
+__global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted_ids,
+                                 const AABB* __restrict__ tri_boxes, const uint32_t* __restrict__ parent,
+                                 uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
+                                 LeafRule rule) {
+    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
+    if (s >= n) return;
+    AABB box = tri_boxes[sorted_ids[s]];
+    NodeMeta m = leaf_meta(box, rule);
+    boxes[s] = box;
+    store_meta(meta + s, m);
+    uint32_t node = s;
+    for (uint32_t p = parent[s]; p != kInvalid; p = parent[p]) {
+        // Releases this thread's node to the sibling's thread; acquires the sibling's.
+        cuda::atomic_ref<uint32_t, cuda::thread_scope_device> count(visits[p - n]);
+        if (count.fetch_add(1u, cuda::memory_order_acq_rel) == 0) return;
+        const uint2 c = children[p];
+        const bool first = c.x == node;
+        const uint32_t sibling = first ? c.y : c.x;
+        box = merge(box, load_box(boxes + sibling));
+        const NodeMeta sm = load_meta(meta + sibling);
+        m = first ? make_node(p, c.x, c.y, m, sm, box, boxes, children, meta, rule)
+                  : make_node(p, c.x, c.y, sm, m, box, boxes, children, meta, rule);
+        node = p;
+    }
+}
+
 // --- PLOC (Meister & Bittner 2018): rounds over the whole cluster list, as
 // accel::ploc_reference makes them (bit for bit: the same areas, ties and node numbers).
 
@@ -1917,13 +1946,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
             s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
         BVHLAB_CHECK_LAUNCH();
-        make_leaves<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), boxes.data(), meta.data(), nullptr,
-                                             rule);
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-        fit_boxes<<<grid_for(n), kBlock>>>(n, parent.data(), children.data(), boxes.data(), meta.data(), visits.data(),
-                                           rule);
+        leaves_and_climb<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), parent.data(), children.data(),
+                                                  boxes.data(), meta.data(), visits.data(), rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
         // Rounds over the whole list until a block can finish it; the host reads each round's
