@@ -832,7 +832,7 @@ constexpr uint32_t kSahPerThread = 8;                   ///< a large task's tria
 constexpr uint32_t kSahChunk = kSahPerThread * kBlock;  ///< and per block
 constexpr uint32_t kSahSweep = 16;                      ///< exact sweep at or below (BinnedSahBuilder's)
 constexpr int kSahWarps = 4;                            ///< warps per block of the small tasks
-constexpr int kSahStack = 10;                           ///< > log2(kSahWarpTask): the smaller child first
+constexpr int kSahStack = 12;                           ///< > log2(kSahWarpTask): the smaller child first
 
 struct SahTask {
     uint32_t b, e;  ///< positions in the order buffers
@@ -1282,14 +1282,13 @@ __global__ void __launch_bounds__(1024)
 /// One warp per small task: its subtree down to tiny tasks (at most kSahSweep triangles, left to
 /// sah_tiny), the triangle ids in shared memory. Each node is split by 32 bins per axis, then the
 /// smaller child goes on and the larger waits on a stack (so it stays short).
-__global__ void __launch_bounds__(kSahWarps* kWarp, 8)
+__global__ void __launch_bounds__(kSahWarps* kWarp)
     sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
               const Vec3* __restrict__ centres, uint32_t n, uint2* children, uint32_t* root,
               uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
     __shared__ uint32_t lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];  // ordered bits
     __shared__ uint32_t num_of[kSahWarps][3 * kSahBins];
-    __shared__ AABB waiting_cb[kSahWarps][kSahStack];  // the centroid bounds of the nodes on the stack
     const uint32_t w = threadIdx.x / kWarp, lane = threadIdx.x & 31;
     uint32_t* ids = ids_of[w];
     uint32_t* tmp = tmp_of[w];
@@ -1306,7 +1305,6 @@ __global__ void __launch_bounds__(kSahWarps* kWarp, 8)
         uint3 stack[kSahStack];
         int sp = 0;
         uint32_t b = 0, e = t.e - t.b, slot = t.slot;
-        AABB cb = t.cb;  // the node's centroid bounds (its parent's partition made them)
         for (;;) {
             const uint32_t size = e - b;
             if (size <= kSahSweep) {  // a tiny task for sah_tiny, its ids in final_ids
@@ -1322,14 +1320,14 @@ __global__ void __launch_bounds__(kSahWarps* kWarp, 8)
                 b = top.x;
                 e = top.y;
                 slot = top.z;
-                __syncwarp();
-                cb = waiting_cb[w][sp];
                 continue;
             }
             uint32_t m;  // the left child's size
-            AABB left_cb = AABB::empty(), right_cb = AABB::empty();
             {
                 // 32 bins per axis over the centroids' bounds, in shared memory.
+                AABB cb = AABB::empty();
+                for (uint32_t i = b + lane; i < e; i += kWarp) cb.extend(centres[ids[i]]);
+                cb = warp_union(cb);
                 const SahMap map(cb);
                 for (uint32_t k = lane; k < 3 * kSahBins; k += kWarp) {
                     for (int j = 0; j < 3; ++j) {
@@ -1372,12 +1370,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp, 8)
                         const uint32_t i = i0 + lane;
                         const bool live = i < e;
                         const uint32_t id = live ? ids[i] : 0;
-                        const Vec3 c = live ? centres[id] : Vec3{};
-                        const bool l = live && map.bin(c[axis], axis) <= bin;
-                        if (l)
-                            left_cb.extend(c);
-                        else if (live)
-                            right_cb.extend(c);
+                        const bool l = live && map.bin(centres[id][axis], axis) <= bin;
                         const unsigned bl = __ballot_sync(~0u, l), br = __ballot_sync(~0u, live && !l);
                         if (l) tmp[b + nl + __popc(bl & lt)] = id;
                         if (live && !l) tmp[b + m + nr + __popc(br & lt)] = id;
@@ -1387,29 +1380,18 @@ __global__ void __launch_bounds__(kSahWarps* kWarp, 8)
                     __syncwarp();
                     for (uint32_t i = b + lane; i < e; i += kWarp) ids[i] = tmp[i];
                     __syncwarp();
-                } else {  // by place
-                    for (uint32_t i = b + lane; i < e; i += kWarp) {
-                        if (i < b + m)
-                            left_cb.extend(centres[ids[i]]);
-                        else
-                            right_cb.extend(centres[ids[i]]);
-                    }
                 }
-                left_cb = warp_union(left_cb);
-                right_cb = warp_union(right_cb);
             }
             const uint32_t id = n + t.b + b + m - 1;
             if (lane == 0) set_link(children, root, slot, id);
             // The smaller child next, the larger on the stack.
             const uint3 l{b, b + m, id << 1}, r{b + m, e, id << 1 | 1u};
             const bool left_first = m <= size - m;
-            if (lane == 0) waiting_cb[w][sp] = left_first ? right_cb : left_cb;
             stack[sp++] = left_first ? r : l;
             const uint3 go = left_first ? l : r;
             b = go.x;
             e = go.y;
             slot = go.z;
-            cb = left_first ? left_cb : right_cb;
         }
         __syncwarp();
     }
