@@ -1202,15 +1202,13 @@ __global__ void __launch_bounds__(kBlock)
     const unsigned lt = (1u << lane) - 1;
     if (threadIdx.x < 12) side_box[threadIdx.x / 6][threadIdx.x % 6] = threadIdx.x % 6 < 3 ? ~0u : 0u;
     uint32_t ids[kSahPerThread];
-    Vec3 cs[kSahPerThread];
     unsigned ballots[kSahPerThread];
     for (uint32_t r = 0; r < kSahPerThread; ++r) {
         const uint32_t i = c.b + r * kBlock + threadIdx.x;
         bool l = false;
         if (i < c.e) {
             ids[r] = in[i];
-            cs[r] = centres[ids[r]];
-            l = s.axis < 0 ? i < s.m : map.bin(cs[r][s.axis], s.axis) <= s.bin;
+            l = s.axis < 0 ? i < s.m : map.bin(centres[ids[r]][s.axis], s.axis) <= s.bin;
         }
         ballots[r] = __ballot_sync(~0u, l);
         if (lane == 0) before[r][warp] = __popc(ballots[r]);
@@ -1235,7 +1233,11 @@ __global__ void __launch_bounds__(kBlock)
         const uint32_t at = is_left ? t.b + l : s.m + (i - t.b - l);
         out[at] = ids[r];
         if (!s.child_cb[is_left ? 0 : 1]) final_ids[at] = ids[r];
-        side[is_left ? 0 : 1].extend(cs[r]);
+        const Vec3 c = centres[ids[r]];
+        if (is_left)
+            side[0].extend(c);
+        else
+            side[1].extend(c);
     }
     for (int j = 0; j < 2; ++j) {
         const uint32_t v[6] = {ordered_bits(side[j].lo.x), ordered_bits(side[j].lo.y), ordered_bits(side[j].lo.z),
