@@ -226,15 +226,24 @@ __global__ void morton_codes(uint32_t n, int bits, const AABB* __restrict__ boxe
 /// A leaf's meta: one triangle, its SAH cost.
 __device__ NodeMeta leaf_meta(const AABB& box, const LeafRule& rule) { return {1, 0, rule.ci * box.half_area(), 0}; }
 
+/// Writes leaf s of the hierarchy, triangle sorted_ids[s]; returns its box, its meta in m.
+__device__ AABB make_leaf(uint32_t s, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes,
+                          AABB* boxes, NodeMeta* meta, const LeafRule& rule, NodeMeta& m) {
+    const AABB box = tri_boxes[sorted_ids[s]];
+    m = leaf_meta(box, rule);
+    boxes[s] = box;
+    store_meta(meta + s, m);
+    return box;
+}
+
 /// Leaf s of the hierarchy is the s-th triangle in key order.
 __global__ void make_leaves(uint32_t n, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes,
                             AABB* __restrict__ boxes, NodeMeta* __restrict__ meta, uint32_t* __restrict__ clusters,
                             LeafRule rule) {
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     if (s >= n) return;
-    const AABB b = tri_boxes[sorted_ids[s]];
-    boxes[s] = b;
-    meta[s] = leaf_meta(b, rule);
+    NodeMeta m;
+    make_leaf(s, sorted_ids, tri_boxes, boxes, meta, rule, m);
     if (clusters) clusters[s] = s;
 }
 
@@ -251,10 +260,8 @@ __global__ void lbvh_climb(uint32_t n, const Key* __restrict__ keys, const uint3
                            LeafRule rule) {
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     if (s >= n) return;
-    AABB box = tri_boxes[sorted_ids[s]];
-    NodeMeta m = leaf_meta(box, rule);
-    boxes[s] = box;
-    store_meta(meta + s, m);
+    NodeMeta m;
+    AABB box = make_leaf(s, sorted_ids, tri_boxes, boxes, meta, rule, m);
     uint32_t node = s, left = s, right = s;
     while (left != 0 || right != n - 1) {
         const accel::morton::RadixParent p = accel::morton::radix_parent(keys, n, left, right);
@@ -307,10 +314,8 @@ __global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted
                                  LeafRule rule) {
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     if (s >= n) return;
-    AABB box = tri_boxes[sorted_ids[s]];
-    NodeMeta m = leaf_meta(box, rule);
-    boxes[s] = box;
-    store_meta(meta + s, m);
+    NodeMeta m;
+    AABB box = make_leaf(s, sorted_ids, tri_boxes, boxes, meta, rule, m);
     uint32_t node = s;
     for (uint32_t p = parent[s]; p != kInvalid; p = parent[p]) {
         // Releases this thread's node to the sibling's thread; acquires the sibling's.
