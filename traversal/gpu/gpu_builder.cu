@@ -284,41 +284,14 @@ __global__ void lbvh_climb(uint32_t n, const Key* __restrict__ keys, const uint3
     *root = node;
 }
 
-/// From node k upwards; the second child to arrive at a node boxes it and goes on.
-__device__ void climb(uint32_t k, uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes,
-                      NodeMeta* meta, uint32_t* __restrict__ visits, const LeafRule& rule) {
-    uint32_t p = parent[k];
-    while (p != kInvalid) {
-        __threadfence();  // this thread's node before the counter
-        if (atomicAdd(&visits[p - n], 1u) == 0) return;
-        __threadfence();
-        const uint2 c = children[p];
-        make_node(p, c.x, c.y, merge(load_box(boxes + c.x), load_box(boxes + c.y)), boxes, children, meta, rule);
-        p = parent[p];
-    }
-}
-
-/// From each leaf upwards (climb).
-__global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
-                          uint32_t* __restrict__ visits, LeafRule rule) {
-    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-    if (k < n) climb(k, n, parent, children, boxes, meta, visits, rule);
-}
-
-/// Thread s makes leaf s (triangle sorted_ids[s]) and climbs a hierarchy whose links and parents
-/// are made: the second of two siblings to arrive boxes their parent and goes on. As the LBVH's
-/// climb, a node's box and meta stay in registers, so each step loads only the sibling's.
-__global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted_ids,
-                                 const AABB* __restrict__ tri_boxes, const uint32_t* __restrict__ parent,
-                                 uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
-                                 LeafRule rule) {
-    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
-    if (s >= n) return;
-    NodeMeta m;
-    AABB box = make_leaf(s, sorted_ids, tri_boxes, boxes, meta, rule, m);
-    uint32_t node = s;
-    for (uint32_t p = parent[s]; p != kInvalid; p = parent[p]) {
-        // Releases this thread's node to the sibling's thread; acquires the sibling's.
+/// From node `node` upwards, its box and meta (written already) in `box` and `m`: the second of
+/// two siblings to arrive at their parent boxes it and goes on, the first stops. The node's box
+/// and meta stay in registers, so each step loads only the sibling's; one acquire-release add on
+/// the parent's counter hands them from the sibling's thread to this one.
+__device__ void climb(uint32_t node, AABB box, NodeMeta m, uint32_t n, const uint32_t* __restrict__ parent,
+                      uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
+                      const LeafRule& rule) {
+    for (uint32_t p = parent[node]; p != kInvalid; p = parent[p]) {
         cuda::atomic_ref<uint32_t, cuda::thread_scope_device> count(visits[p - n]);
         if (count.fetch_add(1u, cuda::memory_order_acq_rel) == 0) return;
         const uint2 c = children[p];
@@ -330,6 +303,32 @@ __global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted
                   : make_node(p, c.x, c.y, sm, m, box, boxes, children, meta, rule);
         node = p;
     }
+}
+
+/// From node x, whose box and meta an earlier kernel wrote, upwards (climb).
+__device__ void climb_from(uint32_t x, uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes,
+                           NodeMeta* meta, uint32_t* __restrict__ visits, const LeafRule& rule) {
+    climb(x, boxes[x], meta[x], n, parent, children, boxes, meta, visits, rule);
+}
+
+/// From each leaf upwards (climb).
+__global__ void fit_boxes(uint32_t n, const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
+                          uint32_t* __restrict__ visits, LeafRule rule) {
+    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k < n) climb_from(k, n, parent, children, boxes, meta, visits, rule);
+}
+
+/// Thread s makes leaf s (triangle sorted_ids[s]) and climbs a hierarchy whose links and parents
+/// are made.
+__global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted_ids,
+                                 const AABB* __restrict__ tri_boxes, const uint32_t* __restrict__ parent,
+                                 uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
+                                 LeafRule rule) {
+    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
+    if (s >= n) return;
+    NodeMeta m;
+    const AABB box = make_leaf(s, sorted_ids, tri_boxes, boxes, meta, rule, m);
+    climb(s, box, m, n, parent, children, boxes, meta, visits, rule);
 }
 
 // --- PLOC (Meister & Bittner 2018): rounds over the whole cluster list, as
@@ -779,7 +778,7 @@ __global__ void refit_from_leaves(const uint32_t* __restrict__ list, const uint3
                                   uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
                                   LeafRule rule) {
     for_each_listed(list, count, [&](uint32_t x) {
-        if (role[x] == kLeaf) climb(x, n, parent, children, boxes, meta, visits, rule);
+        if (role[x] == kLeaf) climb_from(x, n, parent, children, boxes, meta, visits, rule);
     });
 }
 
