@@ -17,7 +17,8 @@
 #   verify    every kernel against Embree on the protocol's four ray types
 #   profile   ncu metrics of every kernel on bunny primary and furball diffuse (PROFILE_SETS:
 #             scene:raytype pairs; PROFILE_KERNEL: one kernel instead of all)
-#   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box
+#   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box, and
+#             memcheck, racecheck and synccheck of the GPU builders (build --reinsert 2)
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
 #   render    the renderer's experiment on data/'s Cornell box (open and closed) and
@@ -179,6 +180,20 @@ if has sanitize; then
             # shellcheck disable=SC2086
             compute-sanitizer --tool $tool --error-exitcode 3 "$bin/bvhlab" -q verify cornell-box --device gpu \
                 --kernel all $st --width 64 --height 48 --json >>"$out/sanitizer.log" 2>&1 || status=1
+        done
+    done
+    # The GPU builders with two reinsertion passes, on the Cornell box (one small task) and a
+    # 30,000-triangle soup (gpu-binned's large levels, warps' subtrees and exact sweeps), and
+    # their TLAS over 2,000 instances.
+    for tool in memcheck racecheck synccheck; do
+        log "compute-sanitizer $tool: GPU builders"
+        for b in lbvh ploc hploc gpu-binned; do
+            for s in cornell-box gen:soup:30000:1 gen:instances:cornell-box:2000; do
+                passes=(--reinsert 2)
+                [[ $s == gen:instances:* ]] && passes=()
+                compute-sanitizer --tool $tool --error-exitcode 3 "$bin/bvhlab" -q build "$s" --builder $b \
+                    "${passes[@]}" --runs 1 --no-epo --json >>"$out/sanitizer.log" 2>&1 || status=1
+            done
         done
     done
     grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$out/sanitizer.log" | tee -a "$out/summary.txt"
