@@ -18,7 +18,7 @@
 #   profile   ncu metrics of every kernel on bunny primary and furball diffuse (PROFILE_SETS:
 #             scene:raytype pairs; PROFILE_KERNEL: one kernel instead of all)
 #   sanitize  compute-sanitizer memcheck and racecheck of every kernel on the Cornell box, and
-#             memcheck, racecheck and synccheck of the GPU builders (build --reinsert 2)
+#             memcheck, racecheck, synccheck and initcheck of the GPU builders (build --reinsert 2)
 #   threshold the dynamic-fetch threshold swept on bunny, dragon and furball (threshold.jsonl)
 #   sass      the SASS of while-while-fma and dynamic-speculative-fma (closest hit), sass.txt
 #   render    the renderer's experiment on data/'s Cornell box (open and closed) and
@@ -185,7 +185,7 @@ if has sanitize; then
     # The GPU builders with two reinsertion passes, on the Cornell box (one small task) and a
     # 30,000-triangle soup (gpu-binned's large levels, warps' subtrees and exact sweeps), and
     # their TLAS over 2,000 instances.
-    for tool in memcheck racecheck synccheck; do
+    for tool in memcheck racecheck synccheck initcheck; do
         log "compute-sanitizer $tool: GPU builders"
         for b in lbvh ploc hploc gpu-binned; do
             for s in cornell-box gen:soup:30000:1 gen:instances:cornell-box:2000; do
