@@ -24,7 +24,7 @@ __attribute__((always_inline)) inline FV to_float(const IV& x) { return __builti
 /// The smallest lane (inlined into the AVX2 copies as into the portable ones).
 __attribute__((always_inline)) inline float hmin(const FV& x) {
     float m = x[0];
-    for (uint32_t i = (1 + 1); i < kLanes; ++i) m = std::min(m, x[i]);
+    for (uint32_t i = 1; i < kLanes; ++i) m = std::min(m, x[i]);
     return m;
 }
 /// x86-64 builds carry a second copy of each search compiled for AVX2, used when the CPU has
