@@ -356,7 +356,7 @@ bool parallel_reinsertion_reference(RawHierarchy& h, const BuildConfig& config, 
         refit([](uint32_t) { return true; });
     }
     for (uint32_t i = 0; i + 1 < n; ++i) {
-        h.left[i] = left[n - i];
+        h.left[i] = left[n + i];
         h.right[i] = right[n + i];
     }
     return stand;
