@@ -1836,7 +1836,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<float> r_gain(r_nodes);
     DeviceBuffer<uint32_t> r_to(r_nodes), r_top(r_nodes), r_parent(r_nodes), r_list(r_nodes), r_count(passes ? 1 : 0);
     DeviceBuffer<unsigned long long> r_locks(r_nodes);
-    DeviceBuffer<uint2> r_children(passes ? nodes - n : 0);  // the interior nodes' (leaves have none)
+    DeviceBuffer<uint2> r_children(passes ? nodes - n : 0);  // the interior nodes' (passes need n >= 3)
     DeviceBuffer<NodeMeta> r_root(passes ? 2 : 0);
     g.tris.resize(prims.mesh ? n : 0);
     g.tri_ids.resize(n);
@@ -1994,9 +1994,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     }
     ev.record(6);
     if (passes) {
-        if (r_children.bytes())
-            BVHLAB_CUDA_CHECK(
-                cudaMemcpyAsync(r_children.data(), children.data() + n, r_children.bytes(), cudaMemcpyDeviceToDevice));
+        BVHLAB_CUDA_CHECK(
+            cudaMemcpyAsync(r_children.data(), children.data() + n, r_children.bytes(), cudaMemcpyDeviceToDevice));
         BVHLAB_CUDA_CHECK(cudaMemcpyAsync(r_parent.data(), parent.data(), parent.bytes(), cudaMemcpyDeviceToDevice));
         root_meta<<<1, 1>>>(root, meta.data(), r_root.data());
         const uint32_t total = uint32_t(nodes);
@@ -2043,9 +2042,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         detail::copy_to_host(rm, r_root.data(), sizeof rm);
         if ((std::max(rm[1].height, 1u) >= options.config.max_depth && rm[1].height > rm[0].height) ||
             rm[1].count != n) {
-            if (r_children.bytes())
-                BVHLAB_CUDA_CHECK(cudaMemcpyAsync(children.data() + n, r_children.data(), r_children.bytes(),
-                                                  cudaMemcpyDeviceToDevice));
+            BVHLAB_CUDA_CHECK(
+                cudaMemcpyAsync(children.data() + n, r_children.data(), r_children.bytes(), cudaMemcpyDeviceToDevice));
             BVHLAB_CUDA_CHECK(
                 cudaMemcpyAsync(parent.data(), r_parent.data(), parent.bytes(), cudaMemcpyDeviceToDevice));
             detail::fill_device_bytes(visits.data(), 0, visits.bytes());
