@@ -1,0 +1,305 @@
+// SPDX-License-Identifier: MIT
+// Probe: where a GPU builder's trees lose their trace speed, top or bottom. Hybrid hierarchies
+// of one scene, each with the GPU builders' leaf choice (accel::tree_from_hierarchy), beside the
+// binned SAH build; the CPU tracer's node visits and triangle tests per ray (framing camera,
+// primary and diffuse rays), as experiments/probes/ploc_quality.cpp reports them.
+//  - binned>K + B: the binned SAH tree's nodes of more than K triangles (the same splits as the
+//    full binned build), each node of at most K below them rebuilt by B (lbvh, ploc r8, or the
+//    LBVH with Morton codes of the whole scene: lbvhg);
+//  - A>K + B: hierarchy A (lbvh or ploc r8) down to its subtrees of at most K triangles,
+//    each rebuilt by B (the binned SAH build, ploc r8, or binned SAH down to 512 and ploc r8 below).
+// Usage: hybrid_quality SCENE.obj|soup [K ...]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "accel/builders/builder.h"
+#include "accel/builders/lbvh_reference.h"
+#include "accel/core/stats.h"
+#include "accel/layouts/bvh2_convert.h"
+#include "scene/io/obj_loader.h"
+#include "scene/io/procedural.h"
+#include "traversal/cpu/cpu_trace.h"
+#include "traversal/oracle/embree_oracle.h"
+#include "traversal/rays/protocol.h"
+#include "traversal/rays/raygen.h"
+
+using namespace bvhlab;
+
+static std::vector<std::pair<std::string, trav::RaySet>> g_rays;
+
+static void report(const std::string& name, const accel::BuildTree& t, const scene::TriangleMesh& m,
+                   const accel::BuildConfig& c) {
+    const accel::TreeStats s = accel::compute_stats(t, m, c);
+    std::printf("%-22s SAH %8.3f EPO %7.3f nodes %8zu", name.c_str(), s.sah, s.epo, t.nodes.size());
+    const accel::Bvh2 bvh = accel::convert_to_bvh2(t, m);
+    for (const auto& [type, set] : g_rays) {
+        std::vector<trav::Hit> h;
+        std::vector<trav::TraversalCounters> k;
+        trav::trace_cpu(bvh, set.rays, set.query, h, &k);
+        double nodes = 0, tris = 0;
+        for (const auto& x : k) {
+            nodes += double(x.nodes);
+            tris += double(x.tri_tests);
+        }
+        std::printf("  %s nodes %.1f tris %.1f", type.c_str(), nodes / double(k.size()), tris / double(k.size()));
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+}
+
+/// A hierarchy under construction: leaves hold a triangle, interior nodes two children.
+struct Gen {
+    struct Node {
+        int32_t left = -1, right = -1;
+        uint32_t tri = 0;
+    };
+    std::vector<Node> nodes;
+
+    uint32_t leaf(uint32_t tri) {
+        nodes.push_back({-1, -1, tri});
+        return uint32_t(nodes.size() - 1);
+    }
+    uint32_t inner(uint32_t a, uint32_t b) {
+        nodes.push_back({int32_t(a), int32_t(b), 0});
+        return uint32_t(nodes.size() - 1);
+    }
+    /// Grafts hierarchy h over local triangle ids, ids[k] being local triangle k's id.
+    uint32_t graft(const accel::RawHierarchy& h, const std::vector<uint32_t>& ids) {
+        const uint32_t n = uint32_t(h.sorted_ids.size());
+        std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+            if (x < n) return leaf(ids[h.sorted_ids[x]]);
+            const uint32_t a = go(h.left[x - n]);
+            const uint32_t b = go(h.right[x - n]);
+            return inner(a, b);
+        };
+        return go(h.root);
+    }
+    /// A chain over ids (for leaves that could not be split).
+    uint32_t chain(const std::vector<uint32_t>& ids) {
+        uint32_t r = leaf(ids[0]);
+        for (size_t i = 1; i < ids.size(); ++i) r = inner(r, leaf(ids[i]));
+        return r;
+    }
+    /// The RawHierarchy: leaves numbered left to right, boxes fitted.
+    accel::RawHierarchy raw(uint32_t root, const scene::TriangleMesh& m) const {
+        accel::RawHierarchy h;
+        uint32_t n = 0;
+        for (const auto& x : nodes) n += x.left < 0 ? 1 : 0;
+        h.sorted_ids.reserve(n);
+        h.left.resize(n - 1);
+        h.right.resize(n - 1);
+        h.boxes.resize(2 * size_t(n) - 1);
+        uint32_t next_inner = 0;
+        std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+            const Node& d = nodes[x];
+            if (d.left < 0) {
+                const uint32_t id = uint32_t(h.sorted_ids.size());
+                h.sorted_ids.push_back(d.tri);
+                AABB b = AABB::empty();
+                for (int v = 0; v < 3; ++v) b.extend(m.vertices[m.indices[3 * size_t(d.tri) + v]]);
+                h.boxes[id] = b;
+                return id;
+            }
+            const uint32_t me = next_inner++;
+            const uint32_t a = go(uint32_t(d.left));
+            const uint32_t b = go(uint32_t(d.right));
+            h.left[me] = a;
+            h.right[me] = b;
+            h.boxes[n + me] = merge(h.boxes[a], h.boxes[b]);
+            return n + me;
+        };
+        h.root = go(root);
+        return h;
+    }
+};
+
+static scene::TriangleMesh sub_mesh(const scene::TriangleMesh& m, const std::vector<uint32_t>& ids) {
+    scene::TriangleMesh s;
+    s.vertices.reserve(3 * ids.size());
+    for (uint32_t t : ids) {
+        for (int v = 0; v < 3; ++v) {
+            s.indices.push_back(uint32_t(s.vertices.size()));
+            s.vertices.push_back(m.vertices[m.indices[3 * size_t(t) + v]]);
+        }
+        s.material_ids.push_back(-1);
+    }
+    return s;
+}
+
+using Bottom = std::function<uint32_t(Gen&, const std::vector<uint32_t>&)>;
+
+static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, const std::vector<uint64_t>& global_keys) {
+    if (b == "binned") {
+        return [&m](Gen& g, const std::vector<uint32_t>& ids) -> uint32_t {
+            if (ids.size() == 1) return g.leaf(ids[0]);
+            accel::BuilderOptions o;
+            o.config.max_leaf_size = 1;
+            const scene::TriangleMesh s = sub_mesh(m, ids);
+            const accel::BuildTree t = accel::run_builder(accel::BuilderKind::kBinned, s, o).tree;
+            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+                const accel::BuildNode& d = t.nodes[x];
+                if (d.is_leaf()) {
+                    std::vector<uint32_t> l;
+                    for (uint32_t i = 0; i < d.prim_count; ++i) l.push_back(ids[t.prim_indices[d.first_index + i]]);
+                    return g.chain(l);
+                }
+                const uint32_t a = go(d.first_index);
+                const uint32_t c = go(d.first_index + 1);
+                return g.inner(a, c);
+            };
+            return go(0);
+        };
+    }
+    if (b == "lbvhg") {
+        // The LBVH over the ids' global Morton codes (what one sort of the whole scene gives).
+        return [&global_keys](Gen& g, const std::vector<uint32_t>& ids) -> uint32_t {
+            if (ids.size() == 1) return g.leaf(ids[0]);
+            std::vector<std::pair<uint64_t, uint32_t>> k;
+            for (uint32_t t : ids) k.push_back({global_keys[t], t});
+            std::sort(k.begin(), k.end());
+            std::vector<uint64_t> keys;
+            for (size_t i = 0; i < k.size(); ++i) keys.push_back((k[i].first << 20) | i);  // distinct
+            const accel::RawHierarchy h = accel::radix_tree(keys);
+            const uint32_t n = uint32_t(keys.size());
+            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+                if (x < n) return g.leaf(k[x].second);
+                const uint32_t a = go(h.left[x - n]);
+                const uint32_t c = go(h.right[x - n]);
+                return g.inner(a, c);
+            };
+            return go(h.root);
+        };
+    }
+    if (b == "binned512+ploc") {
+        // Binned SAH down to nodes of at most 512 triangles, PLOC r8 below them.
+        return [&m](Gen& g, const std::vector<uint32_t>& ids) -> uint32_t {
+            if (ids.size() <= 512) {
+                if (ids.size() == 1) return g.leaf(ids[0]);
+                return g.graft(accel::ploc_reference(sub_mesh(m, ids), 30, 8), ids);
+            }
+            accel::BuilderOptions o;
+            o.config.min_leaf_size = o.config.max_leaf_size = 512;
+            const accel::BuildTree t = accel::run_builder(accel::BuilderKind::kBinned, sub_mesh(m, ids), o).tree;
+            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+                const accel::BuildNode& d = t.nodes[x];
+                if (d.is_leaf()) {
+                    std::vector<uint32_t> l;
+                    for (uint32_t i = 0; i < d.prim_count; ++i) l.push_back(ids[t.prim_indices[d.first_index + i]]);
+                    if (l.size() == 1) return g.leaf(l[0]);
+                    return g.graft(accel::ploc_reference(sub_mesh(m, l), 30, 8), l);
+                }
+                const uint32_t a = go(d.first_index);
+                const uint32_t c = go(d.first_index + 1);
+                return g.inner(a, c);
+            };
+            return go(0);
+        };
+    }
+    const bool ploc = b == "ploc";
+    return [&m, ploc](Gen& g, const std::vector<uint32_t>& ids) -> uint32_t {
+        if (ids.size() == 1) return g.leaf(ids[0]);
+        const scene::TriangleMesh s = sub_mesh(m, ids);
+        return g.graft(ploc ? accel::ploc_reference(s, 30, 8) : accel::lbvh_reference(s, 30), ids);
+    };
+}
+
+int main(int argc, char** argv) {
+    if (argc < 2) return 2;
+    const std::string path = argv[1];
+    scene::TriangleMesh mesh = path == "soup" ? scene::make_procedural(scene::parse_procedural_kind("soup"), 100000, 1)
+                                              : scene::load_obj(path);
+    {
+        const trav::EmbreeOracle oracle(mesh);
+        trav::ProtocolConfig cfg;
+        cfg.camera = trav::framing_camera(mesh);
+        cfg.primary = {256, 192, 1, 0};
+        trav::RayProtocol proto(mesh, oracle, cfg);
+        g_rays.emplace_back("primary", proto.make(trav::RayType::kPrimary));
+        g_rays.emplace_back("diffuse", proto.make(trav::RayType::kDiffuse));
+    }
+    std::vector<uint32_t> ks;
+    for (int i = 2; i < argc; ++i) ks.push_back(uint32_t(std::atoi(argv[i])));
+    if (ks.empty()) ks = {64, 512, 4096, 32768};
+    const char* only = std::getenv("ONLY");  // a substring of the variants to run
+    const auto want = [&](const std::string& name) { return !only || name.find(only) != std::string::npos; };
+    const uint32_t n = uint32_t(mesh.triangle_count());
+    accel::BuildConfig c;
+    accel::BuilderOptions full;
+    if (want("binned")) report("binned", accel::run_builder(accel::BuilderKind::kBinned, mesh, full).tree, mesh, c);
+    const accel::RawHierarchy lbvh = accel::lbvh_reference(mesh, 30);
+    std::vector<uint64_t> global_keys(n);
+    for (uint32_t i = 0; i < n; ++i) global_keys[lbvh.sorted_ids[i]] = lbvh.keys[i];
+    if (want("lbvh")) report("lbvh", accel::tree_from_hierarchy(lbvh, c), mesh, c);
+    const bool with_ploc = std::getenv("PLOC") != nullptr;
+    accel::RawHierarchy ploc;
+    if (with_ploc) {
+        ploc = accel::ploc_reference(mesh, 30, 8);
+        report("ploc r8", accel::tree_from_hierarchy(ploc, c), mesh, c);
+    }
+    for (uint32_t k : ks) {
+        // The binned tree cut at k: nodes of more than k triangles split as in the full build.
+        accel::BuilderOptions top;
+        top.config.min_leaf_size = k;
+        top.config.max_leaf_size = k;
+        const accel::BuildTree t = accel::run_builder(accel::BuilderKind::kBinned, mesh, top).tree;
+        for (const std::string b : {"lbvh", "lbvhg", "ploc"}) {
+            const std::string name = "binned>" + std::to_string(k) + " + " + b;
+            if (!want(name)) continue;
+            const Bottom bottom = bottom_of(b, mesh, global_keys);
+            Gen g;
+            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+                const accel::BuildNode& d = t.nodes[x];
+                if (d.is_leaf()) {
+                    std::vector<uint32_t> l(t.prim_indices.begin() + d.first_index,
+                                            t.prim_indices.begin() + d.first_index + d.prim_count);
+                    return bottom(g, l);
+                }
+                const uint32_t a = go(d.first_index);
+                const uint32_t e = go(d.first_index + 1);
+                return g.inner(a, e);
+            };
+            const uint32_t root = go(0);
+            report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
+        }
+        // Hierarchy A down to its subtrees of at most k triangles, each rebuilt by binned SAH.
+        for (const std::string a : {"lbvh", "ploc"})
+            for (const std::string bn : {"binned", "ploc", "binned512+ploc"}) {
+                const std::string name = a + ">" + std::to_string(k) + " + " + bn;
+                if (!want(name) || (a == "ploc" && !with_ploc) || a == bn) continue;
+                const accel::RawHierarchy& h = a == "lbvh" ? lbvh : ploc;
+                std::vector<uint32_t> count(h.boxes.size(), 1);
+                std::function<uint32_t(uint32_t)> cnt = [&](uint32_t x) -> uint32_t {
+                    if (x < n) return 1;
+                    return count[x] = cnt(h.left[x - n]) + cnt(h.right[x - n]);
+                };
+                cnt(h.root);
+                const Bottom bottom = bottom_of(bn, mesh, global_keys);
+                Gen g;
+                std::function<void(uint32_t, std::vector<uint32_t>&)> collect = [&](uint32_t x,
+                                                                                    std::vector<uint32_t>& l) {
+                    if (x < n) {
+                        l.push_back(h.sorted_ids[x]);
+                        return;
+                    }
+                    collect(h.left[x - n], l);
+                    collect(h.right[x - n], l);
+                };
+                std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+                    if (x < n || count[x] <= k) {
+                        std::vector<uint32_t> l;
+                        collect(x, l);
+                        return bottom(g, l);
+                    }
+                    const uint32_t p = go(h.left[x - n]);
+                    const uint32_t q = go(h.right[x - n]);
+                    return g.inner(p, q);
+                };
+                const uint32_t root = go(h.root);
+                report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
+            }
+    }
+}
