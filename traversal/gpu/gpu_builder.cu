@@ -13,7 +13,6 @@
 #include <cuda/atomic>
 
 #include <algorithm>
-#include <cstdlib>
 #include <string>
 
 #include "accel/core/morton.h"
@@ -978,7 +977,7 @@ __device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) 
 }
 
 /// The root task (or, for a small mesh, the first small task), and every large task's bins empty.
-__global__ void sah_start(uint32_t n, uint32_t top, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
+__global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
                           uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
                           uint32_t bin_count) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -988,7 +987,7 @@ __global__ void sah_start(uint32_t n, uint32_t top, const AABB* __restrict__ bou
     if (n > kSahWarpTask) {
         large[0] = root;
         first[0] = 0;
-        first[1] = top && n > top ? 0 : (n + kSahChunk - 1) / kSahChunk;
+        first[1] = (n + kSahChunk - 1) / kSahChunk;
     } else {
         small[0] = root;
         words[1] = 1;
@@ -1123,91 +1122,12 @@ __device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e
 
 /// One warp per large task: the best split over its bins (the bins made empty again for the next
 /// level), the node linked to its parent, the children queued (large, small) or linked (leaves).
-/// Where the sorted keys [b, e) split as in their radix tree (the first key with the highest bit
-/// in which the first and last differ; the middle when all are equal). Warp-wide, a 33-way search.
-template <typename Key>
-__device__ uint32_t code_split(const Key* __restrict__ keys, uint32_t b, uint32_t e) {
-    const uint32_t lane = threadIdx.x & 31;
-    const Key first = keys[b], last = keys[e - 1];
-    if (first == last) return b + (e - b) / 2;
-    const Key x = first ^ last;
-    const int bit = sizeof(Key) == 8 ? 63 - __clzll((long long)x) : 31 - __clz(int(x));
-    uint32_t lo = b, hi = e - 1;  // the bit is clear at lo, set at hi
-    while (hi - lo > 1) {
-        const uint32_t p = lo + uint32_t(uint64_t(hi - lo) * (lane + 1) / 33);
-        const bool set = p > lo && ((keys[p] >> bit) & 1);
-        const unsigned ballot = __ballot_sync(~0u, set);
-        const uint32_t p_last = __shfl_sync(~0u, p, 31);
-        if (!ballot) {
-            lo = p_last;
-        } else {
-            const int f = __ffs(ballot) - 1;
-            const uint32_t pf = __shfl_sync(~0u, p, f), pb = __shfl_sync(~0u, p, max(f - 1, 0));
-            hi = pf;
-            if (f > 0) lo = pb;
-        }
-    }
-    return hi;
-}
-
-/// A task of more than `top` triangles (in the sorted keys' order, never partitioned): split as the
-/// keys' radix tree splits it, children in the same order buffer; those of at most `top` but more
-/// than a warp's listed for code_child_bounds.
-template <typename Key>
-__device__ void sah_code_split(const SahTask& t, const Key* __restrict__ keys, SahOrder order, uint32_t top,
-                               SahTask* next, SahTask* small, uint32_t* words, uint32_t* bound_list, uint32_t n,
-                               uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
-    const uint32_t m = code_split(keys, t.b, t.e);
-    if ((threadIdx.x & 31) != 0) return;
-    const uint32_t id = n + m - 1;
-    set_link(children, root, t.slot, id);
-    const uint32_t range[3] = {t.b, m, t.e};
-    for (int side = 0; side < 2; ++side) {
-        const uint32_t b = range[side], e = range[side + 1], slot = id << 1 | uint32_t(side);
-        if (e - b == 1) {
-            set_link(children, root, slot, b);
-            final_ids[b] = order.buf[t.buf][b];
-        } else if (e - b > kSahWarpTask) {
-            const uint32_t k = atomicAdd(words, 1u);
-            next[k] = {b, e, slot, t.buf, AABB::empty()};
-            if (e - b <= top) bound_list[atomicAdd(words + 4, 1u)] = k;
-        } else {
-            sah_push(small, words + 1, b, e, slot, t.buf);
-        }
-    }
-}
-
-/// The centroid bounds of the tasks that code splits made for binning (a block per task).
-__global__ void __launch_bounds__(kBlock)
-    code_child_bounds(SahTask* tasks, const uint32_t* __restrict__ list, const uint32_t* __restrict__ words,
-                      SahOrder order, const Vec3* __restrict__ centres) {
-    using Reduce = cub::BlockReduce<AABB, kBlock>;
-    __shared__ typename Reduce::TempStorage storage;
-    const uint32_t count = words[4];
-    for (uint32_t j = blockIdx.x; j < count; j += gridDim.x) {
-        SahTask& t = tasks[list[j]];
-        const uint32_t* in = order.buf[t.buf];
-        AABB c = AABB::empty();
-        for (uint32_t i = t.b + threadIdx.x; i < t.e; i += kBlock) c.extend(centres[in[i]]);
-        c = Reduce(storage).Reduce(c, BoxUnion());
-        if (threadIdx.x == 0) t.cb = c;
-        __syncthreads();
-    }
-}
-
-template <typename Key>
 __global__ void __launch_bounds__(kBlock)
     sah_split(const SahTask* __restrict__ tasks, uint32_t count, SahBin* bins, SahSplit* __restrict__ splits,
-              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root,
-              const Key* __restrict__ keys, uint32_t top, SahOrder order, uint32_t* bound_list,
-              uint32_t* __restrict__ final_ids) {
+              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root) {
     const uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
     if (task >= count) return;  // whole warps
     const SahTask t = tasks[task];
-    if (top && t.e - t.b > top) {
-        sah_code_split(t, keys, order, top, next, small, words, bound_list, n, children, root, final_ids);
-        return;
-    }
     const SahMap map(t.cb);
     AABB box[3];
     uint32_t num[3];
@@ -1345,15 +1265,14 @@ __global__ void __launch_bounds__(kBlock)
 /// in words[2]). One block.
 __global__ void __launch_bounds__(1024)
     sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, uint32_t* __restrict__ first,
-               uint32_t* __restrict__ total, uint32_t top) {
+               uint32_t* __restrict__ total) {
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
     const uint32_t count = words[0];
     uint32_t base = 0;
     for (uint32_t k0 = 0; k0 < count; k0 += 1024) {
         const uint32_t k = k0 + threadIdx.x;
-        const uint32_t size = k < count ? tasks[k].e - tasks[k].b : 0;
-        const uint32_t chunks = top && size > top ? 0 : (size + kSahChunk - 1) / kSahChunk;
+        const uint32_t chunks = k < count ? (tasks[k].e - tasks[k].b + kSahChunk - 1) / kSahChunk : 0;
         uint32_t before, sum;
         Scan(scratch).ExclusiveSum(chunks, before, sum);
         if (k < count) first[k] = base + before;
@@ -1879,12 +1798,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // Everything the pipeline needs, before its first event.
     const size_t nodes = 2 * size_t(n) - 1, inner = std::max<size_t>(n - 1, 1);
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
-    // gpu-binned's top by Morton codes (experiment): tasks of more than `top` triangles split as
-    // the keys' radix tree splits them.
-    const uint32_t top = sah && std::getenv("BVHLAB_LBVH_TOP")
-                             ? std::max<uint32_t>(uint32_t(std::atoi(std::getenv("BVHLAB_LBVH_TOP"))), kSahWarpTask)
-                             : 0;
-    DeviceBuffer<Key> keys(sah && !top ? 0 : n), keys_alt(sah && !top ? 0 : n);
+    DeviceBuffer<Key> keys(sah ? 0 : n), keys_alt(sah ? 0 : n);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<Vec3> centres(sah ? n : 0);  // binned SAH: the triangles' centroids
     DeviceBuffer<uint2> children(nodes);
@@ -1905,8 +1819,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 5 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
-    DeviceBuffer<uint32_t> s_bound_list(top ? s_large : 0);
+    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -1930,7 +1843,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
-    if (!sah || top) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
     if (sah) {
@@ -1970,13 +1883,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data(), centres.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(3);
-    if (!sah || top) {
+    if (!sah) {
         morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(4);
-    if (!sah || top)
-        BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
     ev.record(5);
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
@@ -1997,39 +1909,31 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                                  rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (sah) {
-        if (!top) iota<<<grid_for(n), kBlock>>>(n, ids.data());
-        const SahOrder order = top ? SahOrder{{dv.Current(), dv.Alternate()}} : SahOrder{{ids.data(), ids_alt.data()}};
+        iota<<<grid_for(n), kBlock>>>(n, ids.data());
+        const SahOrder order{{ids.data(), ids_alt.data()}};
         const uint32_t bin_count = uint32_t(s_bins.size());
-        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(n, top, bounds.data(), s_tasks.data(),
-                                                                    s_small.data(), s_first.data(), s_words.data(),
-                                                                    s_bins.data(), bin_count);
+        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
+            n, bounds.data(), s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
         BVHLAB_CHECK_LAUNCH();
         // Large tasks level by level; the host reads each level's task and chunk counts.
-        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = top && n > top ? 0 : (n + kSahChunk - 1) / kSahChunk;
+        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = (n + kSahChunk - 1) / kSahChunk;
         SahTask* level = s_tasks.data();
         SahTask* next = s_tasks.data() + s_large;
         while (tasks) {
-            if (chunks)
-                sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
-                                            s_chunk_counts.data());
+            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
+                                        s_chunk_counts.data());
             set_word<<<1, 1>>>(s_words.data(), 0);
-            if (top) set_word<<<1, 1>>>(s_words.data() + 4, 0);
-            sah_split<Key><<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+            sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
                 level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), n, children.data(),
-                root, dk.Current(), top, order, s_bound_list.data(), final_ids.data());
-            if (top)
-                code_child_bounds<<<unsigned(4 * gpu_sm_count()), kBlock>>>(next, s_bound_list.data(), s_words.data(),
-                                                                            order, centres.data());
-            if (chunks) {
-                sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
-                BVHLAB_CHECK_LAUNCH();
-                BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
-                                                                s_lefts_scan.data(), int(chunks)));
-                sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
-                                                s_lefts_scan.data(), final_ids.data());
-            }
-            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2, top);
+                root);
+            sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+            BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
+                                                            s_lefts_scan.data(), int(chunks)));
+            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
+                                            s_lefts_scan.data(), final_ids.data());
+            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
             BVHLAB_CHECK_LAUNCH();
             uint32_t w[3];  // large tasks, small tasks, chunks
             detail::copy_to_host(w, s_words.data(), sizeof w);
