@@ -2300,8 +2300,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // The layout, flat: each node's place from a scan over every node's flag (no round trip).
     const Layout out{out_nodes.data(), g.tris.data(), g.tri_ids.data()};
     const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
-    const LayoutOrder order{uint32_t(nodes), (!lbvh && !sah) || hybrid,
-                            (lbvh || (sah && !hybrid)) && (!passes || g.reinsertion_undone), root};
+    const LayoutOrder order{uint32_t(nodes), !lbvh && !sah, (lbvh || sah) && (!passes || g.reinsertion_undone), root};
     {
         layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(),
                                                   layout_flags_.data());
