@@ -13,7 +13,6 @@
 #include <cuda/atomic>
 
 #include <algorithm>
-#include <cstdlib>
 #include <string>
 
 #include "accel/core/morton.h"
@@ -588,79 +587,6 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
-__device__ void set_link(uint2* children, uint32_t* root, uint32_t slot, uint32_t node);
-
-// --- Experiment: H-PLOC inside the segments that gpu-binned's splits leave (at most a warp task).
-
-/// Thread i climbs from leaf i within its segment (the positions between two set `ends`), as
-/// hploc does, each segment reduced to one cluster, which is linked to the segment's slot and
-/// kept in seg_root[first position].
-template <typename Key>
-__global__ void __launch_bounds__(kBlock)
-    hploc_segments(uint32_t n, const Key* __restrict__ keys, const uint8_t* __restrict__ ends,
-                   const uint32_t* __restrict__ slot_of, uint32_t* __restrict__ seg_root, int32_t* parent_ids,
-                   uint32_t* clusters, AABB* boxes, uint2* children, NodeMeta* meta, uint32_t* node_counter,
-                   uint32_t* root, int radius, LeafRule rule) {
-    __shared__ WarpScratch scratch[kBlock / kWarp];
-    WarpScratch& mine = scratch[threadIdx.x / kWarp];
-    const uint32_t lane = threadIdx.x % kWarp;
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    uint32_t left = i, right = i, split = 0;
-    const auto at_start = [&](uint32_t l) { return l == 0 || ends[l - 1]; };
-    bool active = i < n && !(at_start(i) && ends[i]);  // one-triangle segments are linked already
-    while (__ballot_sync(~0u, active)) {
-        if (active) {
-            int32_t previous;
-            const bool s0 = at_start(left), e0 = ends[right] != 0;
-            const bool left_child =
-                s0 || (!e0 && accel::morton::apetrei_delta(keys, right) < accel::morton::apetrei_delta(keys, left - 1));
-            if (left_child) {
-                split = right + 1;
-                __threadfence();
-                previous = atomicExch(&parent_ids[right], int32_t(left));
-                if (previous != -1) right = uint32_t(previous);
-            } else {
-                split = left;
-                __threadfence();
-                previous = atomicExch(&parent_ids[left - 1], int32_t(right));
-                if (previous != -1) left = uint32_t(previous);
-            }
-            __threadfence();
-            if (previous == -1) active = false;
-        }
-        __syncwarp();
-        const uint32_t size = right - left + 1;
-        const bool final_node = active && at_start(left) && ends[right];
-        uint32_t wave = __ballot_sync(~0u, active && (size > kHplocThreshold || final_node));
-        while (wave) {
-            const int src = __ffs(wave) - 1;
-            wave &= wave - 1;
-            const uint32_t l = __shfl_sync(~0u, left, src), r = __shfl_sync(~0u, right, src);
-            const uint32_t s = __shfl_sync(~0u, split, src);
-            const bool last = __shfl_sync(~0u, final_node, src);
-            const uint32_t left_span = min(s - l, kHplocThreshold), right_span = min(r + 1 - s, kHplocThreshold);
-            const uint32_t a = lane < left_span ? __ldcg(&clusters[l + lane]) : kInvalid;
-            const uint32_t nl = __popc(__ballot_sync(~0u, a != kInvalid));
-            const uint32_t b = lane < right_span ? __ldcg(&clusters[s + lane]) : kInvalid;
-            const uint32_t nr = __popc(__ballot_sync(~0u, b != kInvalid));
-            const uint32_t b_shifted = __shfl_sync(~0u, b, int(lane - nl) & 31);
-            uint32_t id = lane < nl ? a : (lane < nl + nr ? b_shifted : kInvalid);
-            AABB box = id != kInvalid ? load_box(boxes + id) : AABB::empty();
-            const uint32_t count = ploc_merge(id, box, nl + nr, last ? 1 : kHplocThreshold, radius, mine, node_counter,
-                                              boxes, children, meta, rule);
-            const uint32_t store_span = min(r - l + 1, kHplocThreshold);
-            if (lane < store_span) clusters[l + lane] = lane < count ? id : kInvalid;
-            if (last && lane == 0) {
-                set_link(children, root, slot_of[l], id);
-                seg_root[l] = id;
-            }
-            __syncwarp();
-            __threadfence();
-        }
-        if (final_node) active = false;
-    }
-}
-
 // --- Parallel reinsertion (Meister & Bittner 2018) between the hierarchy and the layout. Each
 // pass, every node of the tree (its leaves, as the SAH chose them, and the interior nodes above
 // them) searches for the node X whose sibling it should become: the most interior area saved,
@@ -1051,7 +977,7 @@ __device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) 
 }
 
 /// The root task (or, for a small mesh, the first small task), and every large task's bins empty.
-__global__ void sah_start(uint32_t n, uint32_t top, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
+__global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
                           uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
                           uint32_t bin_count) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -1061,7 +987,7 @@ __global__ void sah_start(uint32_t n, uint32_t top, const AABB* __restrict__ bou
     if (n > kSahWarpTask) {
         large[0] = root;
         first[0] = 0;
-        first[1] = top && n > top ? 0 : (n + kSahChunk - 1) / kSahChunk;
+        first[1] = (n + kSahChunk - 1) / kSahChunk;
     } else {
         small[0] = root;
         words[1] = 1;
@@ -1196,91 +1122,12 @@ __device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e
 
 /// One warp per large task: the best split over its bins (the bins made empty again for the next
 /// level), the node linked to its parent, the children queued (large, small) or linked (leaves).
-/// Where the sorted keys [b, e) split as in their radix tree (the first key with the highest bit
-/// in which the first and last differ; the middle when all are equal). Warp-wide, a 33-way search.
-template <typename Key>
-__device__ uint32_t code_split(const Key* __restrict__ keys, uint32_t b, uint32_t e) {
-    const uint32_t lane = threadIdx.x & 31;
-    const Key first = keys[b], last = keys[e - 1];
-    if (first == last) return b + (e - b) / 2;
-    const Key x = first ^ last;
-    const int bit = sizeof(Key) == 8 ? 63 - __clzll((long long)x) : 31 - __clz(int(x));
-    uint32_t lo = b, hi = e - 1;  // the bit is clear at lo, set at hi
-    while (hi - lo > 1) {
-        const uint32_t p = lo + uint32_t(uint64_t(hi - lo) * (lane + 1) / 33);
-        const bool set = p > lo && ((keys[p] >> bit) & 1);
-        const unsigned ballot = __ballot_sync(~0u, set);
-        const uint32_t p_last = __shfl_sync(~0u, p, 31);
-        if (!ballot) {
-            lo = p_last;
-        } else {
-            const int f = __ffs(ballot) - 1;
-            const uint32_t pf = __shfl_sync(~0u, p, f), pb = __shfl_sync(~0u, p, max(f - 1, 0));
-            hi = pf;
-            if (f > 0) lo = pb;
-        }
-    }
-    return hi;
-}
-
-/// A task of more than `top` triangles (in the sorted keys' order, never partitioned): split as the
-/// keys' radix tree splits it, children in the same order buffer; those of at most `top` but more
-/// than a warp's listed for code_child_bounds.
-template <typename Key>
-__device__ void sah_code_split(const SahTask& t, const Key* __restrict__ keys, SahOrder order, uint32_t top,
-                               SahTask* next, SahTask* small, uint32_t* words, uint32_t* bound_list, uint32_t n,
-                               uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids, uint32_t* desc) {
-    const uint32_t m = code_split(keys, t.b, t.e);
-    if ((threadIdx.x & 31) != 0) return;
-    const uint32_t id = desc ? 2 * n - 2 - atomicAdd(desc, 1u) : n + m - 1;
-    set_link(children, root, t.slot, id);
-    const uint32_t range[3] = {t.b, m, t.e};
-    for (int side = 0; side < 2; ++side) {
-        const uint32_t b = range[side], e = range[side + 1], slot = id << 1 | uint32_t(side);
-        if (e - b == 1) {
-            set_link(children, root, slot, b);
-            final_ids[b] = order.buf[t.buf][b];
-        } else if (e - b > kSahWarpTask) {
-            const uint32_t k = atomicAdd(words, 1u);
-            next[k] = {b, e, slot, t.buf, AABB::empty()};
-            if (e - b <= top) bound_list[atomicAdd(words + 4, 1u)] = k;
-        } else {
-            sah_push(small, words + 1, b, e, slot, t.buf);
-        }
-    }
-}
-
-/// The centroid bounds of the tasks that code splits made for binning (a block per task).
-__global__ void __launch_bounds__(kBlock)
-    code_child_bounds(SahTask* tasks, const uint32_t* __restrict__ list, const uint32_t* __restrict__ words,
-                      SahOrder order, const Vec3* __restrict__ centres) {
-    using Reduce = cub::BlockReduce<AABB, kBlock>;
-    __shared__ typename Reduce::TempStorage storage;
-    const uint32_t count = words[4];
-    for (uint32_t j = blockIdx.x; j < count; j += gridDim.x) {
-        SahTask& t = tasks[list[j]];
-        const uint32_t* in = order.buf[t.buf];
-        AABB c = AABB::empty();
-        for (uint32_t i = t.b + threadIdx.x; i < t.e; i += kBlock) c.extend(centres[in[i]]);
-        c = Reduce(storage).Reduce(c, BoxUnion());
-        if (threadIdx.x == 0) t.cb = c;
-        __syncthreads();
-    }
-}
-
-template <typename Key>
 __global__ void __launch_bounds__(kBlock)
     sah_split(const SahTask* __restrict__ tasks, uint32_t count, SahBin* bins, SahSplit* __restrict__ splits,
-              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root,
-              const Key* __restrict__ keys, uint32_t top, SahOrder order, uint32_t* bound_list,
-              uint32_t* __restrict__ final_ids, uint32_t* desc) {
+              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root) {
     const uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
     if (task >= count) return;  // whole warps
     const SahTask t = tasks[task];
-    if (top && t.e - t.b > top) {
-        sah_code_split(t, keys, order, top, next, small, words, bound_list, n, children, root, final_ids, desc);
-        return;
-    }
     const SahMap map(t.cb);
     AABB box[3];
     uint32_t num[3];
@@ -1303,7 +1150,7 @@ __global__ void __launch_bounds__(kBlock)
     const uint32_t left = best.left;
     if (lane != 0) return;
     const uint32_t m = axis >= 0 ? t.b + left : t.b + (t.e - t.b) / 2;
-    const uint32_t id = desc ? 2 * n - 2 - atomicAdd(desc, 1u) : n + m - 1;
+    const uint32_t id = n + m - 1;
     set_link(children, root, t.slot, id);
     SahSplit s{axis, bin, m, 0, {nullptr, nullptr}};
     const uint32_t range[3] = {t.b, m, t.e};
@@ -1418,15 +1265,14 @@ __global__ void __launch_bounds__(kBlock)
 /// in words[2]). One block.
 __global__ void __launch_bounds__(1024)
     sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, uint32_t* __restrict__ first,
-               uint32_t* __restrict__ total, uint32_t top) {
+               uint32_t* __restrict__ total) {
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
     const uint32_t count = words[0];
     uint32_t base = 0;
     for (uint32_t k0 = 0; k0 < count; k0 += 1024) {
         const uint32_t k = k0 + threadIdx.x;
-        const uint32_t size = k < count ? tasks[k].e - tasks[k].b : 0;
-        const uint32_t chunks = top && size > top ? 0 : (size + kSahChunk - 1) / kSahChunk;
+        const uint32_t chunks = k < count ? (tasks[k].e - tasks[k].b + kSahChunk - 1) / kSahChunk : 0;
         uint32_t before, sum;
         Scan(scratch).ExclusiveSum(chunks, before, sum);
         if (k < count) first[k] = base + before;
@@ -1437,52 +1283,6 @@ __global__ void __launch_bounds__(1024)
         first[count] = base;
         *total = base;
     }
-}
-
-/// Experiment (H-PLOC below the warp tasks): each small task's triangles into final_ids, its
-/// positions but the last marked as inside a segment (ends cleared), its slot kept by its first
-/// position. A warp per task.
-__global__ void __launch_bounds__(kBlock)
-    small_segments(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, SahOrder order,
-                   uint32_t* __restrict__ final_ids, uint8_t* __restrict__ ends, uint32_t* __restrict__ slot_of) {
-    const uint32_t lane = threadIdx.x & 31;
-    const uint32_t count = words[1];
-    for (uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp; task < count;
-         task += gridDim.x * blockDim.x / kWarp) {
-        const SahTask t = tasks[task];
-        const uint32_t* in = order.buf[t.buf];
-        for (uint32_t i = t.b + lane; i < t.e; i += kWarp) {
-            final_ids[i] = in[i];
-            ends[i] = i + 1 == t.e;
-        }
-        if (lane == 0) slot_of[t.b] = t.slot;
-    }
-}
-
-/// Experiment: the Morton code of the triangle at each position of final_ids.
-template <typename Key>
-__global__ void position_keys(uint32_t n, int bits, const AABB* __restrict__ boxes, const AABB* __restrict__ bounds,
-                              const uint32_t* __restrict__ final_ids, Key* __restrict__ keys) {
-    const uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
-    if (t >= n) return;
-    const AABB c = *bounds;
-    const uint32_t cells = accel::morton::cells_per_axis(bits);
-    const Vec3 scale{accel::morton::axis_scale(c.lo.x, c.hi.x, cells), accel::morton::axis_scale(c.lo.y, c.hi.y, cells),
-                     accel::morton::axis_scale(c.lo.z, c.hi.z, cells)};
-    const Vec3 p = boxes[final_ids[t]].center();
-    if constexpr (sizeof(Key) == 8)
-        keys[t] = accel::morton::code60(p, c.lo, scale);
-    else
-        keys[t] = accel::morton::code30(p, c.lo, scale);
-}
-
-/// Experiment: from each segment's root (a one-triangle segment's leaf) up through the splits above.
-__global__ void segments_climb(uint32_t n, const uint8_t* __restrict__ ends, const uint32_t* __restrict__ seg_root,
-                               const uint32_t* __restrict__ parent, uint2* children, AABB* boxes, NodeMeta* meta,
-                               uint32_t* __restrict__ visits, LeafRule rule) {
-    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
-    if (s >= n || !(s == 0 || ends[s - 1])) return;
-    climb_from(seg_root[s], n, parent, children, boxes, meta, visits, rule);
 }
 
 /// One warp per small task: its subtree down to tiny tasks (at most kSahSweep triangles, left to
@@ -1998,23 +1798,13 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // Everything the pipeline needs, before its first event.
     const size_t nodes = 2 * size_t(n) - 1, inner = std::max<size_t>(n - 1, 1);
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
-    // gpu-binned's top by Morton codes (experiment): tasks of more than `top` triangles split as
-    // the keys' radix tree splits them.
-    const uint32_t top = sah && std::getenv("BVHLAB_LBVH_TOP")
-                             ? std::max<uint32_t>(uint32_t(std::atoi(std::getenv("BVHLAB_LBVH_TOP"))), kSahWarpTask)
-                             : 0;
-    // Experiment: H-PLOC inside the warp tasks (BVHLAB_HPLOC_BOTTOM) in place of their binned subtrees.
-    const bool hybrid = sah && std::getenv("BVHLAB_HPLOC_BOTTOM") && n > 1;
-    DeviceBuffer<Key> keys(sah && !top && !hybrid ? 0 : n), keys_alt(sah && !top ? 0 : n);
-    DeviceBuffer<uint8_t> h_ends(hybrid ? n : 0);
-    DeviceBuffer<uint32_t> h_slot(hybrid ? n : 0), h_root(hybrid ? n : 0);
+    DeviceBuffer<Key> keys(sah ? 0 : n), keys_alt(sah ? 0 : n);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<Vec3> centres(sah ? n : 0);  // binned SAH: the triangles' centroids
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
-    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || sah || passes ? inner : 0),
-        clusters(lbvh || (sah && !hybrid) ? 0 : n);
-    DeviceBuffer<int32_t> parent_ids(kind == accel::BuilderKind::kHploc || hybrid ? inner : 0);
+    DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || sah || passes ? inner : 0), clusters(lbvh || sah ? 0 : n);
+    DeviceBuffer<int32_t> parent_ids(kind == accel::BuilderKind::kHploc ? inner : 0);
     // PLOC's second cluster list, nearest neighbours, flags and their scan.
     DeviceBuffer<uint32_t> clusters_alt(ploc ? n : 0), nn(ploc ? n : 0);
     DeviceBuffer<unsigned long long> flags(ploc ? n : 0), flag_scan(ploc ? n : 0);
@@ -2029,8 +1819,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
-    DeviceBuffer<uint32_t> s_bound_list(top ? s_large : 0);
+    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -2054,7 +1843,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
-    if (!sah || top) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
     if (sah) {
@@ -2077,7 +1866,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     if (lbvh) {  // the climb's outer keys, none yet
         detail::fill_device_bytes(visits.data(), 0xff, visits.bytes());
     }
-    if (kind == accel::BuilderKind::kHploc || hybrid) {
+    if (kind == accel::BuilderKind::kHploc) {
         detail::fill_device_bytes(parent_ids.data(), 0xff, parent_ids.bytes());
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
@@ -2094,13 +1883,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data(), centres.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(3);
-    if (!sah || top) {
+    if (!sah) {
         morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(4);
-    if (!sah || top)
-        BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
     ev.record(5);
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
@@ -2121,40 +1909,31 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                                  rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (sah) {
-        if (!top) iota<<<grid_for(n), kBlock>>>(n, ids.data());
-        const SahOrder order = top ? SahOrder{{dv.Current(), dv.Alternate()}} : SahOrder{{ids.data(), ids_alt.data()}};
+        iota<<<grid_for(n), kBlock>>>(n, ids.data());
+        const SahOrder order{{ids.data(), ids_alt.data()}};
         const uint32_t bin_count = uint32_t(s_bins.size());
-        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(n, top, bounds.data(), s_tasks.data(),
-                                                                    s_small.data(), s_first.data(), s_words.data(),
-                                                                    s_bins.data(), bin_count);
+        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
+            n, bounds.data(), s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
         BVHLAB_CHECK_LAUNCH();
         // Large tasks level by level; the host reads each level's task and chunk counts.
-        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = top && n > top ? 0 : (n + kSahChunk - 1) / kSahChunk;
+        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = (n + kSahChunk - 1) / kSahChunk;
         SahTask* level = s_tasks.data();
         SahTask* next = s_tasks.data() + s_large;
         while (tasks) {
-            if (chunks)
-                sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
-                                            s_chunk_counts.data());
+            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
+                                        s_chunk_counts.data());
             set_word<<<1, 1>>>(s_words.data(), 0);
-            if (top) set_word<<<1, 1>>>(s_words.data() + 4, 0);
-            sah_split<Key><<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+            sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
                 level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), n, children.data(),
-                root, dk.Current(), top, order, s_bound_list.data(), final_ids.data(),
-                hybrid ? s_words.data() + 5 : nullptr);
-            if (top)
-                code_child_bounds<<<unsigned(4 * gpu_sm_count()), kBlock>>>(next, s_bound_list.data(), s_words.data(),
-                                                                            order, centres.data());
-            if (chunks) {
-                sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
-                BVHLAB_CHECK_LAUNCH();
-                BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
-                                                                s_lefts_scan.data(), int(chunks)));
-                sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
-                                                s_lefts_scan.data(), final_ids.data());
-            }
-            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2, top);
+                root);
+            sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+            BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
+                                                            s_lefts_scan.data(), int(chunks)));
+            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
+                                            s_lefts_scan.data(), final_ids.data());
+            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
             BVHLAB_CHECK_LAUNCH();
             uint32_t w[3];  // large tasks, small tasks, chunks
             detail::copy_to_host(w, s_words.data(), sizeof w);
@@ -2162,44 +1941,22 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             chunks = w[2];
             std::swap(level, next);
         }
-        if (hybrid) {
-            // Every position its own segment (a linked leaf) until a small task claims it.
-            detail::fill_device_bytes(h_ends.data(), 1, h_ends.bytes());
-            iota<<<grid_for(n), kBlock>>>(n, h_root.data());
-            small_segments<<<unsigned(8 * gpu_sm_count()), kBlock>>>(s_small.data(), s_words.data(), order,
-                                                                     final_ids.data(), h_ends.data(), h_slot.data());
-            position_keys<Key>
-                <<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), final_ids.data(), keys.data());
-            make_leaves<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), boxes.data(), meta.data(),
-                                                 clusters.data(), rule);
-            set_word<<<1, 1>>>(node_counter, n);
-            hploc_segments<Key><<<grid_for(n), kBlock>>>(
-                n, keys.data(), h_ends.data(), h_slot.data(), h_root.data(), parent_ids.data(), clusters.data(),
-                boxes.data(), children.data(), meta.data(), node_counter, root, options.ploc_radius, rule);
-            BVHLAB_CHECK_LAUNCH();
-            parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
-            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-            segments_climb<<<grid_for(n), kBlock>>>(n, h_ends.data(), h_root.data(), parent.data(), children.data(),
-                                                    boxes.data(), meta.data(), visits.data(), rule);
-        } else {
-            sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
-                s_small.data(), s_words.data(), order, tri_boxes.data(), centres.data(), n, children.data(), root,
-                final_ids.data(), s_tiny.data());
-            tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
-                                                           tk.Current(), ti.Current());
-            BVHLAB_CHECK_LAUNCH();
-            BVHLAB_CUDA_CHECK(
-                cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
-            sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
-                s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root,
-                final_ids.data());
-            BVHLAB_CHECK_LAUNCH();
-            parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
-            BVHLAB_CHECK_LAUNCH();
-            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-            leaves_and_climb<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), parent.data(),
-                                                      children.data(), boxes.data(), meta.data(), visits.data(), rule);
-        }
+        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
+            s_small.data(), s_words.data(), order, tri_boxes.data(), centres.data(), n, children.data(), root,
+            final_ids.data(), s_tiny.data());
+        tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
+                                                       tk.Current(), ti.Current());
+        BVHLAB_CHECK_LAUNCH();
+        BVHLAB_CUDA_CHECK(
+            cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
+        sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
+            s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
+        BVHLAB_CHECK_LAUNCH();
+        parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
+        BVHLAB_CHECK_LAUNCH();
+        detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+        leaves_and_climb<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), parent.data(), children.data(),
+                                                  boxes.data(), meta.data(), visits.data(), rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
         // Rounds over the whole list until a block can finish it; the host reads each round's
