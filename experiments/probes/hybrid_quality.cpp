@@ -18,37 +18,15 @@
 
 #include "accel/builders/builder.h"
 #include "accel/builders/lbvh_reference.h"
-#include "accel/core/stats.h"
-#include "accel/layouts/bvh2_convert.h"
-#include "scene/io/obj_loader.h"
-#include "scene/io/procedural.h"
-#include "traversal/cpu/cpu_trace.h"
-#include "traversal/oracle/embree_oracle.h"
-#include "traversal/rays/protocol.h"
-#include "traversal/rays/raygen.h"
+#include "probe_trees.h"
 
 using namespace bvhlab;
 
-static std::vector<std::pair<std::string, trav::RaySet>> g_rays;
+static probe::RaySets g_rays;
 
 static void report(const std::string& name, const accel::BuildTree& t, const scene::TriangleMesh& m,
                    const accel::BuildConfig& c) {
-    const accel::TreeStats s = accel::compute_stats(t, m, c);
-    std::printf("%-22s SAH %8.3f EPO %7.3f nodes %8zu", name.c_str(), s.sah, s.epo, t.nodes.size());
-    const accel::Bvh2 bvh = accel::convert_to_bvh2(t, m);
-    for (const auto& [type, set] : g_rays) {
-        std::vector<trav::Hit> h;
-        std::vector<trav::TraversalCounters> k;
-        trav::trace_cpu(bvh, set.rays, set.query, h, &k);
-        double nodes = 0, tris = 0;
-        for (const auto& x : k) {
-            nodes += double(x.nodes);
-            tris += double(x.tri_tests);
-        }
-        std::printf("  %s nodes %.1f tris %.1f", type.c_str(), nodes / double(k.size()), tris / double(k.size()));
-    }
-    std::printf("\n");
-    std::fflush(stdout);
+    probe::print_tree(name, 22, t, m, c, g_rays);
 }
 
 /// A hierarchy under construction: leaves hold a triangle, interior nodes two children.
@@ -209,18 +187,8 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
 
 int main(int argc, char** argv) {
     if (argc < 2) return 2;
-    const std::string path = argv[1];
-    scene::TriangleMesh mesh = path == "soup" ? scene::make_procedural(scene::parse_procedural_kind("soup"), 100000, 1)
-                                              : scene::load_obj(path);
-    {
-        const trav::EmbreeOracle oracle(mesh);
-        trav::ProtocolConfig cfg;
-        cfg.camera = trav::framing_camera(mesh);
-        cfg.primary = {256, 192, 1, 0};
-        trav::RayProtocol proto(mesh, oracle, cfg);
-        g_rays.emplace_back("primary", proto.make(trav::RayType::kPrimary));
-        g_rays.emplace_back("diffuse", proto.make(trav::RayType::kDiffuse));
-    }
+    const scene::TriangleMesh mesh = probe::load_mesh(argv[1]);
+    g_rays = probe::framing_rays(mesh);
     std::vector<uint32_t> ks;
     for (int i = 2; i < argc; ++i) ks.push_back(uint32_t(std::atoi(argv[i])));
     if (ks.empty()) ks = {64, 512, 4096, 32768};
