@@ -56,6 +56,26 @@ struct Gen {
         };
         return go(h.root);
     }
+    /// Grafts BuildTree t over local triangle ids (ids[k]: local triangle k's id; empty: t's ids
+    /// are the mesh's), each leaf's ids (left to right) becoming leaf_of(them).
+    template <typename LeafOf>
+    uint32_t graft(const accel::BuildTree& t, const std::vector<uint32_t>& ids, LeafOf&& leaf_of) {
+        std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+            const accel::BuildNode& d = t.nodes[x];
+            if (d.is_leaf()) {
+                std::vector<uint32_t> l;
+                for (uint32_t i = 0; i < d.prim_count; ++i) {
+                    const uint32_t k = t.prim_indices[d.first_index + i];
+                    l.push_back(ids.empty() ? k : ids[k]);
+                }
+                return leaf_of(l);
+            }
+            const uint32_t a = go(d.first_index);
+            const uint32_t b = go(d.first_index + 1);
+            return inner(a, b);
+        };
+        return go(0);
+    }
     /// A chain over ids (for leaves that could not be split).
     uint32_t chain(const std::vector<uint32_t>& ids) {
         uint32_t r = leaf(ids[0]);
@@ -118,18 +138,7 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
             o.config.max_leaf_size = 1;
             const scene::TriangleMesh s = sub_mesh(m, ids);
             const accel::BuildTree t = accel::run_builder(accel::BuilderKind::kBinned, s, o).tree;
-            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
-                const accel::BuildNode& d = t.nodes[x];
-                if (d.is_leaf()) {
-                    std::vector<uint32_t> l;
-                    for (uint32_t i = 0; i < d.prim_count; ++i) l.push_back(ids[t.prim_indices[d.first_index + i]]);
-                    return g.chain(l);
-                }
-                const uint32_t a = go(d.first_index);
-                const uint32_t c = go(d.first_index + 1);
-                return g.inner(a, c);
-            };
-            return go(0);
+            return g.graft(t, ids, [&g](const std::vector<uint32_t>& l) { return g.chain(l); });
         };
     }
     if (b == "lbvhg") {
@@ -141,15 +150,13 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
             std::sort(k.begin(), k.end());
             std::vector<uint64_t> keys;
             for (size_t i = 0; i < k.size(); ++i) keys.push_back((k[i].first << 20) | i);  // distinct
-            const accel::RawHierarchy h = accel::radix_tree(keys);
-            const uint32_t n = uint32_t(keys.size());
-            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
-                if (x < n) return g.leaf(k[x].second);
-                const uint32_t a = go(h.left[x - n]);
-                const uint32_t c = go(h.right[x - n]);
-                return g.inner(a, c);
-            };
-            return go(h.root);
+            accel::RawHierarchy h = accel::radix_tree(keys);
+            std::vector<uint32_t> sorted(k.size());
+            for (size_t i = 0; i < k.size(); ++i) {
+                h.sorted_ids.push_back(uint32_t(i));
+                sorted[i] = k[i].second;
+            }
+            return g.graft(h, sorted);
         };
     }
     if (b == "binned512+ploc") {
@@ -162,19 +169,10 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
             accel::BuilderOptions o;
             o.config.min_leaf_size = o.config.max_leaf_size = 512;
             const accel::BuildTree t = accel::run_builder(accel::BuilderKind::kBinned, sub_mesh(m, ids), o).tree;
-            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
-                const accel::BuildNode& d = t.nodes[x];
-                if (d.is_leaf()) {
-                    std::vector<uint32_t> l;
-                    for (uint32_t i = 0; i < d.prim_count; ++i) l.push_back(ids[t.prim_indices[d.first_index + i]]);
-                    if (l.size() == 1) return g.leaf(l[0]);
-                    return g.graft(accel::ploc_reference(sub_mesh(m, l), 30, 8), l);
-                }
-                const uint32_t a = go(d.first_index);
-                const uint32_t c = go(d.first_index + 1);
-                return g.inner(a, c);
-            };
-            return go(0);
+            return g.graft(t, ids, [&](const std::vector<uint32_t>& l) {
+                if (l.size() == 1) return g.leaf(l[0]);
+                return g.graft(accel::ploc_reference(sub_mesh(m, l), 30, 8), l);
+            });
         };
     }
     const bool ploc = b == "ploc";
@@ -219,18 +217,7 @@ int main(int argc, char** argv) {
             if (!want(name)) continue;
             const Bottom bottom = bottom_of(b, mesh, global_keys);
             Gen g;
-            std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
-                const accel::BuildNode& d = t.nodes[x];
-                if (d.is_leaf()) {
-                    std::vector<uint32_t> l(t.prim_indices.begin() + d.first_index,
-                                            t.prim_indices.begin() + d.first_index + d.prim_count);
-                    return bottom(g, l);
-                }
-                const uint32_t a = go(d.first_index);
-                const uint32_t e = go(d.first_index + 1);
-                return g.inner(a, e);
-            };
-            const uint32_t root = go(0);
+            const uint32_t root = g.graft(t, {}, [&](const std::vector<uint32_t>& l) { return bottom(g, l); });
             report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
         }
         // Hierarchy A down to its subtrees of at most k triangles, each rebuilt by binned SAH.
