@@ -7,7 +7,11 @@
 //    full binned build), each node of at most K below them rebuilt by B (lbvh, ploc r8, or the
 //    LBVH with Morton codes of the whole scene: lbvhg);
 //  - A>K + B: hierarchy A (lbvh or ploc r8) down to its subtrees of at most K triangles,
-//    each rebuilt by B (the binned SAH build, ploc r8, or binned SAH down to 512 and ploc r8 below).
+//    each rebuilt by B (the binned SAH build, ploc r8, or binned SAH down to 512 and ploc r8 below);
+//  - chunkK / chunkuK / lbvhcK + binned: clusters of at most K triangles that the top cannot cut
+//    (K after one another in the Morton order, or the LBVH's largest subtrees of at most K),
+//    binned SAH over the clusters (weighted by their triangle counts; chunku: unweighted), the
+//    binned SAH build inside each: what binning clusters in place of triangles would give.
 // Usage: hybrid_quality SCENE.obj|soup [K ...]
 #include <algorithm>
 #include <cstdio>
@@ -183,6 +187,117 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
     };
 }
 
+/// A cluster of triangles that the top of a hierarchy cannot cut: its box, the centre of that
+/// box, how many triangles it holds, and their ids.
+struct Cluster {
+    AABB box;
+    uint32_t weight = 0;
+    std::vector<uint32_t> ids;
+};
+
+/// Binned SAH over clusters (32 bins a centroid axis, an exact sweep at 16 or fewer), each
+/// cluster weighted by its triangle count (or 1: `weighted` false), each cluster's own subtree
+/// made by `bottom`. What a GPU builder that bins clusters in place of triangles would make.
+static uint32_t binned_clusters(Gen& g, std::vector<uint32_t> items, const std::vector<Cluster>& cl, bool weighted,
+                                const Bottom& bottom) {
+    if (items.size() == 1) return bottom(g, cl[items[0]].ids);
+    const auto w = [&](uint32_t i) { return weighted ? float(cl[i].weight) : 1.0f; };
+    AABB cb = AABB::empty();
+    for (uint32_t i : items) cb.extend(cl[i].box.center());
+    float best = 3.4e38f;
+    int best_axis = -1;
+    float best_pos = 0;     // items whose centre on best_axis is < best_pos go left (binned)
+    size_t best_count = 0;  // or the first best_count of the sorted order (exact)
+    std::vector<uint32_t> best_order;
+    const size_t n = items.size();
+    for (int a = 0; a < 3; ++a) {
+        const float lo = cb.lo[a], ext = cb.hi[a] - cb.lo[a];
+        if (!(ext > 0)) continue;
+        if (n <= 16) {
+            std::vector<uint32_t> o = items;
+            std::sort(o.begin(), o.end(), [&](uint32_t x, uint32_t y) {
+                const float cx = cl[x].box.center()[a], cy = cl[y].box.center()[a];
+                return cx < cy || (cx == cy && x < y);
+            });
+            std::vector<float> right(n);
+            AABB r = AABB::empty();
+            float rw = 0;
+            for (size_t k = n; k-- > 1;) {
+                r.extend(cl[o[k]].box);
+                rw += w(o[k]);
+                right[k] = r.half_area() * rw;
+            }
+            AABB l = AABB::empty();
+            float lw = 0;
+            for (size_t k = 1; k < n; ++k) {
+                l.extend(cl[o[k - 1]].box);
+                lw += w(o[k - 1]);
+                const float c = l.half_area() * lw + right[k];
+                if (c < best) {
+                    best = c;
+                    best_axis = a;
+                    best_count = k;
+                    best_order = o;
+                }
+            }
+            continue;
+        }
+        constexpr int kBins = 32;
+        AABB bb[kBins];
+        float bw[kBins] = {};
+        for (int b = 0; b < kBins; ++b) bb[b] = AABB::empty();
+        const auto bin = [&](uint32_t i) {
+            const int b = int(float(kBins) * (cl[i].box.center()[a] - lo) / ext);
+            return std::min(std::max(b, 0), kBins - 1);
+        };
+        for (uint32_t i : items) {
+            bb[bin(i)].extend(cl[i].box);
+            bw[bin(i)] += w(i);
+        }
+        float right[kBins];
+        AABB r = AABB::empty();
+        float rw = 0;
+        for (int b = kBins; b-- > 1;) {
+            r.extend(bb[b]);
+            rw += bw[b];
+            right[b] = r.half_area() * rw;
+        }
+        AABB l = AABB::empty();
+        float lw = 0;
+        for (int b = 1; b < kBins; ++b) {
+            l.extend(bb[b - 1]);
+            lw += bw[b - 1];
+            if (lw == 0 || rw == 0) continue;
+            const float c = l.half_area() * lw + right[b];
+            if (c < best && right[b] > 0) {
+                best = c;
+                best_axis = a;
+                best_pos = lo + ext * float(b) / float(kBins);
+                best_count = 0;
+            }
+        }
+    }
+    std::vector<uint32_t> left, rightv;
+    if (best_axis < 0) {  // every centre in one place: halves of the list
+        left.assign(items.begin(), items.begin() + long(n / 2));
+        rightv.assign(items.begin() + long(n / 2), items.end());
+    } else if (best_count > 0) {
+        left.assign(best_order.begin(), best_order.begin() + long(best_count));
+        rightv.assign(best_order.begin() + long(best_count), best_order.end());
+    } else {
+        for (uint32_t i : items) (cl[i].box.center()[best_axis] < best_pos ? left : rightv).push_back(i);
+        if (left.empty() || rightv.empty()) {
+            left.assign(items.begin(), items.begin() + long(n / 2));
+            rightv.assign(items.begin() + long(n / 2), items.end());
+        }
+    }
+    items.clear();
+    items.shrink_to_fit();
+    const uint32_t p = binned_clusters(g, std::move(left), cl, weighted, bottom);
+    const uint32_t q = binned_clusters(g, std::move(rightv), cl, weighted, bottom);
+    return g.inner(p, q);
+}
+
 int main(int argc, char** argv) {
     if (argc < 2) return 2;
     const scene::TriangleMesh mesh = probe::load_mesh(argv[1]);
@@ -257,4 +372,64 @@ int main(int argc, char** argv) {
                 report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
             }
     }
+    // Clusters of k triangles that the top cannot cut, binned SAH over them, binned inside each:
+    //  - chunk: k triangles after one another in the scene's Morton order (weighted by count);
+    //  - chunku: the same, every cluster weighing 1;
+    //  - lbvhc: the LBVH's largest subtrees of at most k triangles.
+    for (uint32_t k : ks)
+        for (const std::string kind : {"chunk", "chunku", "lbvhc"}) {
+            const std::string name = kind + std::to_string(k) + " + binned";
+            if (!want(name) || k > 256) continue;
+            std::vector<Cluster> cl;
+            const auto add = [&](const std::vector<uint32_t>& ids) {
+                Cluster x;
+                x.box = AABB::empty();
+                for (uint32_t t : ids)
+                    for (int v = 0; v < 3; ++v) x.box.extend(mesh.vertices[mesh.indices[3 * size_t(t) + v]]);
+                x.weight = uint32_t(ids.size());
+                x.ids = ids;
+                cl.push_back(std::move(x));
+            };
+            if (kind != "lbvhc") {
+                for (uint32_t b = 0; b < n; b += k) {
+                    std::vector<uint32_t> ids;
+                    for (uint32_t i = b; i < std::min(n, b + k); ++i) ids.push_back(lbvh.sorted_ids[i]);
+                    add(ids);
+                }
+            } else {
+                std::vector<uint32_t> count(lbvh.boxes.size(), 1);
+                std::function<uint32_t(uint32_t)> cnt = [&](uint32_t x) -> uint32_t {
+                    if (x < n) return 1;
+                    return count[x] = cnt(lbvh.left[x - n]) + cnt(lbvh.right[x - n]);
+                };
+                cnt(lbvh.root);
+                std::function<void(uint32_t, std::vector<uint32_t>&)> collect = [&](uint32_t x,
+                                                                                    std::vector<uint32_t>& l) {
+                    if (x < n) {
+                        l.push_back(lbvh.sorted_ids[x]);
+                        return;
+                    }
+                    collect(lbvh.left[x - n], l);
+                    collect(lbvh.right[x - n], l);
+                };
+                std::function<void(uint32_t)> cut = [&](uint32_t x) {
+                    if (x < n || count[x] <= k) {
+                        std::vector<uint32_t> l;
+                        collect(x, l);
+                        add(l);
+                        return;
+                    }
+                    cut(lbvh.left[x - n]);
+                    cut(lbvh.right[x - n]);
+                };
+                cut(lbvh.root);
+            }
+            std::vector<uint32_t> items(cl.size());
+            for (uint32_t i = 0; i < items.size(); ++i) items[i] = i;
+            const Bottom bottom = bottom_of("binned", mesh, global_keys);
+            Gen g;
+            const uint32_t root = binned_clusters(g, std::move(items), cl, kind != "chunku", bottom);
+            std::printf("# %s: %zu clusters\n", name.c_str(), cl.size());
+            report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
+        }
 }
