@@ -5,7 +5,6 @@
 #include "traversal/gpu/gpu_builder.h"
 
 #include <thrust/iterator/counting_iterator.h>
-#include <cub/block/block_radix_sort.cuh>
 #include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
@@ -14,7 +13,6 @@
 #include <cuda/atomic>
 
 #include <algorithm>
-#include <cstdlib>
 #include <string>
 
 #include "accel/core/morton.h"
@@ -979,7 +977,7 @@ __device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) 
 }
 
 /// The root task (or, for a small mesh, the first small task), and every large task's bins empty.
-__global__ void sah_start(uint32_t n, uint32_t top, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
+__global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
                           uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
                           uint32_t bin_count) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -989,7 +987,7 @@ __global__ void sah_start(uint32_t n, uint32_t top, const AABB* __restrict__ bou
     if (n > kSahWarpTask) {
         large[0] = root;
         first[0] = 0;
-        first[1] = top && n > top ? 0 : (n + kSahChunk - 1) / kSahChunk;
+        first[1] = (n + kSahChunk - 1) / kSahChunk;
     } else {
         small[0] = root;
         words[1] = 1;
@@ -1124,91 +1122,12 @@ __device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e
 
 /// One warp per large task: the best split over its bins (the bins made empty again for the next
 /// level), the node linked to its parent, the children queued (large, small) or linked (leaves).
-/// Where the sorted keys [b, e) split as in their radix tree (the first key with the highest bit
-/// in which the first and last differ; the middle when all are equal). Warp-wide, a 33-way search.
-template <typename Key>
-__device__ uint32_t code_split(const Key* __restrict__ keys, uint32_t b, uint32_t e) {
-    const uint32_t lane = threadIdx.x & 31;
-    const Key first = keys[b], last = keys[e - 1];
-    if (first == last) return b + (e - b) / 2;
-    const Key x = first ^ last;
-    const int bit = sizeof(Key) == 8 ? 63 - __clzll((long long)x) : 31 - __clz(int(x));
-    uint32_t lo = b, hi = e - 1;  // the bit is clear at lo, set at hi
-    while (hi - lo > 1) {
-        const uint32_t p = lo + uint32_t(uint64_t(hi - lo) * (lane + 1) / 33);
-        const bool set = p > lo && ((keys[p] >> bit) & 1);
-        const unsigned ballot = __ballot_sync(~0u, set);
-        const uint32_t p_last = __shfl_sync(~0u, p, 31);
-        if (!ballot) {
-            lo = p_last;
-        } else {
-            const int f = __ffs(ballot) - 1;
-            const uint32_t pf = __shfl_sync(~0u, p, f), pb = __shfl_sync(~0u, p, max(f - 1, 0));
-            hi = pf;
-            if (f > 0) lo = pb;
-        }
-    }
-    return hi;
-}
-
-/// A task of more than `top` triangles (in the sorted keys' order, never partitioned): split as the
-/// keys' radix tree splits it, children in the same order buffer; those of at most `top` but more
-/// than a warp's listed for code_child_bounds.
-template <typename Key>
-__device__ void sah_code_split(const SahTask& t, const Key* __restrict__ keys, SahOrder order, uint32_t top,
-                               SahTask* next, SahTask* small, uint32_t* words, uint32_t* bound_list, uint32_t n,
-                               uint2* children, uint32_t* root, uint32_t* __restrict__ final_ids) {
-    const uint32_t m = code_split(keys, t.b, t.e);
-    if ((threadIdx.x & 31) != 0) return;
-    const uint32_t id = n + m - 1;
-    set_link(children, root, t.slot, id);
-    const uint32_t range[3] = {t.b, m, t.e};
-    for (int side = 0; side < 2; ++side) {
-        const uint32_t b = range[side], e = range[side + 1], slot = id << 1 | uint32_t(side);
-        if (e - b == 1) {
-            set_link(children, root, slot, b);
-            final_ids[b] = order.buf[t.buf][b];
-        } else if (e - b > kSahWarpTask) {
-            const uint32_t k = atomicAdd(words, 1u);
-            next[k] = {b, e, slot, t.buf, AABB::empty()};
-            if (e - b <= top) bound_list[atomicAdd(words + 4, 1u)] = k;
-        } else {
-            sah_push(small, words + 1, b, e, slot, t.buf);
-        }
-    }
-}
-
-/// The centroid bounds of the tasks that code splits made for binning (a block per task).
-__global__ void __launch_bounds__(kBlock)
-    code_child_bounds(SahTask* tasks, const uint32_t* __restrict__ list, const uint32_t* __restrict__ words,
-                      SahOrder order, const Vec3* __restrict__ centres) {
-    using Reduce = cub::BlockReduce<AABB, kBlock>;
-    __shared__ typename Reduce::TempStorage storage;
-    const uint32_t count = words[4];
-    for (uint32_t j = blockIdx.x; j < count; j += gridDim.x) {
-        SahTask& t = tasks[list[j]];
-        const uint32_t* in = order.buf[t.buf];
-        AABB c = AABB::empty();
-        for (uint32_t i = t.b + threadIdx.x; i < t.e; i += kBlock) c.extend(centres[in[i]]);
-        c = Reduce(storage).Reduce(c, BoxUnion());
-        if (threadIdx.x == 0) t.cb = c;
-        __syncthreads();
-    }
-}
-
-template <typename Key>
 __global__ void __launch_bounds__(kBlock)
     sah_split(const SahTask* __restrict__ tasks, uint32_t count, SahBin* bins, SahSplit* __restrict__ splits,
-              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root,
-              const Key* __restrict__ keys, uint32_t top, SahOrder order, uint32_t* bound_list,
-              uint32_t* __restrict__ final_ids) {
+              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root) {
     const uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
     if (task >= count) return;  // whole warps
     const SahTask t = tasks[task];
-    if (top && t.e - t.b > top) {
-        sah_code_split(t, keys, order, top, next, small, words, bound_list, n, children, root, final_ids);
-        return;
-    }
     const SahMap map(t.cb);
     AABB box[3];
     uint32_t num[3];
@@ -1346,15 +1265,14 @@ __global__ void __launch_bounds__(kBlock)
 /// in words[2]). One block.
 __global__ void __launch_bounds__(1024)
     sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, uint32_t* __restrict__ first,
-               uint32_t* __restrict__ total, uint32_t top) {
+               uint32_t* __restrict__ total) {
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
     const uint32_t count = words[0];
     uint32_t base = 0;
     for (uint32_t k0 = 0; k0 < count; k0 += 1024) {
         const uint32_t k = k0 + threadIdx.x;
-        const uint32_t size = k < count ? tasks[k].e - tasks[k].b : 0;
-        const uint32_t chunks = top && size > top ? 0 : (size + kSahChunk - 1) / kSahChunk;
+        const uint32_t chunks = k < count ? (tasks[k].e - tasks[k].b + kSahChunk - 1) / kSahChunk : 0;
         uint32_t before, sum;
         Scan(scratch).ExclusiveSum(chunks, before, sum);
         if (k < count) first[k] = base + before;
@@ -1482,205 +1400,6 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
             slot = go.z;
         }
         __syncwarp();
-    }
-}
-
-// EXPERIMENT (BVHLAB_SWEEP_BOTTOM=1): one block per small task (at most kSahWarpTask triangles)
-// builds its whole subtree by the exact SAH sweep, level-synchronously: the task's triangles
-// sorted once per axis by centroid (three orders of local ids), every open segment of a level
-// swept on every axis at once (segmented prefix and suffix unions by block scans), the cheapest
-// plane between unequal centroids taken (A_L N_L + A_R N_R; ties: the first axis, the first
-// plane), and the three orders partitioned stably, so that each segment stays sorted. Node n + k
-// - 1 splits at final place k, as gpu-binned's do. No split between equal centroids: the middle.
-constexpr int kSweepThreads = 256;
-constexpr int kSweepItems = int(kSahWarpTask) / kSweepThreads;
-static_assert(kSweepItems * kSweepThreads == int(kSahWarpTask), "the task's places over the block");
-
-struct SegBox {
-    AABB box;
-    uint32_t head;
-};
-
-struct SegBoxUnion {
-    __device__ SegBox operator()(const SegBox& x, const SegBox& y) const {
-        return y.head ? y : SegBox{merge(x.box, y.box), x.head};
-    }
-};
-
-__global__ void __launch_bounds__(kSweepThreads)
-    sah_sweep_block(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, SahOrder order,
-                    const AABB* __restrict__ tri_boxes, uint32_t n, uint2* children, uint32_t* root,
-                    uint32_t* __restrict__ final_ids) {
-    constexpr int S = int(kSahWarpTask);
-    using Sort = cub::BlockRadixSort<uint32_t, kSweepThreads, kSweepItems, uint16_t>;
-    using BoxScan = cub::BlockScan<SegBox, kSweepThreads>;
-    using Count = cub::BlockScan<uint32_t, kSweepThreads>;
-    __shared__ union {
-        typename Sort::TempStorage sort;
-        typename BoxScan::TempStorage scan;
-        typename Count::TempStorage count;
-    } tmp;
-    __shared__ AABB box[S];
-    __shared__ uint32_t gid[S];
-    __shared__ uint16_t ord[2][3][S];
-    __shared__ uint16_t seg_b[S], seg_e[S];
-    __shared__ uint32_t slot[S];  // by a segment's first place
-    __shared__ unsigned long long best[S];
-    __shared__ float right_cost[S];
-    __shared__ uint32_t start_sum[S];
-    __shared__ uint8_t to_left[S];
-    const int t = int(threadIdx.x);
-    const uint32_t count = words[1];
-    for (uint32_t task = blockIdx.x; task < count; task += gridDim.x) {
-        const SahTask tk = tasks[task];
-        const int size = int(tk.e - tk.b);
-        const uint32_t* in = order.buf[tk.buf];
-        __syncthreads();  // the last task's reads are over
-        for (int i = t; i < S; i += kSweepThreads) {
-            if (i < size) {
-                gid[i] = in[tk.b + uint32_t(i)];
-                box[i] = tri_boxes[gid[i]];
-            }
-            seg_b[i] = 0;
-            seg_e[i] = uint16_t(size);
-        }
-        if (t == 0) slot[0] = tk.slot;
-        __syncthreads();
-        for (int a = 0; a < 3; ++a) {
-            uint32_t key[kSweepItems];
-            uint16_t val[kSweepItems];
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int i = t * kSweepItems + j;
-                key[j] = i < size ? ordered_bits(box[i].center()[a]) : ~0u;
-                val[j] = uint16_t(i);
-            }
-            Sort(tmp.sort).Sort(key, val);
-            __syncthreads();
-            for (int j = 0; j < kSweepItems; ++j) ord[0][a][t * kSweepItems + j] = val[j];
-        }
-        if (size == 1) {
-            if (t == 0) set_link(children, root, tk.slot, tk.b);
-        }
-        int cur = 0;
-        __syncthreads();
-        while (__syncthreads_or(size > 1 && [&] {
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                if (p < size && seg_e[p] - seg_b[p] > 1) return true;
-            }
-            return false;
-        }())) {
-            // Per place p (a plane after p), the cheapest axis.
-            unsigned long long mine[kSweepItems];
-            for (int j = 0; j < kSweepItems; ++j) {
-                mine[j] = ~0ull;
-                const int p = t * kSweepItems + j;
-                if (p < size && seg_b[p] == p) best[p] = ~0ull;
-            }
-            for (int a = 0; a < 3; ++a) {
-                const uint16_t* o = ord[cur][a];
-                SegBox fw[kSweepItems], bw[kSweepItems];
-                for (int j = 0; j < kSweepItems; ++j) {
-                    const int p = t * kSweepItems + j;
-                    fw[j] = p < size ? SegBox{box[o[p]], seg_b[p] == p} : SegBox{AABB::empty(), 1u};
-                    const int q = S - 1 - p;  // the suffix scan runs over the places reversed
-                    bw[j] = q < size ? SegBox{box[o[q]], seg_e[q] == q + 1} : SegBox{AABB::empty(), 1u};
-                }
-                BoxScan(tmp.scan).InclusiveScan(bw, bw, SegBoxUnion());
-                __syncthreads();
-                for (int j = 0; j < kSweepItems; ++j) {
-                    const int q = S - 1 - (t * kSweepItems + j);
-                    if (q < size) right_cost[q] = bw[j].box.half_area() * float(seg_e[q] - q);
-                }
-                BoxScan(tmp.scan).InclusiveScan(fw, fw, SegBoxUnion());
-                __syncthreads();
-                for (int j = 0; j < kSweepItems; ++j) {
-                    const int p = t * kSweepItems + j;
-                    if (p + 1 >= size || p + 1 >= seg_e[p]) continue;
-                    if (!(box[o[p]].center()[a] < box[o[p + 1]].center()[a])) continue;
-                    const float c = fw[j].box.half_area() * float(p + 1 - seg_b[p]) + right_cost[p + 1];
-                    const unsigned long long k = (static_cast<unsigned long long>(ordered_bits(c)) << 32) |
-                                                 (uint32_t(a) << 16) | uint32_t(p + 1);
-                    mine[j] = min(mine[j], k);
-                }
-                __syncthreads();
-            }
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                if (mine[j] != ~0ull) atomicMin(&best[seg_b[p]], mine[j]);
-            }
-            __syncthreads();
-            // Which triangles go left, then the three orders partitioned stably.
-            int axis_of[kSweepItems], k_of[kSweepItems];
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                axis_of[j] = -1;
-                if (p >= size || seg_e[p] - seg_b[p] < 2) continue;
-                const unsigned long long bst = best[seg_b[p]];
-                axis_of[j] = bst == ~0ull ? 0 : int((bst >> 16) & 0xffffu);
-                k_of[j] = bst == ~0ull ? (seg_b[p] + seg_e[p]) / 2 : int(bst & 0xffffu);
-                to_left[ord[cur][axis_of[j]][p]] = p < k_of[j];
-            }
-            __syncthreads();
-            uint32_t packed[kSweepItems], before[kSweepItems];
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                packed[j] = 0;
-                if (axis_of[j] >= 0)
-                    for (int a = 0; a < 3; ++a) packed[j] |= uint32_t(to_left[ord[cur][a][p]]) << (10 * a);
-            }
-            Count(tmp.count).ExclusiveSum(packed, before);
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                if (p < size && seg_b[p] == p) start_sum[p] = before[j];
-            }
-            __syncthreads();
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                if (p >= size) continue;
-                if (axis_of[j] < 0) {
-                    for (int a = 0; a < 3; ++a) ord[cur ^ 1][a][p] = ord[cur][a][p];
-                    continue;
-                }
-                const int b = seg_b[p], k = k_of[j];
-                const uint32_t d = before[j] - start_sum[b];
-                for (int a = 0; a < 3; ++a) {
-                    const int lefts = int((d >> (10 * a)) & 1023u);
-                    const int dst = (packed[j] >> (10 * a)) & 1u ? b + lefts : k + (p - b - lefts);
-                    ord[cur ^ 1][a][dst] = ord[cur][a][p];
-                }
-            }
-            __syncthreads();
-            // The nodes and their links; the segments split.
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                if (axis_of[j] < 0) continue;
-                const int b = seg_b[p], e = seg_e[p], k = k_of[j];
-                const uint32_t id = n + tk.b + uint32_t(k) - 1;
-                if (p == b) {
-                    set_link(children, root, slot[b], id);
-                    if (k - b == 1) set_link(children, root, id << 1, tk.b + uint32_t(b));
-                    if (e - k == 1) set_link(children, root, id << 1 | 1u, tk.b + uint32_t(k));
-                }
-            }
-            __syncthreads();
-            for (int j = 0; j < kSweepItems; ++j) {
-                const int p = t * kSweepItems + j;
-                if (axis_of[j] < 0) continue;
-                const int b = seg_b[p], e = seg_e[p], k = k_of[j];
-                const uint32_t id = n + tk.b + uint32_t(k) - 1;
-                if (p == b) slot[b] = id << 1;
-                if (p == k) slot[k] = id << 1 | 1u;
-                if (p < k)
-                    seg_e[p] = uint16_t(k);
-                else
-                    seg_b[p] = uint16_t(k);
-                (void)e;
-            }
-            cur ^= 1;
-            __syncthreads();
-        }
-        for (int i = t; i < size; i += kSweepThreads) final_ids[tk.b + uint32_t(i)] = gid[ord[cur][0][i]];
     }
 }
 
@@ -2079,12 +1798,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // Everything the pipeline needs, before its first event.
     const size_t nodes = 2 * size_t(n) - 1, inner = std::max<size_t>(n - 1, 1);
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
-    // gpu-binned's top by Morton codes (experiment): tasks of more than `top` triangles split as
-    // the keys' radix tree splits them.
-    const uint32_t top = sah && std::getenv("BVHLAB_LBVH_TOP")
-                             ? std::max<uint32_t>(uint32_t(std::atoi(std::getenv("BVHLAB_LBVH_TOP"))), kSahWarpTask)
-                             : 0;
-    DeviceBuffer<Key> keys(sah && !top ? 0 : n), keys_alt(sah && !top ? 0 : n);
+    DeviceBuffer<Key> keys(sah ? 0 : n), keys_alt(sah ? 0 : n);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<Vec3> centres(sah ? n : 0);  // binned SAH: the triangles' centroids
     DeviceBuffer<uint2> children(nodes);
@@ -2105,8 +1819,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 5 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
-    DeviceBuffer<uint32_t> s_bound_list(top ? s_large : 0);
+    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -2130,7 +1843,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
-    if (!sah || top) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
     if (sah) {
@@ -2170,13 +1883,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data(), centres.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(3);
-    if (!sah || top) {
+    if (!sah) {
         morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(4);
-    if (!sah || top)
-        BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
+    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
     ev.record(5);
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
@@ -2197,39 +1909,31 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                                  rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (sah) {
-        if (!top) iota<<<grid_for(n), kBlock>>>(n, ids.data());
-        const SahOrder order = top ? SahOrder{{dv.Current(), dv.Alternate()}} : SahOrder{{ids.data(), ids_alt.data()}};
+        iota<<<grid_for(n), kBlock>>>(n, ids.data());
+        const SahOrder order{{ids.data(), ids_alt.data()}};
         const uint32_t bin_count = uint32_t(s_bins.size());
-        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(n, top, bounds.data(), s_tasks.data(),
-                                                                    s_small.data(), s_first.data(), s_words.data(),
-                                                                    s_bins.data(), bin_count);
+        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
+            n, bounds.data(), s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
         BVHLAB_CHECK_LAUNCH();
         // Large tasks level by level; the host reads each level's task and chunk counts.
-        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = top && n > top ? 0 : (n + kSahChunk - 1) / kSahChunk;
+        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = (n + kSahChunk - 1) / kSahChunk;
         SahTask* level = s_tasks.data();
         SahTask* next = s_tasks.data() + s_large;
         while (tasks) {
-            if (chunks)
-                sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
-                                            s_chunk_counts.data());
+            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
+                                        s_chunk_counts.data());
             set_word<<<1, 1>>>(s_words.data(), 0);
-            if (top) set_word<<<1, 1>>>(s_words.data() + 4, 0);
-            sah_split<Key><<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+            sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
                 level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), n, children.data(),
-                root, dk.Current(), top, order, s_bound_list.data(), final_ids.data());
-            if (top)
-                code_child_bounds<<<unsigned(4 * gpu_sm_count()), kBlock>>>(next, s_bound_list.data(), s_words.data(),
-                                                                            order, centres.data());
-            if (chunks) {
-                sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
-                BVHLAB_CHECK_LAUNCH();
-                BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
-                                                                s_lefts_scan.data(), int(chunks)));
-                sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
-                                                s_lefts_scan.data(), final_ids.data());
-            }
-            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2, top);
+                root);
+            sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+            BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
+                                                            s_lefts_scan.data(), int(chunks)));
+            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
+                                            s_lefts_scan.data(), final_ids.data());
+            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
             BVHLAB_CHECK_LAUNCH();
             uint32_t w[3];  // large tasks, small tasks, chunks
             detail::copy_to_host(w, s_words.data(), sizeof w);
@@ -2237,25 +1941,17 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             chunks = w[2];
             std::swap(level, next);
         }
-        static const bool sweep_bottom = std::getenv("BVHLAB_SWEEP_BOTTOM") != nullptr;  // EXPERIMENT
-        if (sweep_bottom) {
-            sah_sweep_block<<<unsigned(6 * gpu_sm_count()), kSweepThreads>>>(
-                s_small.data(), s_words.data(), order, tri_boxes.data(), n, children.data(), root, final_ids.data());
-            BVHLAB_CHECK_LAUNCH();
-        } else {
-            sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
-                s_small.data(), s_words.data(), order, tri_boxes.data(), centres.data(), n, children.data(), root,
-                final_ids.data(), s_tiny.data());
-            tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
-                                                           tk.Current(), ti.Current());
-            BVHLAB_CHECK_LAUNCH();
-            BVHLAB_CUDA_CHECK(
-                cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
-            sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
-                s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root,
-                final_ids.data());
-            BVHLAB_CHECK_LAUNCH();
-        }
+        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
+            s_small.data(), s_words.data(), order, tri_boxes.data(), centres.data(), n, children.data(), root,
+            final_ids.data(), s_tiny.data());
+        tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
+                                                       tk.Current(), ti.Current());
+        BVHLAB_CHECK_LAUNCH();
+        BVHLAB_CUDA_CHECK(
+            cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
+        sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
+            s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
+        BVHLAB_CHECK_LAUNCH();
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
