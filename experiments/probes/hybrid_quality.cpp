@@ -187,6 +187,38 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
     };
 }
 
+/// Walks hierarchy h down to its largest subtrees of at most k triangles: each becomes at(its
+/// triangles' ids, left to right), and every node above them join(left's result, right's).
+template <typename At, typename Join>
+static uint32_t cut_hierarchy(const accel::RawHierarchy& h, uint32_t k, At&& at, Join&& join) {
+    const uint32_t n = uint32_t(h.sorted_ids.size());
+    std::vector<uint32_t> count(h.boxes.size(), 1);
+    std::function<uint32_t(uint32_t)> cnt = [&](uint32_t x) -> uint32_t {
+        if (x < n) return 1;
+        return count[x] = cnt(h.left[x - n]) + cnt(h.right[x - n]);
+    };
+    cnt(h.root);
+    std::function<void(uint32_t, std::vector<uint32_t>&)> collect = [&](uint32_t x, std::vector<uint32_t>& l) {
+        if (x < n) {
+            l.push_back(h.sorted_ids[x]);
+            return;
+        }
+        collect(h.left[x - n], l);
+        collect(h.right[x - n], l);
+    };
+    std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
+        if (x < n || count[x] <= k) {
+            std::vector<uint32_t> l;
+            collect(x, l);
+            return at(l);
+        }
+        const uint32_t p = go(h.left[x - n]);
+        const uint32_t q = go(h.right[x - n]);
+        return join(p, q);
+    };
+    return go(h.root);
+}
+
 /// A cluster of triangles that the top of a hierarchy cannot cut: its box, the centre of that
 /// box, how many triangles it holds, and their ids.
 struct Cluster {
@@ -341,34 +373,11 @@ int main(int argc, char** argv) {
                 const std::string name = a + ">" + std::to_string(k) + " + " + bn;
                 if (!want(name) || (a == "ploc" && !with_ploc) || a == bn) continue;
                 const accel::RawHierarchy& h = a == "lbvh" ? lbvh : ploc;
-                std::vector<uint32_t> count(h.boxes.size(), 1);
-                std::function<uint32_t(uint32_t)> cnt = [&](uint32_t x) -> uint32_t {
-                    if (x < n) return 1;
-                    return count[x] = cnt(h.left[x - n]) + cnt(h.right[x - n]);
-                };
-                cnt(h.root);
                 const Bottom bottom = bottom_of(bn, mesh, global_keys);
                 Gen g;
-                std::function<void(uint32_t, std::vector<uint32_t>&)> collect = [&](uint32_t x,
-                                                                                    std::vector<uint32_t>& l) {
-                    if (x < n) {
-                        l.push_back(h.sorted_ids[x]);
-                        return;
-                    }
-                    collect(h.left[x - n], l);
-                    collect(h.right[x - n], l);
-                };
-                std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
-                    if (x < n || count[x] <= k) {
-                        std::vector<uint32_t> l;
-                        collect(x, l);
-                        return bottom(g, l);
-                    }
-                    const uint32_t p = go(h.left[x - n]);
-                    const uint32_t q = go(h.right[x - n]);
-                    return g.inner(p, q);
-                };
-                const uint32_t root = go(h.root);
+                const uint32_t root = cut_hierarchy(
+                    h, k, [&](const std::vector<uint32_t>& l) { return bottom(g, l); },
+                    [&](uint32_t p, uint32_t q) { return g.inner(p, q); });
                 report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
             }
     }
@@ -397,32 +406,13 @@ int main(int argc, char** argv) {
                     add(ids);
                 }
             } else {
-                std::vector<uint32_t> count(lbvh.boxes.size(), 1);
-                std::function<uint32_t(uint32_t)> cnt = [&](uint32_t x) -> uint32_t {
-                    if (x < n) return 1;
-                    return count[x] = cnt(lbvh.left[x - n]) + cnt(lbvh.right[x - n]);
-                };
-                cnt(lbvh.root);
-                std::function<void(uint32_t, std::vector<uint32_t>&)> collect = [&](uint32_t x,
-                                                                                    std::vector<uint32_t>& l) {
-                    if (x < n) {
-                        l.push_back(lbvh.sorted_ids[x]);
-                        return;
-                    }
-                    collect(lbvh.left[x - n], l);
-                    collect(lbvh.right[x - n], l);
-                };
-                std::function<void(uint32_t)> cut = [&](uint32_t x) {
-                    if (x < n || count[x] <= k) {
-                        std::vector<uint32_t> l;
-                        collect(x, l);
+                cut_hierarchy(
+                    lbvh, k,
+                    [&](const std::vector<uint32_t>& l) {
                         add(l);
-                        return;
-                    }
-                    cut(lbvh.left[x - n]);
-                    cut(lbvh.right[x - n]);
-                };
-                cut(lbvh.root);
+                        return 0u;
+                    },
+                    [](uint32_t, uint32_t) { return 0u; });
             }
             std::vector<uint32_t> items(cl.size());
             for (uint32_t i = 0; i < items.size(); ++i) items[i] = i;
