@@ -105,6 +105,23 @@ TEST(Bvh2Layout, PacksLeavesAndRecordsDepth) {
             if (c < 0) EXPECT_LE(accel::Bvh2Node::leaf_first(c) + accel::Bvh2Node::leaf_count(c), bvh.tris.size());
 }
 
+TEST(Bvh2Layout, ALeafOfMoreThanSixteenIsRefusedByItsSize) {
+    // The front door refuses --max-leaf 17 for this layout; a tree built past it (the library
+    // called directly) must be refused by the conversion, with the leaf's size and the limit.
+    const scene::TriangleMesh m = scene::make_procedural(scene::ProceduralKind::kSoup, 17, 3);
+    accel::BuilderOptions o;
+    o.config.min_leaf_size = o.config.max_leaf_size = 17;
+    const accel::BuildTree tree = accel::run_builder(accel::BuilderKind::kBinned, m, o).tree;
+    ASSERT_TRUE(tree.nodes[0].is_leaf());
+    ASSERT_EQ(tree.nodes[0].prim_count, 17u);
+    try {
+        accel::convert_to_bvh2(tree, m);
+        FAIL() << "a leaf of 17 triangles was converted";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "a leaf of 17 triangles does not fit the BVH2 layout (at most 16)");
+    }
+}
+
 TEST(Bvh2Layout, ADeeperTreeThanTheStackIsRefusedBeforeTracing) {
     // A forged chain of 70 interior nodes, each with one leaf child: deeper than the 64-entry
     // stack. The CPU tracer must refuse it (in Release builds too), not overflow.
