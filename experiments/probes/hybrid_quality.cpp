@@ -17,11 +17,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "accel/builders/builder.h"
 #include "accel/builders/lbvh_reference.h"
+#include "accel/core/binning.h"
 #include "probe_trees.h"
 
 using namespace bvhlab;
@@ -219,114 +221,63 @@ static uint32_t cut_hierarchy(const accel::RawHierarchy& h, uint32_t k, At&& at,
     return go(h.root);
 }
 
-/// A cluster of triangles that the top of a hierarchy cannot cut: its box, the centre of that
-/// box, how many triangles it holds, and their ids.
+/// A cluster of triangles that the top of a hierarchy cannot cut: its box, how many triangles it
+/// holds, and their ids.
 struct Cluster {
     AABB box;
     uint32_t weight = 0;
     std::vector<uint32_t> ids;
 };
 
-/// Binned SAH over clusters (32 bins a centroid axis, an exact sweep at 16 or fewer), each
-/// cluster weighted by its triangle count (or 1: `weighted` false), each cluster's own subtree
-/// made by `bottom`. What a GPU builder that bins clusters in place of triangles would make.
-static uint32_t binned_clusters(Gen& g, std::vector<uint32_t> items, const std::vector<Cluster>& cl, bool weighted,
-                                const Bottom& bottom) {
-    if (items.size() == 1) return bottom(g, cl[items[0]].ids);
-    const auto w = [&](uint32_t i) { return weighted ? float(cl[i].weight) : 1.0f; };
+/// Binned SAH over clusters (the library's 32-bin mapping and sweep; at 16 or fewer an exact
+/// sweep, each cluster its own bin in centre order), each cluster weighted by its triangle count
+/// (or 1: `weighted` false), each cluster's own subtree made by `bottom`. What a GPU builder that
+/// bins clusters in place of triangles would make.
+static uint32_t binned_clusters(Gen& g, const std::vector<uint32_t>& items, const std::vector<Cluster>& cl,
+                                bool weighted, const Bottom& bottom) {
+    const size_t n = items.size();
+    if (n == 1) return bottom(g, cl[items[0]].ids);
+    const auto bin_of = [&](uint32_t i) { return accel::Bin{cl[i].box, weighted ? cl[i].weight : 1u}; };
     AABB cb = AABB::empty();
     for (uint32_t i : items) cb.extend(cl[i].box.center());
-    float best = 3.4e38f;
-    int best_axis = -1;
-    float best_pos = 0;     // items whose centre on best_axis is < best_pos go left (binned)
-    size_t best_count = 0;  // or the first best_count of the sorted order (exact)
-    std::vector<uint32_t> best_order;
-    const size_t n = items.size();
+    const accel::BinMapping map(cb, 32);
+    float best = std::numeric_limits<float>::infinity();
+    std::vector<uint32_t> left, right;
     for (int a = 0; a < 3; ++a) {
-        const float lo = cb.lo[a], ext = cb.hi[a] - cb.lo[a];
-        if (!(ext > 0)) continue;
+        if (!map.splittable(a)) continue;
+        std::vector<uint32_t> order = items;
+        std::vector<accel::Bin> bins;
         if (n <= 16) {
-            std::vector<uint32_t> o = items;
-            std::sort(o.begin(), o.end(), [&](uint32_t x, uint32_t y) {
+            std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
                 const float cx = cl[x].box.center()[a], cy = cl[y].box.center()[a];
                 return cx < cy || (cx == cy && x < y);
             });
-            std::vector<float> right(n);
-            AABB r = AABB::empty();
-            float rw = 0;
-            for (size_t k = n; k-- > 1;) {
-                r.extend(cl[o[k]].box);
-                rw += w(o[k]);
-                right[k] = r.half_area() * rw;
+            for (uint32_t i : order) bins.push_back(bin_of(i));
+        } else {
+            bins.assign(size_t(map.num_bins), accel::Bin::empty());
+            for (uint32_t i : items) {
+                accel::Bin& b = bins[size_t(map.bin(cl[i].box.center()[a], a))];
+                b.bounds.extend(cl[i].box);
+                b.count += bin_of(i).count;
             }
-            AABB l = AABB::empty();
-            float lw = 0;
-            for (size_t k = 1; k < n; ++k) {
-                l.extend(cl[o[k - 1]].box);
-                lw += w(o[k - 1]);
-                const float c = l.half_area() * lw + right[k];
-                if (c < best) {
-                    best = c;
-                    best_axis = a;
-                    best_count = k;
-                    best_order = o;
-                }
-            }
-            continue;
         }
-        constexpr int kBins = 32;
-        AABB bb[kBins];
-        float bw[kBins] = {};
-        for (int b = 0; b < kBins; ++b) bb[b] = AABB::empty();
-        const auto bin = [&](uint32_t i) {
-            const int b = int(float(kBins) * (cl[i].box.center()[a] - lo) / ext);
-            return std::min(std::max(b, 0), kBins - 1);
-        };
-        for (uint32_t i : items) {
-            bb[bin(i)].extend(cl[i].box);
-            bw[bin(i)] += w(i);
-        }
-        float right[kBins];
-        AABB r = AABB::empty();
-        float rw = 0;
-        for (int b = kBins; b-- > 1;) {
-            r.extend(bb[b]);
-            rw += bw[b];
-            right[b] = r.half_area() * rw;
-        }
-        AABB l = AABB::empty();
-        float lw = 0;
-        for (int b = 1; b < kBins; ++b) {
-            l.extend(bb[b - 1]);
-            lw += bw[b - 1];
-            if (lw == 0 || rw == 0) continue;
-            const float c = l.half_area() * lw + right[b];
-            if (c < best && right[b] > 0) {
-                best = c;
-                best_axis = a;
-                best_pos = lo + ext * float(b) / float(kBins);
-                best_count = 0;
-            }
+        const accel::BinSweep sw = accel::sweep_bins(bins.data(), int(bins.size()));
+        if (!(sw.weight < best)) continue;
+        best = sw.weight;
+        left.clear();
+        right.clear();
+        for (size_t k = 0; k < n; ++k) {
+            const uint32_t i = order[k];
+            const int at = n <= 16 ? int(k) : map.bin(cl[i].box.center()[a], a);
+            (at <= sw.bin ? left : right).push_back(i);
         }
     }
-    std::vector<uint32_t> left, rightv;
-    if (best_axis < 0) {  // every centre in one place: halves of the list
+    if (left.empty() || right.empty()) {  // every centre in one place: halves of the list
         left.assign(items.begin(), items.begin() + long(n / 2));
-        rightv.assign(items.begin() + long(n / 2), items.end());
-    } else if (best_count > 0) {
-        left.assign(best_order.begin(), best_order.begin() + long(best_count));
-        rightv.assign(best_order.begin() + long(best_count), best_order.end());
-    } else {
-        for (uint32_t i : items) (cl[i].box.center()[best_axis] < best_pos ? left : rightv).push_back(i);
-        if (left.empty() || rightv.empty()) {
-            left.assign(items.begin(), items.begin() + long(n / 2));
-            rightv.assign(items.begin() + long(n / 2), items.end());
-        }
+        right.assign(items.begin() + long(n / 2), items.end());
     }
-    items.clear();
-    items.shrink_to_fit();
-    const uint32_t p = binned_clusters(g, std::move(left), cl, weighted, bottom);
-    const uint32_t q = binned_clusters(g, std::move(rightv), cl, weighted, bottom);
+    const uint32_t p = binned_clusters(g, left, cl, weighted, bottom);
+    const uint32_t q = binned_clusters(g, right, cl, weighted, bottom);
     return g.inner(p, q);
 }
 
@@ -418,7 +369,7 @@ int main(int argc, char** argv) {
             for (uint32_t i = 0; i < items.size(); ++i) items[i] = i;
             const Bottom bottom = bottom_of("binned", mesh, global_keys);
             Gen g;
-            const uint32_t root = binned_clusters(g, std::move(items), cl, kind != "chunku", bottom);
+            const uint32_t root = binned_clusters(g, items, cl, kind != "chunku", bottom);
             std::printf("# %s: %zu clusters\n", name.c_str(), cl.size());
             report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
         }
