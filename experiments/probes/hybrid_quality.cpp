@@ -189,10 +189,12 @@ static Bottom bottom_of(const std::string& b, const scene::TriangleMesh& m, cons
     };
 }
 
-/// Walks hierarchy h down to its largest subtrees of at most k triangles: each becomes at(its
-/// triangles' ids, left to right), and every node above them join(left's result, right's).
+/// Walks hierarchy h down to its largest subtrees that `whole(node, its triangle count)` keeps
+/// whole: each becomes at(its triangles' ids, left to right), and every node above them
+/// join(left's result, right's).
 template <typename At, typename Join>
-static uint32_t cut_hierarchy(const accel::RawHierarchy& h, uint32_t k, At&& at, Join&& join) {
+static uint32_t cut_hierarchy_if(const accel::RawHierarchy& h, const std::function<bool(uint32_t, uint32_t)>& whole,
+                                 At&& at, Join&& join) {
     const uint32_t n = uint32_t(h.sorted_ids.size());
     std::vector<uint32_t> count(h.boxes.size(), 1);
     std::function<uint32_t(uint32_t)> cnt = [&](uint32_t x) -> uint32_t {
@@ -209,7 +211,7 @@ static uint32_t cut_hierarchy(const accel::RawHierarchy& h, uint32_t k, At&& at,
         collect(h.right[x - n], l);
     };
     std::function<uint32_t(uint32_t)> go = [&](uint32_t x) -> uint32_t {
-        if (x < n || count[x] <= k) {
+        if (x < n || whole(x, count[x])) {
             std::vector<uint32_t> l;
             collect(x, l);
             return at(l);
@@ -219,6 +221,13 @@ static uint32_t cut_hierarchy(const accel::RawHierarchy& h, uint32_t k, At&& at,
         return join(p, q);
     };
     return go(h.root);
+}
+
+/// cut_hierarchy_if at the largest subtrees of at most k triangles.
+template <typename At, typename Join>
+static uint32_t cut_hierarchy(const accel::RawHierarchy& h, uint32_t k, At&& at, Join&& join) {
+    return cut_hierarchy_if(
+        h, [k](uint32_t, uint32_t count) { return count <= k; }, at, join);
 }
 
 /// A cluster of triangles that the top of a hierarchy cannot cut: its box, how many triangles it
@@ -281,6 +290,62 @@ static uint32_t binned_clusters(Gen& g, const std::vector<uint32_t>& items, cons
     return g.inner(p, q);
 }
 
+/// Clusters as a GPU warp would make them: the Morton order in chunks of `chunk` triangles; in
+/// each, rounds in which every cluster finds the cluster whose union with it has the least area
+/// (ties to the lower place), among those it may join (at most `cap` triangles together), and
+/// mutual pairs merge when the merge is nearly free (the union's area at most `alpha` times the
+/// larger one's); until a round merges nothing. Each cluster's ids in merge order.
+static std::vector<std::vector<uint32_t>> warp_clusters(const scene::TriangleMesh& m,
+                                                        const std::vector<uint32_t>& sorted, float alpha,
+                                                        uint32_t chunk, uint32_t cap) {
+    std::vector<std::vector<uint32_t>> out;
+    for (size_t b = 0; b < sorted.size(); b += chunk) {
+        std::vector<std::vector<uint32_t>> ids;
+        std::vector<AABB> box;
+        for (size_t i = b; i < std::min(sorted.size(), b + chunk); ++i) {
+            ids.push_back({sorted[i]});
+            AABB x = AABB::empty();
+            for (int v = 0; v < 3; ++v) x.extend(m.vertices[m.indices[3 * size_t(sorted[i]) + v]]);
+            box.push_back(x);
+        }
+        for (;;) {
+            const size_t k = ids.size();
+            std::vector<size_t> nn(k, k);
+            for (size_t i = 0; i < k; ++i) {
+                float best = std::numeric_limits<float>::infinity();
+                for (size_t j = 0; j < k; ++j) {
+                    if (j == i || ids[i].size() + ids[j].size() > cap) continue;
+                    AABB u = box[i];
+                    u.extend(box[j]);
+                    if (u.half_area() < best) best = u.half_area(), nn[i] = j;
+                }
+            }
+            std::vector<char> gone(k, 0);
+            bool merged = false;
+            for (size_t i = 0; i < k; ++i) {
+                const size_t j = nn[i];
+                if (j == k || j < i || nn[j] != i) continue;
+                AABB u = box[i];
+                u.extend(box[j]);
+                if (u.half_area() > alpha * std::max(box[i].half_area(), box[j].half_area())) continue;
+                box[i] = u;
+                ids[i].insert(ids[i].end(), ids[j].begin(), ids[j].end());
+                gone[j] = 1;
+                merged = true;
+            }
+            if (!merged) break;
+            std::vector<std::vector<uint32_t>> ids2;
+            std::vector<AABB> box2;
+            for (size_t i = 0; i < k; ++i)
+                if (!gone[i]) ids2.push_back(std::move(ids[i])), box2.push_back(box[i]);
+            ids.swap(ids2);
+            box.swap(box2);
+        }
+        for (auto& c : ids) out.push_back(std::move(c));
+    }
+    return out;
+}
+
 int main(int argc, char** argv) {
     if (argc < 2) return 2;
     const scene::TriangleMesh mesh = probe::load_mesh(argv[1]);
@@ -335,11 +400,15 @@ int main(int argc, char** argv) {
     // Clusters of k triangles that the top cannot cut, binned SAH over them, binned inside each:
     //  - chunk: k triangles after one another in the scene's Morton order (weighted by count);
     //  - chunku: the same, every cluster weighing 1;
-    //  - lbvhc: the LBVH's largest subtrees of at most k triangles.
+    //  - lbvhc: the LBVH's largest subtrees of at most k triangles;
+    //  - plocc: PLOC r8's largest subtrees of at most k triangles (PLOC set), each cluster's own
+    //    subtree made by binned SAH or by PLOC again (what H-PLOC stopped at k would hand over).
     for (uint32_t k : ks)
-        for (const std::string kind : {"chunk", "chunku", "lbvhc"}) {
-            const std::string name = kind + std::to_string(k) + " + binned";
-            if (!want(name) || k > 256) continue;
+        for (const std::string kind : {"chunk", "chunku", "lbvhc", "plocc", "ploccp", "ploca", "plocau", "warpa"}) {
+            const std::string name = kind + std::to_string(k) + (kind == "ploccp" ? " + ploc" : " + binned");
+            if (!want(name) || (k > 256 && kind.rfind("ploca", 0) != 0 && kind != "warpa") ||
+                (kind.rfind("ploc", 0) == 0 && !with_ploc))
+                continue;
             std::vector<Cluster> cl;
             const auto add = [&](const std::vector<uint32_t>& ids) {
                 Cluster x;
@@ -350,15 +419,39 @@ int main(int argc, char** argv) {
                 x.ids = ids;
                 cl.push_back(std::move(x));
             };
-            if (kind != "lbvhc") {
+            if (kind == "warpa") {  // k: alpha in percent; WARP_CHUNK (32) and CAP (16) from the environment
+                const char* wc = std::getenv("WARP_CHUNK");
+                const char* cp = std::getenv("CAP");
+                for (const auto& ids :
+                     warp_clusters(mesh, lbvh.sorted_ids, float(k) / 100.0f, wc ? uint32_t(std::atoi(wc)) : 32u,
+                                   cp ? uint32_t(std::atoi(cp)) : 16u))
+                    add(ids);
+            } else if (kind == "chunk" || kind == "chunku") {
                 for (uint32_t b = 0; b < n; b += k) {
                     std::vector<uint32_t> ids;
                     for (uint32_t i = b; i < std::min(n, b + k); ++i) ids.push_back(lbvh.sorted_ids[i]);
                     add(ids);
                 }
             } else {
-                cut_hierarchy(
-                    lbvh, k,
+                // ploca: k is a percentage; a cluster is a subtree of at most 16 triangles whose
+                // every merge was nearly free (the parent's area at most k% of its larger child's).
+                std::vector<char> cheap;
+                if (kind.rfind("ploca", 0) == 0) {
+                    cheap.assign(ploc.boxes.size(), 1);
+                    std::function<bool(uint32_t)> mark = [&](uint32_t x) -> bool {
+                        if (x < n) return true;
+                        const uint32_t l = ploc.left[x - n], r = ploc.right[x - n];
+                        const bool a = mark(l), b = mark(r);
+                        const float most = std::max(ploc.boxes[l].half_area(), ploc.boxes[r].half_area());
+                        return cheap[x] = a && b && ploc.boxes[x].half_area() <= most * float(k) / 100.0f;
+                    };
+                    mark(ploc.root);
+                }
+                cut_hierarchy_if(
+                    kind == "lbvhc" ? lbvh : ploc,
+                    [&](uint32_t x, uint32_t count) {
+                        return kind.rfind("ploca", 0) == 0 ? count <= 16 && cheap[x] : count <= k;
+                    },
                     [&](const std::vector<uint32_t>& l) {
                         add(l);
                         return 0u;
@@ -367,9 +460,10 @@ int main(int argc, char** argv) {
             }
             std::vector<uint32_t> items(cl.size());
             for (uint32_t i = 0; i < items.size(); ++i) items[i] = i;
-            const Bottom bottom = bottom_of("binned", mesh, global_keys);
+            const Bottom bottom = bottom_of(kind == "ploccp" ? "ploc" : "binned", mesh, global_keys);
             Gen g;
-            const uint32_t root = binned_clusters(g, items, cl, kind != "chunku", bottom);
+            const uint32_t root = binned_clusters(
+                g, items, cl, kind != "chunku" && kind != "plocau" && !std::getenv("UNWEIGHTED"), bottom);
             std::printf("# %s: %zu clusters\n", name.c_str(), cl.size());
             report(name, accel::tree_from_hierarchy(g.raw(root, mesh), c), mesh, c);
         }

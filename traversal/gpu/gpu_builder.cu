@@ -13,6 +13,8 @@
 #include <cuda/atomic>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "accel/core/morton.h"
@@ -1597,6 +1599,184 @@ struct Layout {
     uint32_t* tri_ids;
 };
 
+// --- Clusters for binned SAH (BVHLAB_CLUSTER_ALPHA, an experiment): the Morton order in chunks
+// of a warp; in each, rounds in which every cluster finds the cluster whose union with it has
+// the least area (ties to the lower lane) among those it may join (at most kClusterCap triangles
+// together), and mutual pairs merge when the merge is nearly free (the union's half area at most
+// alpha times the larger one's), until a round merges nothing. Binned SAH then runs over the
+// clusters, and each cluster's merges become the nodes below it. Node ids stay n + m - 1 (every
+// subtree a range of the final order): a merge's split is at its right cluster's first triangle.
+
+constexpr uint32_t kClusterCap = 16;
+constexpr uint32_t kMergeRef = 0x80000000u;  ///< a cluster reference to an interior node (by its right-first triangle)
+
+struct ClusterOut {
+    uint32_t* count;    ///< per chunk: its clusters
+    uint32_t* mask;     ///< per chunk: the lanes that head a cluster
+    uint32_t* members;  ///< per sorted place: the chunk's triangles (sorted places), a cluster's together
+    uint32_t* tris;     ///< the same members' triangle ids
+    uint4* info;        ///< per head slot: first member's index in members, triangle count, root reference
+    AABB* box;          ///< per head slot: the cluster's box
+    uint2* record;      ///< per sorted place s: the merge whose right cluster starts with s (kInvalid: none)
+};
+
+__global__ void __launch_bounds__(kBlock)
+    cluster_chunks(uint32_t n, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes, float alpha,
+                   ClusterOut out) {
+    __shared__ uint8_t members[kBlock / kWarp][kWarp][kClusterCap];
+    const uint32_t lane = threadIdx.x % kWarp, w = threadIdx.x / kWarp;
+    const uint32_t chunk = blockIdx.x * (kBlock / kWarp) + w;
+    const uint32_t base = chunk * kWarp;
+    if (base >= n) return;  // whole warps leave together
+    const uint32_t s = base + lane;
+    bool alive = s < n;
+    AABB box = alive ? tri_boxes[sorted_ids[s]] : AABB::empty();
+    uint32_t count = alive ? 1 : 0;
+    uint32_t ref = s;
+    members[w][lane][0] = uint8_t(lane);
+    __syncwarp();
+    for (;;) {
+        float best = __int_as_float(0x7f800000);
+        uint32_t nn = kWarp;
+        for (uint32_t j = 0; j < kWarp; ++j) {
+            const AABB o = shfl_box(box, int(j));
+            const uint32_t oc = __shfl_sync(~0u, count, int(j));
+            if (j == lane || oc == 0 || count + oc > kClusterCap) continue;
+            const float a = merge(box, o).half_area();
+            if (a < best) {
+                best = a;
+                nn = j;
+            }
+        }
+        if (!alive) nn = kWarp;
+        const uint32_t nn_of_nn = __shfl_sync(~0u, nn, int(nn % kWarp));
+        const AABB other = shfl_box(box, int(nn % kWarp));
+        const uint32_t other_count = __shfl_sync(~0u, count, int(nn % kWarp));
+        const bool mutual = nn < kWarp && nn_of_nn == lane;
+        const bool cheap = mutual && best <= alpha * fmaxf(box.half_area(), other.half_area());
+        const bool take = cheap && lane < nn;  // the lower lane keeps the cluster
+        const bool taken = __shfl_sync(~0u, take ? 1u : 0u, int(nn % kWarp)) != 0 && cheap && nn < lane;
+        if (!__any_sync(~0u, take)) break;
+        const uint32_t other_ref = __shfl_sync(~0u, ref, int(nn % kWarp));
+        if (take) {
+            const uint32_t right_first = base + members[w][nn][0];
+            out.record[right_first] = make_uint2(ref, other_ref);
+            for (uint32_t k = 0; k < other_count; ++k) members[w][lane][count + k] = members[w][nn][k];
+            box = merge(box, other);
+            count += other_count;
+            ref = kMergeRef | right_first;
+        }
+        __syncwarp();
+        if (taken) {
+            alive = false;
+            count = 0;
+            box = AABB::empty();
+        }
+    }
+    const uint32_t heads = __ballot_sync(~0u, alive);
+    // Each head's first member place: the counts of the heads before it.
+    uint32_t first = count;
+    for (uint32_t d = 1; d < kWarp; d <<= 1) {
+        const uint32_t v = __shfl_up_sync(~0u, first, d);
+        if (lane >= d) first += v;
+    }
+    first -= count;
+    for (uint32_t k = 0; k < count; ++k) {
+        const uint32_t m = base + members[w][lane][k];
+        out.members[base + first + k] = m;
+        out.tris[base + first + k] = sorted_ids[m];
+    }
+    if (alive) {
+        out.info[s] = make_uint4(base + first, count, ref, 0);
+        out.box[s] = box;
+    }
+    if (lane == 0) {
+        out.count[chunk] = __popc(heads);
+        out.mask[chunk] = heads;
+    }
+}
+
+/// Cluster k (k-th head in chunk order) at its place: its box, centre and info, and the centres'
+/// bounds (a block's reduced, then atomics).
+__global__ void __launch_bounds__(kBlock)
+    cluster_compact(uint32_t n, const uint32_t* __restrict__ chunk_first, ClusterOut in, AABB* __restrict__ boxes,
+                    Vec3* __restrict__ centres, uint4* __restrict__ info, AABB* __restrict__ bounds) {
+    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
+    AABB cb = AABB::empty();
+    if (s < n) {
+        const uint32_t chunk = s / kWarp, lane = s % kWarp, heads = in.mask[chunk];
+        if (heads >> lane & 1u) {
+            const uint32_t k = chunk_first[chunk] + __popc(heads & ((1u << lane) - 1u));
+            const AABB b = in.box[s];
+            boxes[k] = b;
+            centres[k] = b.center();
+            info[k] = in.info[s];
+            cb.extend(b.center());
+        }
+    }
+    using Reduce = cub::BlockReduce<AABB, kBlock>;
+    __shared__ typename Reduce::TempStorage tmp;
+    const AABB total = Reduce(tmp).Reduce(cb, BoxUnion{});
+    if (threadIdx.x == 0 && !total.is_empty()) atomic_merge(bounds, total);
+}
+
+/// The triangle count of the cluster at each place of binned SAH's order.
+__global__ void cluster_weights(uint32_t c, const uint32_t* __restrict__ order, const uint4* __restrict__ info,
+                                uint32_t* __restrict__ weights) {
+    const uint32_t p = blockIdx.x * blockDim.x + threadIdx.x;
+    if (p < c) weights[p] = info[order[p]].y;
+}
+
+/// The cluster at place p of binned SAH's order puts its triangles at places offset[p] on: the
+/// final order (triangle ids) and each sorted place's final place.
+__global__ void cluster_expand(uint32_t c, const uint32_t* __restrict__ order, const uint4* __restrict__ info,
+                               const uint32_t* __restrict__ offset, const uint32_t* __restrict__ members,
+                               const uint32_t* __restrict__ tris, uint32_t* __restrict__ final_ids,
+                               uint32_t* __restrict__ place) {
+    const uint32_t p = blockIdx.x * blockDim.x + threadIdx.x;
+    if (p >= c) return;
+    const uint4 x = info[order[p]];
+    for (uint32_t k = 0; k < x.y; ++k) {
+        const uint32_t m = members[x.x + k];
+        final_ids[offset[p] + k] = tris[x.x + k];
+        place[m] = offset[p] + k;
+    }
+}
+
+__device__ uint32_t cluster_node(uint32_t ref, uint32_t n, const uint32_t* place) {
+    return ref & kMergeRef ? n + place[ref & ~kMergeRef] - 1 : place[ref];
+}
+
+/// Each merge inside a cluster as its node: id n + (its right cluster's first place) - 1.
+__global__ void cluster_nodes(uint32_t n, const uint2* __restrict__ record, const uint32_t* __restrict__ place,
+                              uint2* __restrict__ children) {
+    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
+    if (s >= n) return;
+    const uint2 r = record[s];
+    if (r.x == kInvalid) return;
+    children[n + place[s] - 1] = make_uint2(cluster_node(r.x, n, place), cluster_node(r.y, n, place));
+}
+
+/// Binned SAH's nodes over the c clusters (node c + j splits its order at place j + 1) as nodes of
+/// the whole tree; a cluster in place of a leaf by its root. The root last (thread c - 1).
+__global__ void cluster_top(uint32_t c, uint32_t n, const uint2* __restrict__ top,
+                            const uint32_t* __restrict__ top_root, const uint32_t* __restrict__ order,
+                            const uint4* __restrict__ info, const uint32_t* __restrict__ offset,
+                            const uint32_t* __restrict__ place, uint2* __restrict__ children,
+                            uint32_t* __restrict__ root) {
+    const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
+    if (j >= c) return;
+    auto node_of = [&](uint32_t x) {
+        return x < c ? cluster_node(info[order[x]].z, n, place) : n + offset[x - c + 1] - 1;
+    };
+    if (j == c - 1) {
+        *root = node_of(*top_root);
+        return;
+    }
+    const uint2 t = top[c + j];
+    children[n + offset[j + 1] - 1] = make_uint2(node_of(t.x), node_of(t.y));
+}
+
 struct LayoutInput {
     uint32_t n;
     const uint2* children;
@@ -1780,6 +1960,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const int bits = options.morton_bits;
     const bool lbvh = kind == accel::BuilderKind::kLbvh, ploc = kind == accel::BuilderKind::kPloc;
     const bool sah = kind == accel::BuilderKind::kGpuBinned;
+    // An experiment: binned SAH over clusters of nearly coincident triangles (cluster_chunks).
+    const char* alpha_env = sah ? std::getenv("BVHLAB_CLUSTER_ALPHA") : nullptr;
+    const float alpha = alpha_env ? std::strtof(alpha_env, nullptr) : 0.0f;
+    const bool clustered = alpha > 0.0f && n > 1;
+    const bool coded = !sah || clustered;  // Morton codes sorted
     const int passes = n >= 3 ? accel::reinsertion_passes(kind, options) : 0;
     const LeafRule rule{options.config.traversal_cost, options.config.intersection_cost, options.config.min_leaf_size,
                         options.config.max_leaf_size};
@@ -1798,7 +1983,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // Everything the pipeline needs, before its first event.
     const size_t nodes = 2 * size_t(n) - 1, inner = std::max<size_t>(n - 1, 1);
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
-    DeviceBuffer<Key> keys(sah ? 0 : n), keys_alt(sah ? 0 : n);
+    DeviceBuffer<Key> keys(coded ? n : 0), keys_alt(coded ? n : 0);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
     DeviceBuffer<Vec3> centres(sah ? n : 0);  // binned SAH: the triangles' centroids
     DeviceBuffer<uint2> children(nodes);
@@ -1827,6 +2012,17 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     cub::DoubleBuffer<uint8_t> tk(t_keys.data(), t_keys_alt.data());
     cub::DoubleBuffer<uint32_t> ti(t_index.data(), t_index_alt.data());
     DeviceBuffer<unsigned long long> layout_flags_(nodes), layout_scan(nodes);  // the layout's flags and their scan
+    // Clusters: per chunk of a warp its count, head lanes and first cluster; per sorted place the
+    // members, head info and box, and the merge records; the compacted clusters (boxes, centres,
+    // info, centres' bounds); binned SAH's tree over them (links, root, order), the clusters'
+    // triangle counts in that order and their scan, and each sorted place's final place.
+    const size_t cn = clustered ? n : 0, c_chunks = clustered ? (n + kWarp - 1) / kWarp : 0;
+    DeviceBuffer<uint32_t> c_count(c_chunks), c_mask(c_chunks), c_first(c_chunks), c_members(cn), c_tris(cn);
+    DeviceBuffer<uint4> c_info_slot(cn), c_info(cn);
+    DeviceBuffer<AABB> c_box_slot(cn), c_boxes(cn), c_bounds(clustered ? 1 : 0);
+    DeviceBuffer<uint2> c_record(cn), c_top(clustered ? 2 * cn : 0);
+    DeviceBuffer<Vec3> c_centres(cn);
+    DeviceBuffer<uint32_t> c_order(cn), c_weights(cn), c_offset(cn), c_place(cn), c_words(clustered ? 2 : 0);
     // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
     // per node, the hierarchy before the passes (restored if they are undone) and the root's
     // meta before and after.
@@ -1843,7 +2039,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     size_t sort_bytes = 0, scan_bytes = 0, select_bytes = 0;
     cub::DoubleBuffer<Key> dk(keys.data(), keys_alt.data());
     cub::DoubleBuffer<uint32_t> dv(ids.data(), ids_alt.data());
-    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
+    if (coded) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sort_bytes, dk, dv, int(n), 0, bits));
     BVHLAB_CUDA_CHECK(
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
     if (sah) {
@@ -1853,6 +2049,10 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         scan_bytes = std::max(scan_bytes, b);
         BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, b, tk, ti, int(s_tiny.size()), 0, 5));
         sort_bytes = std::max(sort_bytes, b);
+        if (clustered) {
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, b, c_weights.data(), c_offset.data(), int(n)));
+            scan_bytes = std::max(scan_bytes, b);
+        }
     }
     if (passes) {
         BVHLAB_CUDA_CHECK(cub::DeviceSelect::If(nullptr, select_bytes, thrust::counting_iterator<uint32_t>(0),
@@ -1871,6 +2071,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
     if (sah) detail::fill_device_bytes(s_words.data(), 0, s_words.bytes());
+    if (clustered) detail::fill_device_bytes(c_record.data(), 0xff, c_record.bytes());
 
     // The boxes' kernel: a few blocks per SM, each primitive a grid apart (few atomics on the bounds).
     const unsigned box_grid = std::min(grid_for(n), unsigned(4 * gpu_sm_count()));
@@ -1883,12 +2084,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         prim_boxes<<<box_grid, kBlock>>>(n, InstanceBox{*prims.tlas}, tri_boxes.data(), bounds.data(), centres.data());
     BVHLAB_CHECK_LAUNCH();
     ev.record(3);
-    if (!sah) {
+    if (coded) {
         morton_codes<Key><<<grid_for(n), kBlock>>>(n, bits, tri_boxes.data(), bounds.data(), keys.data(), ids.data());
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(4);
-    if (!sah) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
+    if (coded) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
     ev.record(5);
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
@@ -1909,49 +2110,92 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                                  rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (sah) {
-        iota<<<grid_for(n), kBlock>>>(n, ids.data());
-        const SahOrder order{{ids.data(), ids_alt.data()}};
-        const uint32_t bin_count = uint32_t(s_bins.size());
-        sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
-            n, bounds.data(), s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
-        BVHLAB_CHECK_LAUNCH();
-        // Large tasks level by level; the host reads each level's task and chunk counts.
-        uint32_t tasks = n > kSahWarpTask ? 1 : 0, chunks = (n + kSahChunk - 1) / kSahChunk;
-        SahTask* level = s_tasks.data();
-        SahTask* next = s_tasks.data() + s_large;
-        while (tasks) {
-            sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, tri_boxes.data(), s_bins.data(),
-                                        s_chunk_counts.data());
-            set_word<<<1, 1>>>(s_words.data(), 0);
-            sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), n, children.data(),
-                root);
-            sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+        // Binned SAH over m primitives (boxes, centres, the centres' bounds): links of nodes m + k
+        // in kids, the root in *proot, the primitives' final order in fin.
+        const auto binned = [&](uint32_t m, const AABB* pboxes, const Vec3* pcentres, const AABB* pbounds, uint2* kids,
+                                uint32_t* proot, uint32_t* fin) {
+            iota<<<grid_for(m), kBlock>>>(m, ids.data());
+            const SahOrder order{{ids.data(), ids_alt.data()}};
+            const uint32_t bin_count = uint32_t(s_bins.size());
+            sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
+                m, pbounds, s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
             BVHLAB_CHECK_LAUNCH();
-            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
-                                                            s_lefts_scan.data(), int(chunks)));
-            sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, centres.data(),
-                                            s_lefts_scan.data(), final_ids.data());
-            sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
+            // Large tasks level by level; the host reads each level's task and chunk counts.
+            uint32_t tasks = m > kSahWarpTask ? 1 : 0, chunks = (m + kSahChunk - 1) / kSahChunk;
+            SahTask* level = s_tasks.data();
+            SahTask* next = s_tasks.data() + s_large;
+            while (tasks) {
+                sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, pboxes, s_bins.data(),
+                                            s_chunk_counts.data());
+                set_word<<<1, 1>>>(s_words.data(), 0);
+                sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                    level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), m, kids, proot);
+                sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                    level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+                BVHLAB_CHECK_LAUNCH();
+                BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
+                                                                s_lefts_scan.data(), int(chunks)));
+                sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, pcentres,
+                                                s_lefts_scan.data(), fin);
+                sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
+                BVHLAB_CHECK_LAUNCH();
+                uint32_t w[3];  // large tasks, small tasks, chunks
+                detail::copy_to_host(w, s_words.data(), sizeof w);
+                tasks = w[0];
+                chunks = w[2];
+                std::swap(level, next);
+            }
+            sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
+                s_small.data(), s_words.data(), order, pboxes, pcentres, m, kids, proot, fin, s_tiny.data());
+            tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
+                                                           tk.Current(), ti.Current());
             BVHLAB_CHECK_LAUNCH();
-            uint32_t w[3];  // large tasks, small tasks, chunks
-            detail::copy_to_host(w, s_words.data(), sizeof w);
-            tasks = w[0];
-            chunks = w[2];
-            std::swap(level, next);
+            BVHLAB_CUDA_CHECK(
+                cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
+            sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
+                s_tiny.data(), ti.Current(), s_words.data(), pboxes, m, kids, proot, fin);
+            BVHLAB_CHECK_LAUNCH();
+        };
+        if (!clustered) {
+            binned(n, tri_boxes.data(), centres.data(), bounds.data(), children.data(), root, final_ids.data());
+        } else {
+            const uint32_t chunks = uint32_t(c_chunks);
+            const ClusterOut co{c_count.data(),     c_mask.data(),     c_members.data(), c_tris.data(),
+                                c_info_slot.data(), c_box_slot.data(), c_record.data()};
+            const uint32_t* morton_ids = dv.Current();
+            set_empty<<<1, 1>>>(c_bounds.data());
+            cluster_chunks<<<(chunks + kBlock / kWarp - 1) / (kBlock / kWarp), kBlock>>>(n, morton_ids,
+                                                                                         tri_boxes.data(), alpha, co);
+            BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(
+                cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_count.data(), c_first.data(), int(chunks)));
+            cluster_compact<<<grid_for(n), kBlock>>>(n, c_first.data(), co, c_boxes.data(), c_centres.data(),
+                                                     c_info.data(), c_bounds.data());
+            BVHLAB_CHECK_LAUNCH();
+            uint32_t last[2];
+            detail::copy_to_host(last, c_first.data() + chunks - 1, sizeof(uint32_t));
+            detail::copy_to_host(last + 1, c_count.data() + chunks - 1, sizeof(uint32_t));
+            const uint32_t c = last[0] + last[1];
+            uint32_t* top_root = c_words.data();
+            if (c == 1) {
+                iota<<<1, 1>>>(1, c_order.data());
+                set_word<<<1, 1>>>(top_root, 0);
+                BVHLAB_CHECK_LAUNCH();
+            } else {
+                binned(c, c_boxes.data(), c_centres.data(), c_bounds.data(), c_top.data(), top_root, c_order.data());
+            }
+            cluster_weights<<<grid_for(c), kBlock>>>(c, c_order.data(), c_info.data(), c_weights.data());
+            BVHLAB_CHECK_LAUNCH();
+            BVHLAB_CUDA_CHECK(
+                cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_weights.data(), c_offset.data(), int(c)));
+            cluster_expand<<<grid_for(c), kBlock>>>(c, c_order.data(), c_info.data(), c_offset.data(), c_members.data(),
+                                                    c_tris.data(), final_ids.data(), c_place.data());
+            cluster_nodes<<<grid_for(n), kBlock>>>(n, c_record.data(), c_place.data(), children.data());
+            cluster_top<<<grid_for(c), kBlock>>>(c, n, c_top.data(), top_root, c_order.data(), c_info.data(),
+                                                 c_offset.data(), c_place.data(), children.data(), root);
+            BVHLAB_CHECK_LAUNCH();
+            if (std::getenv("BVHLAB_CLUSTER_VERBOSE")) std::fprintf(stderr, "clusters %u of %u\n", c, n);
         }
-        sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
-            s_small.data(), s_words.data(), order, tri_boxes.data(), centres.data(), n, children.data(), root,
-            final_ids.data(), s_tiny.data());
-        tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
-                                                       tk.Current(), ti.Current());
-        BVHLAB_CHECK_LAUNCH();
-        BVHLAB_CUDA_CHECK(
-            cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
-        sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
-            s_tiny.data(), ti.Current(), s_words.data(), tri_boxes.data(), n, children.data(), root, final_ids.data());
-        BVHLAB_CHECK_LAUNCH();
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
