@@ -1624,6 +1624,8 @@ __global__ void __launch_bounds__(kBlock)
     cluster_chunks(uint32_t n, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes, float alpha,
                    ClusterOut out) {
     __shared__ uint8_t members[kBlock / kWarp][kWarp][kClusterCap];
+    // Each round's boxes, the count in lo's w.
+    __shared__ float4 lo4[kBlock / kWarp][kWarp], hi4[kBlock / kWarp][kWarp];
     const uint32_t lane = threadIdx.x % kWarp, w = threadIdx.x / kWarp;
     const uint32_t chunk = blockIdx.x * (kBlock / kWarp) + w;
     const uint32_t base = chunk * kWarp;
@@ -1634,24 +1636,28 @@ __global__ void __launch_bounds__(kBlock)
     uint32_t count = alive ? 1 : 0;
     uint32_t ref = s;
     members[w][lane][0] = uint8_t(lane);
-    __syncwarp();
     for (;;) {
+        const uint32_t live = __ballot_sync(~0u, alive);
+        lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(count));
+        hi4[w][lane] = make_float4(box.hi.x, box.hi.y, box.hi.z, 0.0f);
+        __syncwarp();
         float best = __int_as_float(0x7f800000);
         uint32_t nn = kWarp;
-        for (uint32_t j = 0; j < kWarp; ++j) {
-            const AABB o = shfl_box(box, int(j));
-            const uint32_t oc = __shfl_sync(~0u, count, int(j));
-            if (j == lane || oc == 0 || count + oc > kClusterCap) continue;
-            const float a = merge(box, o).half_area();
-            if (a < best) {
-                best = a;
+        for (uint32_t rest = live; rest; rest &= rest - 1) {  // the live clusters, lowest lane first
+            const uint32_t j = uint32_t(__ffs(int(rest))) - 1;
+            const float4 a = lo4[w][j], b = hi4[w][j];
+            if (j == lane || count + __float_as_uint(a.w) > kClusterCap) continue;
+            const float area = merge(box, AABB{{a.x, a.y, a.z}, {b.x, b.y, b.z}}).half_area();
+            if (area < best) {
+                best = area;
                 nn = j;
             }
         }
         if (!alive) nn = kWarp;
         const uint32_t nn_of_nn = __shfl_sync(~0u, nn, int(nn % kWarp));
-        const AABB other = shfl_box(box, int(nn % kWarp));
-        const uint32_t other_count = __shfl_sync(~0u, count, int(nn % kWarp));
+        const float4 oa = lo4[w][nn % kWarp], ob = hi4[w][nn % kWarp];
+        const AABB other{{oa.x, oa.y, oa.z}, {ob.x, ob.y, ob.z}};
+        const uint32_t other_count = __float_as_uint(oa.w);
         const bool mutual = nn < kWarp && nn_of_nn == lane;
         const bool cheap = mutual && best <= alpha * fmaxf(box.half_area(), other.half_area());
         const bool take = cheap && lane < nn;  // the lower lane keeps the cluster
