@@ -295,6 +295,7 @@ static uint32_t binned_clusters(Gen& g, const std::vector<uint32_t>& items, cons
 /// (ties to the lower place), among those it may join (at most `cap` triangles together), and
 /// mutual pairs merge when the merge is nearly free (the union's area at most `alpha` times the
 /// larger one's); until a round merges nothing. Each cluster's ids in merge order.
+static size_t g_rounds = 0, g_pairs = 0;  // warp_clusters' rounds and live clusters over them
 static std::vector<std::vector<uint32_t>> warp_clusters(const scene::TriangleMesh& m,
                                                         const std::vector<uint32_t>& sorted, float alpha,
                                                         uint32_t chunk, uint32_t cap) {
@@ -310,6 +311,8 @@ static std::vector<std::vector<uint32_t>> warp_clusters(const scene::TriangleMes
         }
         for (;;) {
             const size_t k = ids.size();
+            g_rounds += 1;
+            g_pairs += k;
             std::vector<size_t> nn(k, k);
             for (size_t i = 0; i < k; ++i) {
                 float best = std::numeric_limits<float>::infinity();
@@ -343,6 +346,9 @@ static std::vector<std::vector<uint32_t>> warp_clusters(const scene::TriangleMes
         }
         for (auto& c : ids) out.push_back(std::move(c));
     }
+    std::printf("# %zu chunks: %.2f rounds, %.1f live clusters a round\n", (sorted.size() + chunk - 1) / chunk,
+                double(g_rounds) * chunk / double(sorted.size()), double(g_pairs) / double(g_rounds));
+    g_rounds = g_pairs = 0;
     return out;
 }
 
