@@ -76,9 +76,8 @@ __device__ void store_meta(NodeMeta* at, const NodeMeta& m) {
 
 /// Writes interior node `id` over children a and b (complete) with box `box`, and decides by
 /// SAH whether its subtree becomes one leaf.
-/// The meta of a node over children with metas ma and mb and box `box`: by SAH, whether its
-/// subtree becomes one leaf.
-__device__ NodeMeta node_meta(const NodeMeta& ma, const NodeMeta& mb, const AABB& box, const LeafRule& rule) {
+__device__ NodeMeta make_node(uint32_t id, uint32_t a, uint32_t b, const NodeMeta& ma, const NodeMeta& mb,
+                              const AABB& box, AABB* boxes, uint2* children, NodeMeta* meta, const LeafRule& rule) {
     NodeMeta m;
     m.count = ma.count + mb.count;
     const float area = box.half_area();
@@ -88,12 +87,6 @@ __device__ NodeMeta node_meta(const NodeMeta& ma, const NodeMeta& mb, const AABB
     m.cost = leaf ? as_leaf : inner;
     m.interior = leaf ? 0 : 1 + ma.interior + mb.interior;
     m.height = leaf ? 0 : 1 + max(ma.height, mb.height);
-    return m;
-}
-
-__device__ NodeMeta make_node(uint32_t id, uint32_t a, uint32_t b, const NodeMeta& ma, const NodeMeta& mb,
-                              const AABB& box, AABB* boxes, uint2* children, NodeMeta* meta, const LeafRule& rule) {
-    const NodeMeta m = node_meta(ma, mb, box, rule);
     boxes[id] = box;
     children[id] = make_uint2(a, b);
     store_meta(meta + id, m);
@@ -1618,20 +1611,18 @@ constexpr uint32_t kClusterCap = 16;
 constexpr uint32_t kMergeRef = 0x80000000u;  ///< a cluster reference to an interior node (by its right-first triangle)
 
 struct ClusterOut {
-    uint32_t* count;        ///< per chunk: its clusters
-    uint32_t* mask;         ///< per chunk: the lanes that head a cluster
-    uint32_t* members;      ///< per sorted place: the chunk's triangles (sorted places), a cluster's together
-    uint32_t* tris;         ///< the same members' triangle ids
-    uint4* info;            ///< per head slot: first member's index in members, triangle count, root reference
-    AABB* box;              ///< per head slot: the cluster's box
-    uint2* record;          ///< per sorted place s: the merge whose right cluster starts with s (kInvalid: none)
-    AABB* record_box;       ///< and that merge's box
-    NodeMeta* record_meta;  ///< and meta
+    uint32_t* count;    ///< per chunk: its clusters
+    uint32_t* mask;     ///< per chunk: the lanes that head a cluster
+    uint32_t* members;  ///< per sorted place: the chunk's triangles (sorted places), a cluster's together
+    uint32_t* tris;     ///< the same members' triangle ids
+    uint4* info;        ///< per head slot: first member's index in members, triangle count, root reference
+    AABB* box;          ///< per head slot: the cluster's box
+    uint2* record;      ///< per sorted place s: the merge whose right cluster starts with s (kInvalid: none)
 };
 
 __global__ void __launch_bounds__(kBlock)
     cluster_chunks(uint32_t n, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes, float alpha,
-                   LeafRule rule, ClusterOut out) {
+                   ClusterOut out) {
     // A cluster's triangles as a list through next_ from the lane that holds it (its first) to
     // its tail; at the end, the chunk's triangles in cluster order.
     __shared__ uint8_t next_[kBlock / kWarp][kWarp], order_[kBlock / kWarp][kWarp];
@@ -1646,7 +1637,6 @@ __global__ void __launch_bounds__(kBlock)
     AABB box = alive ? tri_boxes[sorted_ids[s]] : AABB::empty();
     uint32_t count = alive ? 1 : 0;
     uint32_t ref = s, tail = lane;
-    NodeMeta meta = leaf_meta(box, rule);
     for (;;) {
         const uint32_t live = __ballot_sync(~0u, alive);
         lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(count));
@@ -1676,18 +1666,12 @@ __global__ void __launch_bounds__(kBlock)
         if (!__any_sync(~0u, take)) break;
         const uint32_t other_ref = __shfl_sync(~0u, ref, int(nn % kWarp));
         const uint32_t other_tail = __shfl_sync(~0u, tail, int(nn % kWarp));
-        const NodeMeta other_meta{
-            __shfl_sync(~0u, meta.count, int(nn % kWarp)), __shfl_sync(~0u, meta.interior, int(nn % kWarp)),
-            __shfl_sync(~0u, meta.cost, int(nn % kWarp)), __shfl_sync(~0u, meta.height, int(nn % kWarp))};
         if (take) {
             const uint32_t right_first = base + nn;  // a lane's cluster starts with its own triangle
             out.record[right_first] = make_uint2(ref, other_ref);
             next_[w][tail] = uint8_t(nn);
             tail = other_tail;
             box = merge(box, other);
-            meta = node_meta(meta, other_meta, box, rule);
-            out.record_box[right_first] = box;
-            store_meta(out.record_meta + right_first, meta);
             count += other_count;
             ref = kMergeRef | right_first;
         }
@@ -1774,32 +1758,14 @@ __device__ uint32_t cluster_node(uint32_t ref, uint32_t n, const uint32_t* place
     return ref & kMergeRef ? n + place[ref & ~kMergeRef] - 1 : place[ref];
 }
 
-/// Each sorted place's leaf at its final place, and the merge whose right cluster it starts as
-/// node n + (its final place) - 1, with the box and meta the merge made.
-__global__ void cluster_nodes(uint32_t n, ClusterOut in, const uint32_t* __restrict__ place,
-                              const uint32_t* __restrict__ final_ids, const AABB* __restrict__ tri_boxes,
-                              uint2* __restrict__ children, AABB* __restrict__ boxes, NodeMeta* __restrict__ meta,
-                              LeafRule rule) {
+/// Each merge inside a cluster as its node: id n + (its right cluster's first place) - 1.
+__global__ void cluster_nodes(uint32_t n, const uint2* __restrict__ record, const uint32_t* __restrict__ place,
+                              uint2* __restrict__ children) {
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     if (s >= n) return;
-    const uint32_t p = place[s];
-    const AABB box = tri_boxes[final_ids[p]];
-    boxes[p] = box;
-    store_meta(meta + p, leaf_meta(box, rule));
-    const uint2 r = in.record[s];
+    const uint2 r = record[s];
     if (r.x == kInvalid) return;
-    const uint32_t id = n + p - 1;
-    children[id] = make_uint2(cluster_node(r.x, n, place), cluster_node(r.y, n, place));
-    boxes[id] = in.record_box[s];
-    meta[id] = in.record_meta[s];
-}
-
-/// From each cluster's root (its box and meta written) upwards through binned SAH's nodes (climb).
-__global__ void cluster_climb(uint32_t c, uint32_t n, const uint4* __restrict__ info,
-                              const uint32_t* __restrict__ place, const uint32_t* __restrict__ parent, uint2* children,
-                              AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits, LeafRule rule) {
-    const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-    if (k < c) climb_from(cluster_node(info[k].z, n, place), n, parent, children, boxes, meta, visits, rule);
+    children[n + place[s] - 1] = make_uint2(cluster_node(r.x, n, place), cluster_node(r.y, n, place));
 }
 
 /// Binned SAH's nodes over the c clusters (node c + j splits its order at place j + 1) as nodes of
@@ -2064,8 +2030,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const size_t cn = clustered ? n : 0, c_chunks = clustered ? (n + kWarp - 1) / kWarp : 0;
     DeviceBuffer<uint32_t> c_count(c_chunks), c_mask(c_chunks), c_first(c_chunks), c_members(cn), c_tris(cn);
     DeviceBuffer<uint4> c_info_slot(cn), c_info(cn);
-    DeviceBuffer<AABB> c_box_slot(cn), c_boxes(cn), c_bounds(clustered ? 1 : 0), c_record_box(cn);
-    DeviceBuffer<NodeMeta> c_record_meta(cn);
+    DeviceBuffer<AABB> c_box_slot(cn), c_boxes(cn), c_bounds(clustered ? 1 : 0);
     DeviceBuffer<uint2> c_record(cn), c_top(clustered ? 2 * cn : 0);
     DeviceBuffer<Vec3> c_centres(cn);
     DeviceBuffer<uint32_t> c_order(cn), c_weights(cn), c_offset(cn), c_place(cn), c_words(clustered ? 2 : 0);
@@ -2206,13 +2171,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             binned(n, tri_boxes.data(), centres.data(), bounds.data(), children.data(), root, final_ids.data());
         } else {
             const uint32_t chunks = uint32_t(c_chunks);
-            const ClusterOut co{c_count.data(),  c_mask.data(),       c_members.data(),
-                                c_tris.data(),   c_info_slot.data(),  c_box_slot.data(),
-                                c_record.data(), c_record_box.data(), c_record_meta.data()};
+            const ClusterOut co{c_count.data(),     c_mask.data(),     c_members.data(), c_tris.data(),
+                                c_info_slot.data(), c_box_slot.data(), c_record.data()};
             const uint32_t* morton_ids = dv.Current();
             set_empty<<<1, 1>>>(c_bounds.data());
-            cluster_chunks<<<(chunks + kBlock / kWarp - 1) / (kBlock / kWarp), kBlock>>>(
-                n, morton_ids, tri_boxes.data(), alpha, rule, co);
+            cluster_chunks<<<(chunks + kBlock / kWarp - 1) / (kBlock / kWarp), kBlock>>>(n, morton_ids,
+                                                                                         tri_boxes.data(), alpha, co);
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(
                 cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_count.data(), c_first.data(), int(chunks)));
@@ -2237,25 +2201,18 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                 cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_weights.data(), c_offset.data(), int(c)));
             cluster_expand<<<grid_for(c), kBlock>>>(c, c_order.data(), c_info.data(), c_offset.data(), c_members.data(),
                                                     c_tris.data(), final_ids.data(), c_place.data());
-            cluster_nodes<<<grid_for(n), kBlock>>>(n, co, c_place.data(), final_ids.data(), tri_boxes.data(),
-                                                   children.data(), boxes.data(), meta.data(), rule);
+            cluster_nodes<<<grid_for(n), kBlock>>>(n, c_record.data(), c_place.data(), children.data());
             cluster_top<<<grid_for(c), kBlock>>>(c, n, c_top.data(), top_root, c_order.data(), c_info.data(),
                                                  c_offset.data(), c_place.data(), children.data(), root);
-            parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
-            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-            cluster_climb<<<grid_for(c), kBlock>>>(c, n, c_info.data(), c_place.data(), parent.data(), children.data(),
-                                                   boxes.data(), meta.data(), visits.data(), rule);
             BVHLAB_CHECK_LAUNCH();
             if (std::getenv("BVHLAB_CLUSTER_VERBOSE")) std::fprintf(stderr, "clusters %u of %u\n", c, n);
         }
-        if (!clustered) {
-            parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
-            BVHLAB_CHECK_LAUNCH();
-            detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-            leaves_and_climb<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), parent.data(),
-                                                      children.data(), boxes.data(), meta.data(), visits.data(), rule);
-            BVHLAB_CHECK_LAUNCH();
-        }
+        parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
+        BVHLAB_CHECK_LAUNCH();
+        detail::fill_device_bytes(visits.data(), 0, visits.bytes());
+        leaves_and_climb<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), parent.data(), children.data(),
+                                                  boxes.data(), meta.data(), visits.data(), rule);
+        BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
         // Rounds over the whole list until a block can finish it; the host reads each round's
         // list length (a round trip per round).
