@@ -182,7 +182,10 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     if (spec.on_gpu()) {
         if (accel::uses_morton(spec.kind())) f["morton_bits"] = spec.options.morton_bits;
         if (accel::uses_radius(spec.kind())) f["radius"] = spec.options.ploc_radius;
-        if (spec.kind() == accel::BuilderKind::kGpuBinned) f["bins"] = 32;
+        if (spec.kind() == accel::BuilderKind::kGpuBinned) {
+            f["bins"] = 32;
+            f["cluster_alpha"] = spec.options.cluster_alpha;
+        }
     } else if (builder != "sweep") {
         f["bins"] = spec.options.num_bins;
     }
@@ -203,6 +206,7 @@ nlohmann::json gpu_build_figures(const GpuBuild& g, size_t triangles) {
     nlohmann::json f = gpu_stage_times(t);
     f["reinsertion_passes"] = g.reinsertion_passes;
     f["reinsertion_undone"] = g.reinsertion_undone;
+    if (g.clusters) f["clusters"] = g.clusters;
     f["total_ms"] = t.total_ms;
     f["mtris_per_s"] = t.total_ms > 0.0 ? double(triangles) / (t.total_ms * 1e3) : 0.0;
     f["peak_device_bytes"] = g.peak_bytes;

@@ -2,6 +2,7 @@
 #include "accel/builders/builder.h"
 
 #include <chrono>
+#include <sstream>
 
 #include "accel/builders/reinsertion.h"
 #include "accel/builders/sbvh.h"
@@ -20,8 +21,13 @@ std::string options_problem(const BuilderOptions& o) {
           range_problem("alpha", o.sbvh_alpha, 0.0f, 1.0f), range_problem("budget", o.sbvh_budget, 1.0f, 16.0f),
           range_problem("spatial_bins", o.sbvh_spatial_bins, 2, 256),
           range_problem("reinsertion_passes", o.reinsertion_passes, -1, 16),
-          range_problem("radius", o.ploc_radius, 1, 16)})
+          range_problem("radius", o.ploc_radius, 1, 16), range_problem("clusters", o.cluster_alpha, 0.0f, 16.0f)})
         if (!p.empty()) return p;
+    if (o.cluster_alpha > 0.0f && o.cluster_alpha < 1.0f) {
+        std::ostringstream s;
+        s << "clusters " << o.cluster_alpha << " is neither 0 (off) nor in [1, 16]";
+        return s.str();
+    }
     if (o.morton_bits != 30 && o.morton_bits != 60)
         return "morton_bits " + std::to_string(o.morton_bits) + " is neither 30 nor 60";
     if (c.min_leaf_size > c.max_leaf_size)

@@ -29,6 +29,9 @@ inline bool uses_morton(BuilderKind kind) {
 /// Whether `kind` clusters by PLOC's rule and so takes a search radius (ploc, hploc).
 inline bool uses_radius(BuilderKind kind) { return kind == BuilderKind::kPloc || kind == BuilderKind::kHploc; }
 
+/// Whether `kind` takes a cluster alpha (gpu-binned).
+inline bool uses_clusters(BuilderKind kind) { return kind == BuilderKind::kGpuBinned; }
+
 /// "binned", "sweep", "sbvh", "lbvh", "ploc", "hploc" or "gpu-binned"; throws bvhlab::Error otherwise.
 BuilderKind parse_builder_kind(const std::string& name);
 const char* builder_name(BuilderKind kind);
@@ -48,6 +51,13 @@ struct BuilderOptions {
     int morton_bits = 30;
     /// H-PLOC: how many clusters to each side a cluster looks at for its nearest neighbour.
     int ploc_radius = 8;
+    /// gpu-binned: 0 bins every triangle (the CPU binned tree, node for node); from 1 to 16, bins
+    /// clusters of nearly coincident triangles instead: neighbours in the Morton order merge
+    /// while their union's half area is at most this many times the larger one's, at most 16
+    /// triangles a cluster (accel::triangle_clusters). Fewer primitives to bin where triangles
+    /// overlap (hair, fur, foliage), the same splits elsewhere. A TLAS over instances bins every
+    /// instance.
+    float cluster_alpha = 0.0f;
     /// Not part of the configuration: when set, run_builder reports the CPU builders' progress
     /// with it (references in finished leaves of the triangle count; the reinsertion passes that
     /// follow at 99%).

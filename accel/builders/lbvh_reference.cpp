@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <string>
 #include <utility>
 
+#include "accel/builders/binned_sah.h"
 #include "accel/core/check.h"
 #include "accel/core/morton.h"
 #include "accel/core/reinsertion_search.h"
@@ -207,6 +209,122 @@ RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, in
         clusters.swap(next);
     }
     h.root = clusters[0];
+    return h;
+}
+
+namespace {
+
+/// A cluster of the reference clustering: its box, its triangle ids in order, and its merges as
+/// (first, split, end) places in that order.
+struct RefCluster {
+    AABB box;
+    std::vector<uint32_t> tris;
+    std::vector<std::array<uint32_t, 3>> merges;
+};
+
+std::vector<RefCluster> make_clusters(const scene::TriangleMesh& mesh, float alpha) {
+    if (!(alpha >= 1.0f)) throw Error("cluster alpha " + std::to_string(alpha) + " is below 1");
+    const RawHierarchy order = morton_order(mesh, 30);
+    const std::vector<uint32_t>& sorted = order.sorted_ids;
+    constexpr size_t kChunk = 32;
+    std::vector<RefCluster> out;
+    for (size_t b = 0; b < sorted.size(); b += kChunk) {
+        std::vector<RefCluster> c;
+        for (size_t i = b; i < std::min(sorted.size(), b + kChunk); ++i) c.push_back({order.boxes[i], {sorted[i]}, {}});
+        for (;;) {
+            const size_t k = c.size();
+            std::vector<size_t> nn(k, k);
+            std::vector<float> best(k, std::numeric_limits<float>::infinity());
+            for (size_t i = 0; i < k; ++i)
+                for (size_t j = 0; j < k; ++j) {
+                    if (j == i || c[i].tris.size() + c[j].tris.size() > kMaxClusterTriangles) continue;
+                    const float a = merge(c[i].box, c[j].box).half_area();
+                    if (a < best[i]) best[i] = a, nn[i] = j;
+                }
+            std::vector<char> gone(k, 0);
+            bool merged = false;
+            for (size_t i = 0; i < k; ++i) {
+                const size_t j = nn[i];
+                if (j == k || j < i || nn[j] != i) continue;
+                if (!(best[i] <= alpha * std::max(c[i].box.half_area(), c[j].box.half_area()))) continue;
+                const uint32_t wi = uint32_t(c[i].tris.size()), wj = uint32_t(c[j].tris.size());
+                for (const auto& m : c[j].merges) c[i].merges.push_back({m[0] + wi, m[1] + wi, m[2] + wi});
+                c[i].merges.push_back({0, wi, wi + wj});
+                c[i].tris.insert(c[i].tris.end(), c[j].tris.begin(), c[j].tris.end());
+                c[i].box = merge(c[i].box, c[j].box);
+                gone[j] = 1;
+                merged = true;
+            }
+            if (!merged) break;
+            std::vector<RefCluster> kept;
+            for (size_t i = 0; i < k; ++i)
+                if (!gone[i]) kept.push_back(std::move(c[i]));
+            c.swap(kept);
+        }
+        for (RefCluster& x : c) out.push_back(std::move(x));
+    }
+    return out;
+}
+
+}  // namespace
+
+std::vector<std::vector<uint32_t>> triangle_clusters(const scene::TriangleMesh& mesh, float alpha) {
+    std::vector<std::vector<uint32_t>> out;
+    for (RefCluster& c : make_clusters(mesh, alpha)) out.push_back(std::move(c.tris));
+    return out;
+}
+
+RawHierarchy clustered_binned_reference(const scene::TriangleMesh& mesh, float alpha) {
+    const std::vector<RefCluster> cl = make_clusters(mesh, alpha);
+    const uint32_t n = uint32_t(mesh.triangle_count());
+    RawHierarchy h;
+    h.boxes.resize(2 * size_t(n) - 1);
+    h.left.resize(n - 1);
+    h.right.resize(n - 1);
+    if (n == 1) {
+        h.sorted_ids = {0};
+        h.boxes[0] = mesh.triangle_bounds(0);
+        return h;
+    }
+    std::vector<PrimRef> refs(cl.size());
+    for (size_t k = 0; k < cl.size(); ++k) refs[k] = {cl[k].box, uint32_t(k)};
+    BinnedSahBuilder::Config config;
+    config.min_leaf_size = config.max_leaf_size = 1;
+    const BuildTree top = BinnedSahBuilder(config).build(std::move(refs));
+    // Node n + m - 1 for a split at place m; each node's box from its children's.
+    const auto link = [&](uint32_t m, uint32_t a, uint32_t b) {
+        const uint32_t id = n + m - 1;
+        h.left[m - 1] = a;
+        h.right[m - 1] = b;
+        h.boxes[id] = merge(h.boxes[a], h.boxes[b]);
+        return id;
+    };
+    // A cluster's range [a, b) of its places, starting at place `at`: its leaves and merges.
+    std::function<uint32_t(const RefCluster&, uint32_t, uint32_t, uint32_t)> inside =
+        [&](const RefCluster& c, uint32_t at, uint32_t a, uint32_t b) -> uint32_t {
+        if (b - a == 1) return at + a;
+        for (const auto& m : c.merges)
+            if (m[0] == a && m[2] == b) return link(at + m[1], inside(c, at, a, m[1]), inside(c, at, m[1], b));
+        throw Error("clustered_binned_reference: a cluster's merges do not cover it");
+    };
+    uint32_t place = 0;
+    std::function<uint32_t(uint32_t)> walk = [&](uint32_t x) -> uint32_t {
+        const BuildNode& node = top.nodes[x];
+        if (node.is_leaf()) {
+            const RefCluster& c = cl[top.prim_indices[node.first_index]];
+            const uint32_t at = place;
+            for (uint32_t t : c.tris) {
+                h.sorted_ids.push_back(t);
+                h.boxes[place++] = mesh.triangle_bounds(t);
+            }
+            return inside(c, at, 0, uint32_t(c.tris.size()));
+        }
+        const uint32_t a = walk(node.first_index);
+        const uint32_t m = place;
+        const uint32_t b = walk(node.first_index + 1);
+        return link(m, a, b);
+    };
+    h.root = walk(0);
     return h;
 }
 

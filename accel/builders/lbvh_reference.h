@@ -48,6 +48,25 @@ RawHierarchy radix_tree(const std::vector<uint64_t>& keys);
 /// and for a radius outside [1, 16].
 RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, int radius);
 
+/// gpu-binned's clusters (BuilderOptions::cluster_alpha = alpha, at least 1): the triangles in
+/// Morton order (30-bit codes) in chunks of 32; in each chunk, rounds in which every cluster finds
+/// the cluster whose union with it has the least half area (on equal areas the lower place)
+/// among those it may join (at most kMaxClusterTriangles together), and each mutual pair whose
+/// union's half area is at most alpha times the larger one's merges, the lower place keeping
+/// the cluster with its own triangles first; until a round merges nothing. The clusters in order
+/// of chunk and place, each as its triangle ids. Throws bvhlab::Error for an empty mesh or an
+/// alpha below 1.
+std::vector<std::vector<uint32_t>> triangle_clusters(const scene::TriangleMesh& mesh, float alpha);
+
+constexpr uint32_t kMaxClusterTriangles = 16;
+
+/// gpu-binned's hierarchy with clusters, as traversal/gpu/gpu_builder.cu makes it, bit for bit:
+/// binned SAH over the clusters' boxes (BinnedSahBuilder's splits, down to single clusters), each
+/// cluster's merges below it (the lower place's cluster on the left). Interior node n + m - 1
+/// splits the final order at place m; sorted_ids is that order, keys are empty. Throws as
+/// triangle_clusters does.
+RawHierarchy clustered_binned_reference(const scene::TriangleMesh& mesh, float alpha);
+
 /// The BuildTree of a hierarchy with the GPU builders' leaf choice: bottom-up, a node's subtree
 /// becomes one leaf when it holds at most min_leaf triangles, or at most max_leaf and its SAH
 /// cost as a leaf (Ci x count x half area) is no more than as a node (Ct x half area + the

@@ -34,8 +34,8 @@ struct Header {
     uint64_t index_count;   // uint32 primitive indices that follow the nodes
     uint32_t spatial_bins;  // SBVH spatial bins
     uint32_t reinsertion;   // BVH files: reinsertion passes run after the build (was reserved, 0)
-    // The GPU builders (lbvh, ploc, hploc, gpu-binned) have no bin option: num_bins holds their Morton bits and
-    // spatial_bins H-PLOC's search radius.
+    // The GPU builders (lbvh, ploc, hploc, gpu-binned) have no bin option: num_bins holds their Morton bits,
+    // spatial_bins H-PLOC's search radius and sbvh_alpha gpu-binned's cluster alpha.
 };
 static_assert(sizeof(Header) == 88, "tree file header is 88 bytes");
 
@@ -78,6 +78,7 @@ std::string describe_config(BuilderKind kind, const BuilderOptions& o) {
         if (uses_morton(kind)) s << " morton=" << o.morton_bits;
         if (kind == BuilderKind::kGpuBinned) s << " bins=32";
         if (uses_radius(kind)) s << " radius=" << o.ploc_radius;
+        if (uses_clusters(kind) && o.cluster_alpha > 0.0f) s << " clusters=" << o.cluster_alpha;  // older records: off
         if (const int r = reinsertion_passes(kind, o); r > 0) s << " reinsert=" << r;  // older records have none
         return s.str();
     }
@@ -105,6 +106,7 @@ void write_tree_file(const std::string& path, const BuildTree& tree, const TreeF
     if (runs_on_gpu(meta.builder)) {
         h.num_bins = uint32_t(meta.options.morton_bits);
         h.spatial_bins = uint32_t(meta.options.ploc_radius);
+        h.sbvh_alpha = meta.options.cluster_alpha;
     }
     write_file(path, h, tree.nodes, tree.prim_indices);
 }
@@ -197,6 +199,10 @@ TreeFile read_tree_file(const std::string& path) {
     if (!kd && runs_on_gpu(f.meta.builder)) {
         o.morton_bits = int(h.num_bins);
         o.ploc_radius = int(h.spatial_bins);
+        // gpu-binned's cluster alpha, in SBVH alpha's field: files written before it hold SBVH's
+        // default there (below 1: off), as the other GPU builders' do.
+        o.cluster_alpha = uses_clusters(f.meta.builder) && h.sbvh_alpha >= 1.0f ? h.sbvh_alpha : 0.0f;
+        o.sbvh_alpha = BuilderOptions{}.sbvh_alpha;
         o.num_bins = BuilderOptions{}.num_bins;
         o.sbvh_spatial_bins = BuilderOptions{}.sbvh_spatial_bins;
     }

@@ -11,7 +11,12 @@
 //  - chunkK / chunkuK / lbvhcK + binned: clusters of at most K triangles that the top cannot cut
 //    (K after one another in the Morton order, or the LBVH's largest subtrees of at most K),
 //    binned SAH over the clusters (weighted by their triangle counts; chunku: unweighted), the
-//    binned SAH build inside each: what binning clusters in place of triangles would give.
+//    binned SAH build inside each: what binning clusters in place of triangles would give;
+//  - ploccK / ploccpK + B: PLOC r8's largest subtrees of at most K triangles as the clusters (PLOC
+//    set), binned SAH or PLOC inside each; plocaA / plocauA + binned: PLOC's subtrees of at most 16
+//    whose every merge was nearly free (its area at most A% of the larger child's; plocau
+//    unweighted); warpaA + binned: gpu-binned's clusters at alpha A% (accel::triangle_clusters;
+//    UNWEIGHTED set: every cluster weighs 1, as gpu-binned bins them).
 // Usage: hybrid_quality SCENE.obj|soup [K ...]
 #include <algorithm>
 #include <cstdio>
@@ -290,68 +295,6 @@ static uint32_t binned_clusters(Gen& g, const std::vector<uint32_t>& items, cons
     return g.inner(p, q);
 }
 
-/// Clusters as a GPU warp would make them: the Morton order in chunks of `chunk` triangles; in
-/// each, rounds in which every cluster finds the cluster whose union with it has the least area
-/// (ties to the lower place), among those it may join (at most `cap` triangles together), and
-/// mutual pairs merge when the merge is nearly free (the union's area at most `alpha` times the
-/// larger one's); until a round merges nothing. Each cluster's ids in merge order.
-static size_t g_rounds = 0, g_pairs = 0;  // warp_clusters' rounds and live clusters over them
-static std::vector<std::vector<uint32_t>> warp_clusters(const scene::TriangleMesh& m,
-                                                        const std::vector<uint32_t>& sorted, float alpha,
-                                                        uint32_t chunk, uint32_t cap) {
-    std::vector<std::vector<uint32_t>> out;
-    for (size_t b = 0; b < sorted.size(); b += chunk) {
-        std::vector<std::vector<uint32_t>> ids;
-        std::vector<AABB> box;
-        for (size_t i = b; i < std::min(sorted.size(), b + chunk); ++i) {
-            ids.push_back({sorted[i]});
-            AABB x = AABB::empty();
-            for (int v = 0; v < 3; ++v) x.extend(m.vertices[m.indices[3 * size_t(sorted[i]) + v]]);
-            box.push_back(x);
-        }
-        for (;;) {
-            const size_t k = ids.size();
-            g_rounds += 1;
-            g_pairs += k;
-            std::vector<size_t> nn(k, k);
-            for (size_t i = 0; i < k; ++i) {
-                float best = std::numeric_limits<float>::infinity();
-                for (size_t j = 0; j < k; ++j) {
-                    if (j == i || ids[i].size() + ids[j].size() > cap) continue;
-                    AABB u = box[i];
-                    u.extend(box[j]);
-                    if (u.half_area() < best) best = u.half_area(), nn[i] = j;
-                }
-            }
-            std::vector<char> gone(k, 0);
-            bool merged = false;
-            for (size_t i = 0; i < k; ++i) {
-                const size_t j = nn[i];
-                if (j == k || j < i || nn[j] != i) continue;
-                AABB u = box[i];
-                u.extend(box[j]);
-                if (u.half_area() > alpha * std::max(box[i].half_area(), box[j].half_area())) continue;
-                box[i] = u;
-                ids[i].insert(ids[i].end(), ids[j].begin(), ids[j].end());
-                gone[j] = 1;
-                merged = true;
-            }
-            if (!merged) break;
-            std::vector<std::vector<uint32_t>> ids2;
-            std::vector<AABB> box2;
-            for (size_t i = 0; i < k; ++i)
-                if (!gone[i]) ids2.push_back(std::move(ids[i])), box2.push_back(box[i]);
-            ids.swap(ids2);
-            box.swap(box2);
-        }
-        for (auto& c : ids) out.push_back(std::move(c));
-    }
-    std::printf("# %zu chunks: %.2f rounds, %.1f live clusters a round\n", (sorted.size() + chunk - 1) / chunk,
-                double(g_rounds) * chunk / double(sorted.size()), double(g_pairs) / double(g_rounds));
-    g_rounds = g_pairs = 0;
-    return out;
-}
-
 int main(int argc, char** argv) {
     if (argc < 2) return 2;
     const scene::TriangleMesh mesh = probe::load_mesh(argv[1]);
@@ -425,13 +368,8 @@ int main(int argc, char** argv) {
                 x.ids = ids;
                 cl.push_back(std::move(x));
             };
-            if (kind == "warpa") {  // k: alpha in percent; WARP_CHUNK (32) and CAP (16) from the environment
-                const char* wc = std::getenv("WARP_CHUNK");
-                const char* cp = std::getenv("CAP");
-                for (const auto& ids :
-                     warp_clusters(mesh, lbvh.sorted_ids, float(k) / 100.0f, wc ? uint32_t(std::atoi(wc)) : 32u,
-                                   cp ? uint32_t(std::atoi(cp)) : 16u))
-                    add(ids);
+            if (kind == "warpa") {  // k: alpha in percent; gpu-binned's clusters (chunks of 32, at most 16)
+                for (const auto& ids : accel::triangle_clusters(mesh, float(k) / 100.0f)) add(ids);
             } else if (kind == "chunk" || kind == "chunku") {
                 for (uint32_t b = 0; b < n; b += k) {
                     std::vector<uint32_t> ids;

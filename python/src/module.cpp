@@ -238,11 +238,13 @@ trav::StructureSpec make_spec(const std::string& builder, const std::string& lay
             spec.options.morton_bits = v.cast<int>();
         else if (k == "radius")
             spec.options.ploc_radius = v.cast<int>();
+        else if (k == "clusters")
+            spec.options.cluster_alpha = v.cast<float>();
         else
             throw Error("build() has no option '" + k +
                         "' (bins, max_leaf, min_leaf, alpha, budget, spatial_bins, reinsertion_passes, collapse, "
                         "cw_tris, kd_stack, kd_ct, kd_ci, kd_bonus, kd_max_depth, epo, build_device, morton_bits, "
-                        "radius)");
+                        "radius, clusters)");
     }
     return spec;
 }
@@ -408,7 +410,7 @@ PYBIND11_MODULE(_bvhlab, m) {
         "layout "
         "bvh2|cwbvh, options as keywords "
         "(bins, max_leaf, min_leaf, alpha, budget, spatial_bins, reinsertion_passes, collapse, cw_tris, kd_stack, "
-        "build_device, morton_bits, radius, "
+        "build_device, morton_bits, radius, clusters, "
         "kd_ct, kd_ci, kd_bonus, kd_max_depth, epo)");
     m.def(
         "load_structure",

@@ -1,14 +1,17 @@
 // SPDX-License-Identifier: MIT
 // The GPU builders' host side: Morton codes, the LBVH's radix tree and its CPU reference, the
 // BuildTree of a BVH2 layout, PLOC's CPU reference and the GPU builders' leaf choice, and the
-// options, specs and files of lbvh, ploc and hploc. The GPU
+// options, specs and files of lbvh, ploc and hploc; gpu-binned's clusters and their reference. The GPU
 // pipeline itself is tested in tests/traversal/gpu_builder_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <functional>
+#include <limits>
 
+#include "accel/builders/binned_sah.h"
 #include "accel/builders/builder.h"
 #include "accel/builders/lbvh_reference.h"
 #include "accel/core/check.h"
@@ -351,6 +354,107 @@ TEST(ParallelReinsertionReference, PassesThatReachMaxDepthAreUndone) {
     EXPECT_EQ(std::memcmp(held.boxes.data(), built.boxes.data(), built.boxes.size() * sizeof(AABB)), 0);
 }
 
+/// `copies` triangles with one box at each x of `xs` (in that order along x).
+scene::TriangleMesh stacks_at(std::initializer_list<float> xs, int copies) {
+    scene::TriangleMesh m;
+    for (float x : xs)
+        for (int k = 0; k < copies; ++k) scene::add_triangle_checked(m, {x, 0, 0}, {x + 0.1f, 0, 0}, {x, 0.1f, 0}, -1);
+    return m;
+}
+
+TEST(TriangleClusters, NearlyCoincidentNeighboursMergeUpToTheCap) {
+    // Three stacks of four equal triangles: at alpha 1 each stack is one cluster (a union that
+    // grows no box), and no two stacks meet; at alpha 1e4 the stacks' unions are cheap too.
+    const scene::TriangleMesh m = stacks_at({0.0f, 10.0f, 20.0f}, 4);
+    const auto c = triangle_clusters(m, 1.0f);
+    ASSERT_EQ(c.size(), 3u);
+    for (const auto& x : c) {
+        ASSERT_EQ(x.size(), 4u);
+        const float x0 = m.vertex(x[0], 0).x;
+        for (uint32_t t : x) EXPECT_EQ(m.vertex(t, 0).x, x0) << "a cluster mixes stacks";
+    }
+    // A merge keeps the lower place's triangles first: a stack's first triangle leads it.
+    for (const auto& x : c) EXPECT_EQ(x[0] % 4, 0u);
+    EXPECT_EQ(triangle_clusters(m, 16.0f).size(), 3u);  // stacks 10 apart cost far more than 16x
+    // At most 16 triangles a cluster, and a chunk is 32 triangles of the Morton order: 40 equal
+    // triangles make clusters of 16, 16 and 8.
+    const auto big = triangle_clusters(stacks_at({0.0f}, 40), 1.0f);
+    ASSERT_EQ(big.size(), 3u);
+    EXPECT_EQ(big[0].size(), 16u);
+    EXPECT_EQ(big[1].size(), 16u);
+    EXPECT_EQ(big[2].size(), 8u);
+    // Every triangle once; a sparse soup hardly clusters at alpha 1.
+    const scene::TriangleMesh soup = scene::make_procedural(scene::ProceduralKind::kSoup, 3000, 5);
+    std::vector<uint32_t> all;
+    for (const auto& x : triangle_clusters(soup, 1.3f)) all.insert(all.end(), x.begin(), x.end());
+    std::sort(all.begin(), all.end());
+    ASSERT_EQ(all.size(), soup.triangle_count());
+    for (size_t k = 0; k < all.size(); ++k) ASSERT_EQ(all[k], k);
+    EXPECT_THROW(triangle_clusters(m, 0.5f), Error);
+    EXPECT_THROW(triangle_clusters(m, std::numeric_limits<float>::quiet_NaN()), Error);
+    EXPECT_THROW(triangle_clusters(scene::TriangleMesh{}, 1.3f), Error);
+}
+
+TEST(ClusteredBinnedReference, ClustersBecomeSubtreesUnderBinnedSplits) {
+    for (auto kind : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured}) {
+        const scene::TriangleMesh mesh = scene::make_procedural(kind, 3000, 5);
+        for (float alpha : {1.3f, 4.0f}) {
+            SCOPED_TRACE(alpha);
+            const RawHierarchy h = clustered_binned_reference(mesh, alpha);
+            expect_sound(h, mesh);
+            EXPECT_TRUE(h.keys.empty());
+            const uint32_t n = uint32_t(mesh.triangle_count());
+            // Node n + m - 1 splits the order at place m: its right child's first leaf is m.
+            std::vector<uint32_t> first(2 * size_t(n) - 1), count(2 * size_t(n) - 1, 1);
+            std::function<void(uint32_t)> walk = [&](uint32_t x) {
+                if (x < n) {
+                    first[x] = x;
+                    return;
+                }
+                walk(h.left[x - n]);
+                walk(h.right[x - n]);
+                first[x] = first[h.left[x - n]];
+                count[x] = count[h.left[x - n]] + count[h.right[x - n]];
+                EXPECT_EQ(x, n + first[h.right[x - n]] - 1) << "node " << x;
+                EXPECT_EQ(first[h.right[x - n]], first[x] + count[h.left[x - n]]) << "not a range";
+            };
+            walk(h.root);
+            // Every cluster is one subtree: its triangles are the leaves of one node.
+            std::vector<uint32_t> place(n);
+            for (uint32_t k = 0; k < n; ++k) place[h.sorted_ids[k]] = k;
+            size_t multi = 0;
+            for (const auto& c : triangle_clusters(mesh, alpha)) {
+                uint32_t lo = n, hi = 0;
+                for (uint32_t t : c) lo = std::min(lo, place[t]), hi = std::max(hi, place[t]);
+                EXPECT_EQ(hi - lo + 1, c.size()) << "a cluster's triangles are not together";
+                if (c.size() > 1) ++multi;
+            }
+            if (kind == scene::ProceduralKind::kStructured) EXPECT_GT(multi, 0u) << "no cluster formed";
+        }
+    }
+    // Where no cluster forms, the hierarchy is the binned builder's (leaves of one), node for node.
+    scene::TriangleMesh soup;  // small triangles on a jittered grid, apart from one another
+    for (int i = 0; i < 2000; ++i) {
+        const float x = float(i % 50) + 0.37f * float((i * 7919) % 13) / 13.0f, y = float(i / 50);
+        const float z = float((i * 104729) % 97) / 9.7f;
+        scene::add_triangle_checked(soup, {x, y, z}, {x + 0.1f, y, z}, {x, y + 0.1f, z + 0.05f}, -1);
+    }
+    ASSERT_EQ(triangle_clusters(soup, 1.0f).size(), soup.triangle_count());
+    BuildConfig one;
+    one.min_leaf_size = one.max_leaf_size = 1;
+    BinnedSahBuilder::Config c;
+    static_cast<BuildConfig&>(c) = one;
+    const BuildTree binned = build_tree_from_bvh2(convert_to_bvh2(BinnedSahBuilder(c).build(soup), soup));
+    const BuildTree ours =
+        build_tree_from_bvh2(convert_to_bvh2(tree_from_hierarchy(clustered_binned_reference(soup, 1.0f), one), soup));
+    ASSERT_EQ(ours.nodes.size(), binned.nodes.size());
+    EXPECT_EQ(std::memcmp(ours.nodes.data(), binned.nodes.data(), ours.nodes.size() * sizeof(BuildNode)), 0);
+    EXPECT_EQ(ours.prim_indices, binned.prim_indices);
+    // One triangle: a root leaf.
+    const scene::TriangleMesh one_tri = test::mesh_of({{0, 0, 0, 1, 0, 0, 0, 1, 0}});
+    EXPECT_EQ(clustered_binned_reference(one_tri, 1.3f).root, 0u);
+}
+
 TEST(Bvh2Convert, BuildTreeOfTheLayoutKeepsTreeAndFigures) {
     const scene::TriangleMesh mesh = scene::make_procedural(scene::ProceduralKind::kStructured, 4000, 2);
     BuilderOptions o;
@@ -420,6 +524,21 @@ TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
     EXPECT_EQ(describe_config(BuilderKind::kGpuBinned, o),
               "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32 reinsert=2");
     EXPECT_THROW(run_builder(BuilderKind::kGpuBinned, mesh, o), Error);
+    // Its cluster alpha: 0 (off, not named, as records before it read) or 1 to 16.
+    EXPECT_TRUE(uses_clusters(BuilderKind::kGpuBinned));
+    EXPECT_FALSE(uses_clusters(BuilderKind::kHploc));
+    o.cluster_alpha = 1.3f;
+    EXPECT_EQ(options_problem(o), "");
+    EXPECT_EQ(describe_config(BuilderKind::kGpuBinned, o),
+              "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32 clusters=1.3 reinsert=2");
+    EXPECT_EQ(describe_config(BuilderKind::kHploc, o),
+              "hploc leaf=1..8 max_depth=64 Ct=1 Ci=1 morton=60 radius=16 reinsert=2");
+    o.cluster_alpha = 0.5f;
+    EXPECT_EQ(options_problem(o), "clusters 0.5 is neither 0 (off) nor in [1, 16]");
+    o.cluster_alpha = 17.0f;
+    EXPECT_EQ(options_problem(o), "clusters 17 is not in [0, 16]");
+    o.cluster_alpha = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_NE(options_problem(o).find("clusters nan"), std::string::npos) << options_problem(o);
 }
 
 TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
@@ -509,6 +628,17 @@ TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     EXPECT_EQ(b.figures["bins"], 32);
     EXPECT_FALSE(b.figures.contains("morton_bits"));
     EXPECT_FALSE(b.figures.contains("radius"));
+    EXPECT_EQ(b.figures["cluster_alpha"], 0.0);
+    // With clusters: the alpha comes back (in SBVH alpha's field) and is named.
+    meta.options.cluster_alpha = 1.5f;
+    test::TempFile gc("gpu-binned-clusters.tree");
+    write_tree_file(gc.path(), tree, meta);
+    const TreeFile rc = read_tree_file(gc.path());
+    EXPECT_EQ(rc.meta.options.cluster_alpha, 1.5f);
+    EXPECT_EQ(rc.meta.options.sbvh_alpha, BuilderOptions{}.sbvh_alpha);
+    EXPECT_EQ(describe_config(rc.meta), "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32 clusters=1.5");
+    EXPECT_EQ(trav::load_structure(mesh, meta.scene_hash, gc.path()).figures["cluster_alpha"], 1.5);
+    EXPECT_EQ(rg.meta.options.cluster_alpha, 0.0f);
     // A file of another version, older or newer, is refused with its version named.
     for (const uint32_t version : {kTreeFileVersion - 1, kTreeFileVersion + 1}) {
         std::FILE* fp = std::fopen(g.path().c_str(), "r+b");

@@ -240,6 +240,13 @@ expect_error radius-gpu-binned "--radius applies to --builder ploc or hploc, not
     --builder gpu-binned --radius 4
 expect_error gpu-binned-on-cpu "--build-device cpu does not apply: builder gpu-binned runs on the GPU" build "$cb" \
     --builder gpu-binned --build-device cpu
+expect_error clusters-hploc "--clusters applies to --builder gpu-binned, not hploc" build "$cb" --builder hploc \
+    --clusters 1.3
+expect_error clusters-binned "--clusters applies to --builder gpu-binned, not binned" build "$cb" --clusters 1.3
+expect_error clusters-half "--clusters 0.5 is neither 0 [(]off[)] nor in [[]1, 16[]]" build "$cb" \
+    --builder gpu-binned --clusters 0.5
+expect_error clusters-17 "--clusters" build "$cb" --builder gpu-binned --clusters 17
+expect_error clusters-nan "--clusters" build "$cb" --builder gpu-binned --clusters nan
 expect_error reinsert-17-gpu "--reinsert" build "$cb" --builder lbvh --reinsert 17
 expect_error morton-bits-31 "--morton-bits" build "$cb" --builder lbvh --morton-bits 31
 expect_error radius-0 "--radius" build "$cb" --builder hploc --radius 0

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The GPU builders (ctest label "gpu"): the LBVH and PLOC equal their CPU references bit for
-// bit, and so do the leaves chosen by SAH; gpu-binned equals the CPU's binned builder with leaves of one; every tree
-// of lbvh, ploc, hploc and gpu-binned is valid, kept on the device as built,
+// bit, and so do the leaves chosen by SAH; gpu-binned equals the CPU's binned builder with leaves of one, and with
+// clusters its CPU reference; every tree of lbvh, ploc, hploc and gpu-binned (with and without clusters) is valid,
+// kept on the device as built,
 // and agrees with Embree (0 real mismatches) through the CPU traversal of its host copy and the default GPU kernel, on
 // generated soups, the adversarial and edge scenes and the benchmark scenes; PLOC's and
 // H-PLOC's trees are better than the LBVH's. Each test skips with the reason when there is no device.
@@ -58,13 +59,21 @@ std::vector<NamedMesh> builder_meshes() {
     return out;
 }
 
+/// The spec of a GPU builder by name; "gpu-binned+clusters" is gpu-binned with a cluster alpha of 1.3.
 StructureSpec gpu_spec(const std::string& builder, const std::string& layout = "bvh2") {
     StructureSpec s;
     s.builder = builder;
     s.layout = layout;
     s.epo = false;
+    if (builder == "gpu-binned+clusters") {
+        s.builder = "gpu-binned";
+        s.options.cluster_alpha = 1.3f;
+    }
     return s;
 }
+
+/// Every GPU builder, gpu-binned also with clusters.
+const std::vector<const char*> kGpuBuilders = {"lbvh", "ploc", "hploc", "gpu-binned", "gpu-binned+clusters"};
 
 template <typename T>
 bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
@@ -157,6 +166,44 @@ TEST(GpuBuilder, GpuBinnedEqualsTheCpuBinnedBuilderBitForBit) {
     }
 }
 
+TEST(GpuBuilder, ClusteredGpuBinnedEqualsItsCpuReferenceBitForBit) {
+    // Clusters, their order, binned SAH over their boxes and each cluster's merges below it: the
+    // hierarchy of accel::clustered_binned_reference, node for node and box for box. Meshes where
+    // clusters form: the structured scene, stacks of equal triangles (clusters of 16 and chunk
+    // ends), long thin triangles in bundles (hair); alphas from 1 (equal boxes only) to 16. Not on
+    // "one centre", whose coincident centroids split in the order each side holds them.
+    BVHLAB_SKIP_WITHOUT_GPU();
+    std::vector<NamedMesh> meshes = builder_meshes();
+    meshes.push_back({"soup 200000", scene::make_procedural(scene::ProceduralKind::kSoup, 200000, 5)});
+    scene::TriangleMesh stacks, hair;
+    for (int s = 0; s < 300; ++s)
+        for (int k = 0; k < 1 + s % 40; ++k) {
+            const float x = float(s % 17), y = float(s / 17);
+            scene::add_triangle_checked(stacks, {x, y, 0}, {x + 0.5f, y, 0}, {x, y + 0.5f, 0.1f}, -1);
+        }
+    for (int b = 0; b < 2000; ++b)  // bundles of six strands 10 long and 0.01 wide
+        for (int k = 0; k < 6; ++k) {
+            const float x = float(b % 40) * 0.3f + 0.002f * float(k), y = float(b / 40) * 0.3f,
+                        z = 0.01f * float(k % 2);
+            scene::add_triangle_checked(hair, {x, y, z}, {x + 0.01f, y, z}, {x + 0.005f, y + 0.2f, z + 10.0f}, -1);
+        }
+    meshes.push_back({"stacks", std::move(stacks)});
+    meshes.push_back({"hair", std::move(hair)});
+    for (const NamedMesh& m : meshes) {
+        if (m.name == "one centre") continue;
+        for (float alpha : {1.0f, 1.3f, 16.0f}) {
+            SCOPED_TRACE(m.name + ", alpha " + std::to_string(alpha));
+            accel::BuilderOptions o;
+            o.cluster_alpha = alpha;
+            const GpuBuild g = build_on_gpu(m.mesh, accel::BuilderKind::kGpuBinned, o, true);
+            expect_same_hierarchy(g.raw, accel::clustered_binned_reference(m.mesh, alpha));
+            if (m.mesh.triangle_count() > 1) EXPECT_EQ(g.clusters, accel::triangle_clusters(m.mesh, alpha).size());
+            if (m.name == "stacks" || m.name == "hair")
+                EXPECT_LT(2 * g.clusters, m.mesh.triangle_count()) << "few clusters formed";
+        }
+    }
+}
+
 TEST(GpuBuilder, LeavesEqualTheCpuLeafChoice) {
     // The device decides leaves by SAH as accel::tree_from_hierarchy does, in the same float
     // operations: the same nodes, leaves, depth and SAH, for both references' hierarchies.
@@ -187,12 +234,12 @@ TEST(GpuBuilder, LeavesEqualTheCpuLeafChoice) {
 
 TEST(GpuBuilder, TreesAreValidAndStayOnTheDeviceAsBuilt) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    for (const char* builder : {"lbvh", "ploc", "hploc", "gpu-binned"}) {
+    for (const char* builder : kGpuBuilders) {
         for (const NamedMesh& m : builder_meshes()) {
             SCOPED_TRACE(std::string(builder) + " on " + m.name);
             // The factory validates the tree (every triangle once, boxes, leaf sizes, depth).
             AccelStructure a = build_structure(m.mesh, gpu_spec(builder));
-            EXPECT_EQ(a.structure.name, std::string("bvh2/") + builder);
+            EXPECT_EQ(a.structure.name, "bvh2/" + a.spec.builder);
             EXPECT_EQ(a.figures["build_device"], "gpu");
             EXPECT_GT(a.figures["gpu_build"]["total_ms"].get<double>(), 0.0);
             EXPECT_GT(a.figures["gpu_build"]["peak_device_bytes"].get<size_t>(), 0u);
@@ -233,7 +280,7 @@ TEST(GpuBuilder, TreesAreValidAndStayOnTheDeviceAsBuilt) {
 
 TEST(GpuBuilder, AgreesWithEmbreeThroughCpuAndGpuTraversal) {
     BVHLAB_SKIP_WITHOUT_GPU();
-    for (const char* builder : {"lbvh", "ploc", "hploc", "gpu-binned"}) {
+    for (const char* builder : kGpuBuilders) {
         for (const char* layout : {"bvh2", "cwbvh"}) {
             for (const NamedMesh& m : builder_meshes()) {
                 if (m.mesh.triangle_count() < 1000 && m.name.rfind("soup", 0) == 0) continue;  // hardly any hits
@@ -253,7 +300,7 @@ TEST(GpuBuilder, AgreesWithEmbreeOnAdversarialScenes) {
         cfg.primary = {64, 48, 1, 0};
         cfg.ao_length = scene.ao_length;
         RayProtocol proto(scene.mesh, oracle, cfg);
-        for (const char* builder : {"lbvh", "ploc", "hploc", "gpu-binned"}) {
+        for (const char* builder : kGpuBuilders) {
             SCOPED_TRACE(std::string(builder) + " on " + scene.name);
             AccelStructure a = build_structure(scene.mesh, gpu_spec(builder));
             auto gpu = a.gpu_tracer();
@@ -285,7 +332,7 @@ TEST(GpuBuilder, AgreesWithEmbreeOnBenchmarkScenes) {
         const scene::TriangleMesh mesh = scene::load_obj(e.file);
         ASSERT_TRUE(e.camera.has_value());
         const EmbreeOracle oracle(mesh);
-        for (const char* builder : {"lbvh", "ploc", "hploc", "gpu-binned"}) {
+        for (const char* builder : kGpuBuilders) {
             SCOPED_TRACE(std::string(builder) + " on " + e.name);
             AccelStructure a = build_structure(mesh, gpu_spec(builder));
             auto gpu = a.gpu_tracer();
@@ -330,7 +377,7 @@ TEST(GpuReinsertion, LowersTheSahAndAgreesWithEmbree) {
     // builder's own on the scenes of 1,000 triangles and more (measured at 0.83-0.97 of it), and
     // the CPU traversal and the default GPU kernel agree with Embree.
     BVHLAB_SKIP_WITHOUT_GPU();
-    for (const char* builder : {"lbvh", "ploc", "hploc", "gpu-binned"}) {
+    for (const char* builder : kGpuBuilders) {
         for (const NamedMesh& m : builder_meshes()) {
             SCOPED_TRACE(std::string(builder) + " on " + m.name);
             const AccelStructure base = build_structure(m.mesh, gpu_spec(builder));
@@ -346,7 +393,9 @@ TEST(GpuReinsertion, LowersTheSahAndAgreesWithEmbree) {
             std::printf("reinsertion %s %s: SAH %.4f -> %.4f, depth %u -> %u\n", builder, m.name.c_str(),
                         base.stats.sah, a.stats.sah, base.stats.depth, a.stats.depth);
             // The binned SAH tree starts nearer its optimum: any gain (measured: 0.89-0.97 of its SAH).
-            if (n >= 1000) EXPECT_LT(a.stats.sah, (std::string(builder) == "gpu-binned" ? 1.0 : 0.99) * base.stats.sah);
+            if (n >= 1000)
+                EXPECT_LT(a.stats.sah,
+                          (std::string(builder).rfind("gpu-binned", 0) == 0 ? 1.0 : 0.99) * base.stats.sah);
             if (n < 1000 && m.name.rfind("soup", 0) == 0) continue;  // hardly any hits
             expect_cpu_and_gpu_agree(m.mesh, std::move(a));
         }

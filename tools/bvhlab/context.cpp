@@ -412,6 +412,12 @@ void BuildOptions::add_to(CLI::App& app) {
                        "ploc, hploc: clusters to each side that a cluster searches for its nearest neighbour")
             ->check(CLI::Range(1, 16))
             ->capture_default_str(),
+        app.add_option("--clusters", opts.cluster_alpha,
+                       "gpu-binned: 0 bins every triangle (the CPU binned tree); 1 to 16 bins clusters of nearly "
+                       "coincident triangles, Morton-order neighbours merged while their box grows at most this "
+                       "many times in area, at most 16 a cluster (1.3: binned-quality trees, faster on hair and fur)")
+            ->check(FiniteRange(0.0, 16.0))
+            ->capture_default_str(),
     };
     // --structure NAME picks the builder; a path is checked when the command runs.
     st->each([this](const std::string& v) {
@@ -496,7 +502,8 @@ void BuildOptions::check_applicable() const {
                         "'");
         return;
     }
-    // config_flags: --bins, --max-leaf, --min-leaf, --alpha, --budget, --spatial-bins, --reinsert.
+    // config_flags: --bins, --max-leaf, --min-leaf, --alpha, --budget, --spatial-bins, --reinsert, --morton-bits,
+    // --radius, --clusters.
     auto refuse = [](const CLI::Option* f, const std::string& why) {
         if (f->count()) throw Error(f->get_name() + " " + why);
     };
@@ -530,6 +537,12 @@ void BuildOptions::check_applicable() const {
     }
     if (!accel::uses_morton(k)) refuse(config_flags[7], "applies to --builder lbvh, ploc or hploc, not " + builder);
     if (!accel::uses_radius(k)) refuse(config_flags[8], "applies to --builder ploc or hploc, not " + builder);
+    if (!accel::uses_clusters(k)) refuse(config_flags[9], "applies to --builder gpu-binned, not " + builder);
+    if (opts.cluster_alpha > 0.0f && opts.cluster_alpha < 1.0f) {
+        std::ostringstream s;
+        s << "--clusters " << opts.cluster_alpha << " is neither 0 (off) nor in [1, 16]";
+        throw Error(s.str());
+    }
 }
 
 void RayOptions::add_to(CLI::App& app) {

@@ -52,6 +52,7 @@ static void check_explicit_options(const BuildOptions& opts, const accel::TreeFi
     if (flags[6]->count()) asked.reinsertion_passes = given.reinsertion_passes;
     if (flags[7]->count()) asked.morton_bits = given.morton_bits;
     if (flags[8]->count()) asked.ploc_radius = given.ploc_radius;
+    if (flags[9]->count()) asked.cluster_alpha = given.cluster_alpha;
     const std::string have = accel::describe_config(f.meta.builder, f.meta.options);
     const std::string want = accel::describe_config(f.meta.builder, asked);
     if (have != want)

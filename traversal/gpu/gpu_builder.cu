@@ -13,8 +13,6 @@
 #include <cuda/atomic>
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "accel/core/morton.h"
@@ -1599,13 +1597,12 @@ struct Layout {
     uint32_t* tri_ids;
 };
 
-// --- Clusters for binned SAH (BVHLAB_CLUSTER_ALPHA, an experiment): the Morton order in chunks
-// of a warp; in each, rounds in which every cluster finds the cluster whose union with it has
-// the least area (ties to the lower lane) among those it may join (at most kClusterCap triangles
-// together), and mutual pairs merge when the merge is nearly free (the union's half area at most
-// alpha times the larger one's), until a round merges nothing. Binned SAH then runs over the
-// clusters, and each cluster's merges become the nodes below it. Node ids stay n + m - 1 (every
-// subtree a range of the final order): a merge's split is at its right cluster's first triangle.
+// --- Clusters for binned SAH (BuilderOptions::cluster_alpha; accel::clustered_binned_reference): the Morton order in
+// chunks of a warp; in each, rounds in which every cluster finds the cluster whose union with it has the least area
+// (ties to the lower lane) among those it may join (at most kClusterCap triangles together), and mutual pairs merge
+// when the merge is nearly free (the union's half area at most alpha times the larger one's), until a round merges
+// nothing. Binned SAH then runs over the clusters, and each cluster's merges become the nodes below it. Node ids stay n
+// + m - 1 (every subtree a range of the final order): a merge's split is at its right cluster's first triangle.
 
 constexpr uint32_t kClusterCap = 16;
 constexpr uint32_t kMergeRef = 0x80000000u;  ///< a cluster reference to an interior node (by its right-first triangle)
@@ -1971,9 +1968,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const int bits = options.morton_bits;
     const bool lbvh = kind == accel::BuilderKind::kLbvh, ploc = kind == accel::BuilderKind::kPloc;
     const bool sah = kind == accel::BuilderKind::kGpuBinned;
-    // An experiment: binned SAH over clusters of nearly coincident triangles (cluster_chunks).
-    const char* alpha_env = sah ? std::getenv("BVHLAB_CLUSTER_ALPHA") : nullptr;
-    const float alpha = alpha_env ? std::strtof(alpha_env, nullptr) : 0.0f;
+    // Binned SAH over clusters of nearly coincident triangles (cluster_chunks).
+    const float alpha = sah && prims.mesh ? options.cluster_alpha : 0.0f;  // a TLAS bins every instance
     const bool clustered = alpha > 0.0f && n > 1;
     const bool coded = !sah || clustered;  // Morton codes sorted
     const int passes = n >= 3 ? accel::reinsertion_passes(kind, options) : 0;
@@ -2205,7 +2201,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             cluster_top<<<grid_for(c), kBlock>>>(c, n, c_top.data(), top_root, c_order.data(), c_info.data(),
                                                  c_offset.data(), c_place.data(), children.data(), root);
             BVHLAB_CHECK_LAUNCH();
-            if (std::getenv("BVHLAB_CLUSTER_VERBOSE")) std::fprintf(stderr, "clusters %u of %u\n", c, n);
+            g.clusters = c;
         }
         parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();

@@ -68,10 +68,12 @@ struct GpuBuild {
     accel::RawHierarchy raw;          ///< the hierarchy before leaves were chosen, when asked for
     int reinsertion_passes = 0;       ///< passes of parallel reinsertion run
     bool reinsertion_undone = false;  ///< they made the tree deeper than max_depth and were undone
+    size_t clusters = 0;              ///< gpu-binned with a cluster alpha: the clusters it binned
 };
 
 /// Builds `mesh` (at least one triangle) with GPU builder `kind` and the options' leaf sizes,
-/// costs, Morton bits and (H-)PLOC search radius. `keep_raw` also downloads the hierarchy before
+/// costs, Morton bits, (H-)PLOC search radius and gpu-binned's cluster alpha (whose hierarchy equals
+/// accel::clustered_binned_reference's). `keep_raw` also downloads the hierarchy before
 /// the leaves are chosen, after any reinsertion passes (the LBVH's and PLOC's are comparable bit
 /// for bit with accel::lbvh_reference and accel::ploc_reference, passes with
 /// accel::parallel_reinsertion_reference; gpu-binned's has no keys and its sorted_ids are its
