@@ -198,7 +198,8 @@ TEST(GpuBuilder, ClusteredGpuBinnedEqualsItsCpuReferenceBitForBit) {
             const GpuBuild g = build_on_gpu(m.mesh, accel::BuilderKind::kGpuBinned, o, true);
             expect_same_hierarchy(g.raw, accel::clustered_binned_reference(m.mesh, alpha));
             if (m.mesh.triangle_count() > 1) EXPECT_EQ(g.clusters, accel::triangle_clusters(m.mesh, alpha).size());
-            if (m.name == "stacks" || m.name == "hair")
+            // Equal boxes merge at any alpha; a bundle's strands (each a little apart) above 1.
+            if (m.name == "stacks" || (m.name == "hair" && alpha > 1.0f))
                 EXPECT_LT(2 * g.clusters, m.mesh.triangle_count()) << "few clusters formed";
         }
     }
