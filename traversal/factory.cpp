@@ -271,6 +271,8 @@ void StructureSpec::check() const {
     if (build_device == "gpu" && !on_gpu())
         throw Error("build_device gpu applies to the GPU builders (lbvh, ploc, hploc, gpu-binned), not " + builder);
     if (build_device == "cpu" && on_gpu()) throw Error("builder '" + builder + "' runs on the GPU only");
+    if (options.cluster_alpha > 0.0f && (is_kdtree() || !accel::uses_clusters(kind())))
+        throw Error("clusters applies to builder gpu-binned, not " + builder);
 }
 
 AccelStructure build_structure(const scene::TriangleMesh& mesh, const StructureSpec& spec_in, const StageHook& stage) {

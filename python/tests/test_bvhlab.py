@@ -134,6 +134,10 @@ def test_build_options_and_their_errors(cornell):
         bvhlab.build(cornell, builder="hploc", build_device="cpu")
     with pytest.raises(bvhlab.Error, match="morton_bits 31"):
         bvhlab.build(cornell, builder="lbvh", morton_bits=31)
+    with pytest.raises(bvhlab.Error, match=r"clusters 0.5 is neither 0 \(off\) nor in \[1, 16\]"):
+        bvhlab.build(cornell, builder="gpu-binned", clusters=0.5)
+    with pytest.raises(bvhlab.Error, match="clusters applies to builder gpu-binned, not hploc"):
+        bvhlab.build(cornell, builder="hploc", clusters=1.3)
 
 
 @needs_gpu
@@ -147,6 +151,11 @@ def test_gpu_builders(cornell):
         rays, query = bvhlab.rays(cornell, "primary", width=40, height=30)
         hits, _ = bvhlab.trace(s, rays, query, device="gpu")
         assert bvhlab.verify(cornell, rays, hits, query)["mismatches"] == 0
+    s = bvhlab.build(cornell, "gpu-binned", clusters=1.3)  # clusters of nearly coincident triangles
+    assert s.stats["cluster_alpha"] == pytest.approx(1.3) and s.stats["gpu_build"]["clusters"] > 0
+    rays, query = bvhlab.rays(cornell, "diffuse", width=40, height=30)
+    hits, _ = bvhlab.trace(s, rays, query, device="gpu")
+    assert bvhlab.verify(cornell, rays, hits, query)["mismatches"] == 0
 
 
 def test_files_round_trip_and_stale_structures_are_refused(cornell, tmp_path):

@@ -561,6 +561,20 @@ TEST(GpuBuilderOptions, SpecsRefuseTheWrongDevice) {
     EXPECT_THROW(c.check(), Error);  // binned runs on the CPU
     c.builder = "kdtree";
     EXPECT_FALSE(c.on_gpu());
+    // A cluster alpha applies to gpu-binned only.
+    trav::StructureSpec g;
+    g.builder = "gpu-binned";
+    g.options.cluster_alpha = 1.3f;
+    g.check();
+    for (const char* other : {"hploc", "binned", "kdtree"}) {
+        g.builder = other;
+        try {
+            g.check();
+            ADD_FAILURE() << other << ": no error";
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()), std::string("clusters applies to builder gpu-binned, not ") + other);
+        }
+    }
 }
 
 TEST(GpuBuilderOptions, WithoutADeviceTheBuildSaysWhy) {
