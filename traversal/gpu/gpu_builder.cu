@@ -1965,7 +1965,7 @@ struct Prims {
 template <typename Key>
 GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::BuilderOptions& options, bool keep_raw) {
     const uint32_t n = prims.n;
-    const int bits = options.morton_bits;
+    const int bits = kind == accel::BuilderKind::kGpuBinned ? 30 : options.morton_bits;
     const bool lbvh = kind == accel::BuilderKind::kLbvh, ploc = kind == accel::BuilderKind::kPloc;
     const bool sah = kind == accel::BuilderKind::kGpuBinned;
     // Binned SAH over clusters of nearly coincident triangles (cluster_chunks).
@@ -2396,8 +2396,10 @@ double gpu_refit(const RefitInput& in) {
 GpuBuild gpu_build(const scene::TriangleMesh& mesh, accel::BuilderKind kind, const accel::BuilderOptions& options,
                    bool keep_raw) {
     const Prims p{uint32_t(mesh.triangle_count()), &mesh, nullptr};
-    return options.morton_bits == 60 ? build<uint64_t>(p, kind, options, keep_raw)
-                                     : build<uint32_t>(p, kind, options, keep_raw);
+    // gpu-binned takes no Morton bits: its clusters follow 30-bit codes (accel::triangle_clusters).
+    return options.morton_bits == 60 && kind != accel::BuilderKind::kGpuBinned
+               ? build<uint64_t>(p, kind, options, keep_raw)
+               : build<uint32_t>(p, kind, options, keep_raw);
 }
 
 GpuBuild gpu_build_tlas(uint32_t instances, const TlasInput& in, accel::BuilderKind kind,
