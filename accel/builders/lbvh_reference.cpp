@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -223,7 +224,11 @@ struct RefCluster {
 };
 
 std::vector<RefCluster> make_clusters(const scene::TriangleMesh& mesh, float alpha) {
-    if (!(alpha >= 1.0f)) throw Error("cluster alpha " + std::to_string(alpha) + " is below 1");
+    if (!(alpha >= 1.0f)) {
+        std::ostringstream s;
+        s << "cluster alpha " << alpha << " is not at least 1";
+        throw Error(s.str());
+    }
     const RawHierarchy order = morton_order(mesh, 30);
     const std::vector<uint32_t>& sorted = order.sorted_ids;
     constexpr size_t kChunk = 32;
