@@ -1604,7 +1604,7 @@ struct Layout {
 // nothing. Binned SAH then runs over the clusters, and each cluster's merges become the nodes below it. Node ids stay n
 // + m - 1 (every subtree a range of the final order): a merge's split is at its right cluster's first triangle.
 
-constexpr uint32_t kClusterCap = 16;
+constexpr uint32_t kClusterCap = accel::kMaxClusterTriangles;
 constexpr uint32_t kMergeRef = 0x80000000u;  ///< a cluster reference to an interior node (by its right-first triangle)
 
 struct ClusterOut {
