@@ -5,6 +5,7 @@
 #include "traversal/gpu/gpu_builder.h"
 
 #include <thrust/iterator/counting_iterator.h>
+#include <thrust/iterator/transform_iterator.h>
 #include <cub/block/block_reduce.cuh>
 #include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
@@ -1728,12 +1729,11 @@ __global__ void __launch_bounds__(kBlock)
     if (threadIdx.x == 0 && !total.is_empty()) atomic_merge(bounds, total);
 }
 
-/// The triangle count of the cluster at each place of binned SAH's order.
-__global__ void cluster_weights(uint32_t c, const uint32_t* __restrict__ order, const uint4* __restrict__ info,
-                                uint32_t* __restrict__ weights) {
-    const uint32_t p = blockIdx.x * blockDim.x + threadIdx.x;
-    if (p < c) weights[p] = info[order[p]].y;
-}
+/// The triangle count of cluster k (an iterator over binned SAH's order of clusters feeds the scan).
+struct ClusterWeight {
+    const uint4* info;
+    __device__ uint32_t operator()(uint32_t k) const { return info[k].y; }
+};
 
 /// The cluster at place p of binned SAH's order puts its triangles at places offset[p] on: the
 /// final order (triangle ids) and each sorted place's final place.
@@ -1992,7 +1992,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<AABB> tri_boxes(n), bounds(1), boxes(nodes);
     DeviceBuffer<Key> keys(coded ? n : 0), keys_alt(coded ? n : 0);
     DeviceBuffer<uint32_t> ids(n), ids_alt(n);
-    DeviceBuffer<Vec3> centres(sah ? n : 0);  // binned SAH: the triangles' centroids
+    DeviceBuffer<Vec3> centres(sah && !clustered ? n : 0);  // binned SAH over triangles: their centroids
     DeviceBuffer<uint2> children(nodes);
     DeviceBuffer<NodeMeta> meta(nodes);
     DeviceBuffer<uint32_t> parent(nodes), visits(lbvh || sah || passes ? inner : 0), clusters(lbvh || sah ? 0 : n);
@@ -2029,7 +2029,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<AABB> c_box_slot(cn), c_boxes(cn), c_bounds(clustered ? 1 : 0);
     DeviceBuffer<uint2> c_record(cn), c_top(clustered ? 2 * cn : 0);
     DeviceBuffer<Vec3> c_centres(cn);
-    DeviceBuffer<uint32_t> c_order(cn), c_weights(cn), c_offset(cn), c_place(cn), c_words(clustered ? 2 : 0);
+    DeviceBuffer<uint32_t> c_order(cn), c_offset(cn), c_place(cn), c_words(clustered ? 2 : 0);
+    const auto c_weights = thrust::make_transform_iterator(c_order.data(), ClusterWeight{c_info.data()});
     // Reinsertion: each node's role and move (X, gain, common ancestor), a lock and a moving flag
     // per node, the hierarchy before the passes (restored if they are undone) and the root's
     // meta before and after.
@@ -2057,7 +2058,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, b, tk, ti, int(s_tiny.size()), 0, 5));
         sort_bytes = std::max(sort_bytes, b);
         if (clustered) {
-            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, b, c_weights.data(), c_offset.data(), int(n)));
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, b, c_weights, c_offset.data(), int(n)));
             scan_bytes = std::max(scan_bytes, b);
         }
     }
@@ -2191,10 +2192,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             } else {
                 binned(c, c_boxes.data(), c_centres.data(), c_bounds.data(), c_top.data(), top_root, c_order.data());
             }
-            cluster_weights<<<grid_for(c), kBlock>>>(c, c_order.data(), c_info.data(), c_weights.data());
-            BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(
-                cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_weights.data(), c_offset.data(), int(c)));
+                cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_weights, c_offset.data(), int(c)));
             cluster_expand<<<grid_for(c), kBlock>>>(c, c_order.data(), c_info.data(), c_offset.data(), c_members.data(),
                                                     c_tris.data(), final_ids.data(), c_place.data());
             cluster_nodes<<<grid_for(n), kBlock>>>(n, c_record.data(), c_place.data(), children.data());
