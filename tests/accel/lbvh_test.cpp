@@ -659,6 +659,17 @@ TEST(TreeFile, GpuBuildersKeepMortonBitsAndRadius) {
     EXPECT_EQ(rc.meta.options.sbvh_alpha, BuilderOptions{}.sbvh_alpha);
     EXPECT_EQ(describe_config(rc.meta), "gpu-binned leaf=1..8 max_depth=64 Ct=1 Ci=1 bins=32 clusters=1.5");
     EXPECT_EQ(trav::load_structure(mesh, meta.scene_hash, gc.path()).figures["cluster_alpha"], 1.5);
+    // A header alpha out of range (a damaged or forged file) is refused in one line naming it.
+    meta.options.cluster_alpha = 20.0f;
+    test::TempFile bad("gpu-binned-clusters-20.tree");
+    write_tree_file(bad.path(), tree, meta);
+    try {
+        read_tree_file(bad.path());
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "structure file '" + bad.path() + "' has a header value out of range: clusters 20 is not in [0, 16]");
+    }
     EXPECT_EQ(rg.meta.options.cluster_alpha, 0.0f);
     // A file of another version, older or newer, is refused with its version named.
     for (const uint32_t version : {kTreeFileVersion - 1, kTreeFileVersion + 1}) {
