@@ -14,6 +14,7 @@
 #include <cuda/atomic>
 
 #include <algorithm>
+#include <optional>
 #include <string>
 
 #include "accel/core/morton.h"
@@ -989,6 +990,7 @@ __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* 
         large[0] = root;
         first[0] = 0;
         first[1] = (n + kSahChunk - 1) / kSahChunk;
+        words[4] = 1;
     } else {
         small[0] = root;
         words[1] = 1;
@@ -1031,8 +1033,10 @@ __device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80
 constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
-    sah_bin(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, SahOrder order,
-            const AABB* __restrict__ tri_boxes, SahBin* bins, uint32_t* __restrict__ chunk_counts) {
+    sah_bin(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, const uint32_t* __restrict__ first,
+            SahOrder order, const AABB* __restrict__ tri_boxes, SahBin* bins, uint32_t* __restrict__ chunk_counts) {
+    const uint32_t count = *task_count;
+    if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     __shared__ uint32_t lo[kBinSets][3 * kSahBins][3], hi[kBinSets][3 * kSahBins][3];
     __shared__ uint32_t num[kBinSets][3 * kSahBins];
     for (uint32_t k = threadIdx.x; k < kBinSets * 3 * kSahBins; k += blockDim.x) {
@@ -1124,10 +1128,11 @@ __device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e
 /// One warp per large task: the best split over its bins (the bins made empty again for the next
 /// level), the node linked to its parent, the children queued (large, small) or linked (leaves).
 __global__ void __launch_bounds__(kBlock)
-    sah_split(const SahTask* __restrict__ tasks, uint32_t count, SahBin* bins, SahSplit* __restrict__ splits,
-              SahTask* next, SahTask* small, uint32_t* words, uint32_t n, uint2* children, uint32_t* root) {
+    sah_split(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, SahBin* bins,
+              SahSplit* __restrict__ splits, SahTask* next, uint32_t* next_count, SahTask* small, uint32_t* small_count,
+              uint32_t n, uint2* children, uint32_t* root) {
     const uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
-    if (task >= count) return;  // whole warps
+    if (task >= *task_count) return;  // whole warps
     const SahTask t = tasks[task];
     const SahMap map(t.cb);
     AABB box[3];
@@ -1160,20 +1165,21 @@ __global__ void __launch_bounds__(kBlock)
         if (e - b == 1)
             set_link(children, root, slot, b);
         else if (e - b > kSahWarpTask)
-            s.child_cb[side] = sah_push(next, words, b, e, slot, 1 - t.buf);
+            s.child_cb[side] = sah_push(next, next_count, b, e, slot, 1 - t.buf);
         else
-            s.child_cb[side] = sah_push(small, words + 1, b, e, slot, 1 - t.buf);
+            s.child_cb[side] = sah_push(small, small_count, b, e, slot, 1 - t.buf);
     }
     splits[task] = s;
 }
 
 /// Each chunk's count of triangles going left, from its counts per bin (one warp per chunk).
 __global__ void __launch_bounds__(kBlock)
-    sah_lefts(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first, uint32_t chunks,
-              const SahSplit* __restrict__ splits, const uint32_t* __restrict__ chunk_counts,
-              uint32_t* __restrict__ lefts) {
+    sah_lefts(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
+              const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits,
+              const uint32_t* __restrict__ chunk_counts, uint32_t* __restrict__ lefts) {
     const uint32_t chunk = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
-    if (chunk >= chunks) return;  // whole warps
+    const uint32_t count = *task_count;
+    if (chunk >= first[count]) return;  // whole warps
     const SahChunk c(tasks, first, count, chunk);
     const SahSplit s = splits[c.task];
     if (s.axis < 0) {  // by place
@@ -1191,9 +1197,12 @@ __global__ void __launch_bounds__(kBlock)
 /// its chunk in kSahPerThread coalesced rounds; each triangle's place among the lefts comes from
 /// the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
-    sah_scatter(const SahTask* __restrict__ tasks, uint32_t count, const uint32_t* __restrict__ first,
-                const SahSplit* __restrict__ splits, SahOrder order, const Vec3* __restrict__ centres,
-                const uint32_t* __restrict__ lefts_before, uint32_t* __restrict__ final_ids) {
+    sah_scatter(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
+                const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits, SahOrder order,
+                const Vec3* __restrict__ centres, const uint32_t* __restrict__ lefts_before,
+                uint32_t* __restrict__ final_ids) {
+    const uint32_t count = *task_count;
+    if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     constexpr uint32_t kWarps = kBlock / kWarp;
     __shared__ uint32_t before[kSahPerThread][kWarps];  // lefts counted before each round and warp
     __shared__ uint32_t side_box[2][6];                 // the children's centroid bounds, ordered bits
@@ -1263,13 +1272,13 @@ __global__ void __launch_bounds__(kBlock)
 }
 
 /// The next level's chunks: each large task's first chunk (first[count] = the chunk count, also
-/// in words[2]). One block.
+/// in *total). One block.
 __global__ void __launch_bounds__(1024)
-    sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ words, uint32_t* __restrict__ first,
+    sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, uint32_t* __restrict__ first,
                uint32_t* __restrict__ total) {
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
-    const uint32_t count = words[0];
+    const uint32_t count = *task_count;
     uint32_t base = 0;
     for (uint32_t k0 = 0; k0 < count; k0 += 1024) {
         const uint32_t k = k0 + threadIdx.x;
@@ -1624,8 +1633,14 @@ __global__ void __launch_bounds__(kBlock)
     // A cluster's triangles as a list through next_ from the lane that holds it (its first) to
     // its tail; at the end, the chunk's triangles in cluster order.
     __shared__ uint8_t next_[kBlock / kWarp][kWarp], order_[kBlock / kWarp][kWarp];
-    // Each round's boxes, the count in lo's w.
+    // The lanes' boxes, the count in lo's w; rewritten by the lanes whose cluster grew.
     __shared__ float4 lo4[kBlock / kWarp][kWarp], hi4[kBlock / kWarp][kWarp];
+    // The pairs' union half areas, +inf where the two may not merge (the same lane, a dead one, over the cap):
+    // lane l reads its row at area_[j][l], so each round's search touches no box, and a merge
+    // recomputes only the merged clusters' pairs. Row length 33: both area_[j][l] and area_[l][j]
+    // over the lanes l fall on 32 banks.
+    __shared__ float area_[kBlock / kWarp][kWarp * (kWarp + 1)];
+    constexpr float kInf = __builtin_huge_valf();
     const uint32_t lane = threadIdx.x % kWarp, w = threadIdx.x / kWarp;
     const uint32_t chunk = blockIdx.x * (kBlock / kWarp) + w;
     const uint32_t base = chunk * kWarp;
@@ -1635,20 +1650,35 @@ __global__ void __launch_bounds__(kBlock)
     AABB box = alive ? tri_boxes[sorted_ids[s]] : AABB::empty();
     uint32_t count = alive ? 1 : 0;
     uint32_t ref = s, tail = lane;
-    for (;;) {
-        const uint32_t live = __ballot_sync(~0u, alive);
+    float* area = area_[w];
+    const auto put_box = [&] {
         lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(count));
         hi4[w][lane] = make_float4(box.hi.x, box.hi.y, box.hi.z, 0.0f);
-        __syncwarp();
-        float best = __int_as_float(0x7f800000);
+    };
+    // This lane's union with lane j's cluster, +inf if they may not merge.
+    const auto pair_area = [&](uint32_t j, uint32_t live) {
+        const float4 a = lo4[w][j], b = hi4[w][j];
+        if (j == lane || !alive || !(live >> j & 1u) || count + __float_as_uint(a.w) > kClusterCap) return kInf;
+        return merge(box, AABB{{a.x, a.y, a.z}, {b.x, b.y, b.z}}).half_area();
+    };
+    put_box();
+    uint32_t live = __ballot_sync(~0u, alive);
+    __syncwarp();
+    area[lane * (kWarp + 1) + lane] = kInf;
+    for (uint32_t d = 1; d <= kWarp / 2; ++d) {  // every pair once (at d = 16 twice, the same value)
+        const uint32_t j = (lane + d) % kWarp;
+        const float a = pair_area(j, live);
+        area[j * (kWarp + 1) + lane] = a;
+        area[lane * (kWarp + 1) + j] = a;
+    }
+    __syncwarp();
+    for (;;) {
+        float best = kInf;
         uint32_t nn = kWarp;
-        for (uint32_t rest = live; rest; rest &= rest - 1) {  // the live clusters, lowest lane first
-            const uint32_t j = uint32_t(__ffs(int(rest))) - 1;
-            const float4 a = lo4[w][j], b = hi4[w][j];
-            if (j == lane || count + __float_as_uint(a.w) > kClusterCap) continue;
-            const float area = merge(box, AABB{{a.x, a.y, a.z}, {b.x, b.y, b.z}}).half_area();
-            if (area < best) {
-                best = area;
+        for (uint32_t j = 0; j < kWarp; ++j) {  // lowest lane first on equal areas
+            const float a = area[j * (kWarp + 1) + lane];
+            if (a < best) {
+                best = a;
                 nn = j;
             }
         }
@@ -1661,9 +1691,11 @@ __global__ void __launch_bounds__(kBlock)
         const bool cheap = mutual && best <= alpha * fmaxf(box.half_area(), other.half_area());
         const bool take = cheap && lane < nn;  // the lower lane keeps the cluster
         const bool taken = __shfl_sync(~0u, take ? 1u : 0u, int(nn % kWarp)) != 0 && cheap && nn < lane;
-        if (!__any_sync(~0u, take)) break;
+        const uint32_t grew = __ballot_sync(~0u, take);
+        if (!grew) break;
         const uint32_t other_ref = __shfl_sync(~0u, ref, int(nn % kWarp));
         const uint32_t other_tail = __shfl_sync(~0u, tail, int(nn % kWarp));
+        __syncwarp();  // every lane has read the boxes before the grown ones are rewritten
         if (take) {
             const uint32_t right_first = base + nn;  // a lane's cluster starts with its own triangle
             out.record[right_first] = make_uint2(ref, other_ref);
@@ -1672,13 +1704,28 @@ __global__ void __launch_bounds__(kBlock)
             box = merge(box, other);
             count += other_count;
             ref = kMergeRef | right_first;
+            put_box();
         }
-        __syncwarp();
         if (taken) {
             alive = false;
             count = 0;
             box = AABB::empty();
         }
+        const uint32_t gone = __ballot_sync(~0u, taken);
+        live &= ~gone;
+        __syncwarp();
+        for (uint32_t rest = grew; rest; rest &= rest - 1) {  // the grown clusters' pairs anew
+            const uint32_t i = uint32_t(__ffs(int(rest))) - 1;
+            const float a = pair_area(i, live);
+            area[i * (kWarp + 1) + lane] = a;
+            area[lane * (kWarp + 1) + i] = a;
+        }
+        for (uint32_t rest = gone; rest; rest &= rest - 1) {  // and no pair with the merged-away ones
+            const uint32_t i = uint32_t(__ffs(int(rest))) - 1;
+            area[i * (kWarp + 1) + lane] = kInf;
+            area[lane * (kWarp + 1) + i] = kInf;
+        }
+        __syncwarp();
     }
     const uint32_t heads = __ballot_sync(~0u, alive);
     // Each head's first member place: the counts of the heads before it.
@@ -1705,17 +1752,17 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
-/// Cluster k (k-th head in chunk order) at its place: its box, centre and info, and the centres'
-/// bounds (a block's reduced, then atomics).
+/// Cluster k (k-th head in chunk order; chunk_end: the clusters up to each chunk's end) at its
+/// place: its box, centre and info, and the centres' bounds (a block's reduced, then atomics).
 __global__ void __launch_bounds__(kBlock)
-    cluster_compact(uint32_t n, const uint32_t* __restrict__ chunk_first, ClusterOut in, AABB* __restrict__ boxes,
+    cluster_compact(uint32_t n, const uint32_t* __restrict__ chunk_end, ClusterOut in, AABB* __restrict__ boxes,
                     Vec3* __restrict__ centres, uint4* __restrict__ info, AABB* __restrict__ bounds) {
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     AABB cb = AABB::empty();
     if (s < n) {
         const uint32_t chunk = s / kWarp, lane = s % kWarp, heads = in.mask[chunk];
         if (heads >> lane & 1u) {
-            const uint32_t k = chunk_first[chunk] + __popc(heads & ((1u << lane) - 1u));
+            const uint32_t k = chunk_end[chunk] - __popc(heads) + __popc(heads & ((1u << lane) - 1u));
             const AABB b = in.box[s];
             boxes[k] = b;
             centres[k] = b.center();
@@ -1948,6 +1995,36 @@ private:
     std::vector<cudaEvent_t> e_;
 };
 
+/// Counters read back without stalling the device: copy() puts them, after the work enqueued so
+/// far, in pinned slot k; wait() waits for that copy alone. The host enqueues more work meanwhile.
+class Readback {
+public:
+    static constexpr size_t kWords = 8;
+    Readback() {
+        BVHLAB_CUDA_CHECK(cudaHostAlloc(&h_, 2 * kWords * sizeof(uint32_t), cudaHostAllocDefault));
+        for (cudaEvent_t& e : e_) BVHLAB_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+    }
+    ~Readback() {
+        for (cudaEvent_t e : e_) BVHLAB_CUDA_CHECK_LOG(cudaEventDestroy(e));
+        BVHLAB_CUDA_CHECK_LOG(cudaFreeHost(h_));
+    }
+    Readback(const Readback&) = delete;
+    Readback& operator=(const Readback&) = delete;
+    void copy(int slot, const uint32_t* d, size_t words) {
+        BVHLAB_CUDA_CHECK(cudaMemcpyAsync(h_ + slot * kWords, d, std::min(words, kWords) * sizeof(uint32_t),
+                                          cudaMemcpyDeviceToHost));
+        BVHLAB_CUDA_CHECK(cudaEventRecord(e_[slot]));
+    }
+    const uint32_t* wait(int slot) {
+        BVHLAB_CUDA_CHECK(cudaEventSynchronize(e_[slot]));
+        return h_ + slot * kWords;
+    }
+
+private:
+    uint32_t* h_ = nullptr;
+    cudaEvent_t e_[2] = {};
+};
+
 template <typename T>
 void download(std::vector<T>& h, const T* d, size_t count) {
     h.resize(count);
@@ -2011,7 +2088,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
+    DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -2024,7 +2101,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     // info, centres' bounds); binned SAH's tree over them (links, root, order), the clusters'
     // triangle counts in that order and their scan, and each sorted place's final place.
     const size_t cn = clustered ? n : 0, c_chunks = clustered ? (n + kWarp - 1) / kWarp : 0;
-    DeviceBuffer<uint32_t> c_count(c_chunks), c_mask(c_chunks), c_first(c_chunks), c_members(cn), c_tris(cn);
+    DeviceBuffer<uint32_t> c_count(c_chunks), c_mask(c_chunks), c_end(c_chunks), c_members(cn), c_tris(cn);
     DeviceBuffer<uint4> c_info_slot(cn), c_info(cn);
     DeviceBuffer<AABB> c_box_slot(cn), c_boxes(cn), c_bounds(clustered ? 1 : 0);
     DeviceBuffer<uint2> c_record(cn), c_top(clustered ? 2 * cn : 0);
@@ -2060,6 +2137,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         if (clustered) {
             BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, b, c_weights, c_offset.data(), int(n)));
             scan_bytes = std::max(scan_bytes, b);
+            BVHLAB_CUDA_CHECK(cub::DeviceScan::InclusiveSum(nullptr, b, c_count.data(), c_end.data(), int(c_chunks)));
+            scan_bytes = std::max(scan_bytes, b);
         }
     }
     if (passes) {
@@ -2079,6 +2158,10 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
     if (sah) detail::fill_device_bytes(s_words.data(), 0, s_words.bytes());
+    // Binned SAH's level scans run over a bound on the chunks: the rest of the lefts are zeros.
+    if (sah) detail::fill_device_bytes(s_lefts.data(), 0, s_lefts.bytes());
+    std::optional<Readback> readback;  // binned SAH's level counts
+    if (sah) readback.emplace();
     if (clustered) detail::fill_device_bytes(c_record.data(), 0xff, c_record.bytes());
 
     // The boxes' kernel: a few blocks per SM, each primitive a grid apart (few atomics on the bounds).
@@ -2128,29 +2211,41 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
                 m, pbounds, s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
             BVHLAB_CHECK_LAUNCH();
-            // Large tasks level by level; the host reads each level's task and chunk counts.
+            // Large tasks level by level. Level k's kernels read its task count (words[4 + k % 2]) and
+            // chunk count (first[tasks]) on the device; their grids are bounded from level k - 1's counts
+            // (a task makes at most two large tasks, with at most one chunk more than its own). So the
+            // host enqueues level k before it knows level k's counts, then reads them (copied after
+            // level k - 1) while the device runs level k; a level with no tasks does nothing.
             uint32_t tasks = m > kSahWarpTask ? 1 : 0, chunks = (m + kSahChunk - 1) / kSahChunk;
+            size_t grid_tasks = tasks, grid_chunks = chunks;
             SahTask* level = s_tasks.data();
             SahTask* next = s_tasks.data() + s_large;
-            while (tasks) {
-                sah_bin<<<chunks, kBlock>>>(level, tasks, s_first.data(), order, pboxes, s_bins.data(),
-                                            s_chunk_counts.data());
-                set_word<<<1, 1>>>(s_words.data(), 0);
-                sah_split<<<unsigned((size_t(tasks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, tasks, s_bins.data(), s_splits.data(), next, s_small.data(), s_words.data(), m, kids, proot);
-                sah_lefts<<<unsigned((size_t(chunks) * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, tasks, s_first.data(), chunks, s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+            for (uint32_t k = 0; tasks; ++k) {
+                const uint32_t* now = s_words.data() + 4 + k % 2;
+                uint32_t* after = s_words.data() + 4 + (k + 1) % 2;
+                sah_bin<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), order, pboxes, s_bins.data(),
+                                                           s_chunk_counts.data());
+                set_word<<<1, 1>>>(after, 0);
+                sah_split<<<unsigned((grid_tasks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                    level, now, s_bins.data(), s_splits.data(), next, after, s_small.data(), s_words.data() + 1, m,
+                    kids, proot);
+                sah_lefts<<<unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                    level, now, s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
                 BVHLAB_CHECK_LAUNCH();
                 BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
-                                                                s_lefts_scan.data(), int(chunks)));
-                sah_scatter<<<chunks, kBlock>>>(level, tasks, s_first.data(), s_splits.data(), order, pcentres,
-                                                s_lefts_scan.data(), fin);
-                sah_chunks<<<1, 1024>>>(next, s_words.data(), s_first.data(), s_words.data() + 2);
+                                                                s_lefts_scan.data(), int(grid_chunks)));
+                sah_scatter<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), s_splits.data(), order,
+                                                               pcentres, s_lefts_scan.data(), fin);
+                sah_chunks<<<1, 1024>>>(next, after, s_first.data(), s_words.data() + 2);
                 BVHLAB_CHECK_LAUNCH();
-                uint32_t w[3];  // large tasks, small tasks, chunks
-                detail::copy_to_host(w, s_words.data(), sizeof w);
-                tasks = w[0];
-                chunks = w[2];
+                readback->copy(int(k % 2), s_words.data(), s_words.size());
+                if (k > 0) {  // level k's counts
+                    const uint32_t* w = readback->wait(int((k - 1) % 2));
+                    tasks = w[4 + k % 2];
+                    chunks = w[2];
+                }
+                grid_tasks = std::min(2 * size_t(tasks), s_large);
+                grid_chunks = std::min(size_t(chunks) + tasks, s_chunks);
                 std::swap(level, next);
             }
             sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
@@ -2176,14 +2271,12 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                                                                          tri_boxes.data(), alpha, co);
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(
-                cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_count.data(), c_first.data(), int(chunks)));
-            cluster_compact<<<grid_for(n), kBlock>>>(n, c_first.data(), co, c_boxes.data(), c_centres.data(),
+                cub::DeviceScan::InclusiveSum(scratch.data(), scan_bytes, c_count.data(), c_end.data(), int(chunks)));
+            cluster_compact<<<grid_for(n), kBlock>>>(n, c_end.data(), co, c_boxes.data(), c_centres.data(),
                                                      c_info.data(), c_bounds.data());
             BVHLAB_CHECK_LAUNCH();
-            uint32_t last[2];
-            detail::copy_to_host(last, c_first.data() + chunks - 1, sizeof(uint32_t));
-            detail::copy_to_host(last + 1, c_count.data() + chunks - 1, sizeof(uint32_t));
-            const uint32_t c = last[0] + last[1];
+            uint32_t c = 0;  // the clusters: the last chunk's end
+            detail::copy_to_host(&c, c_end.data() + chunks - 1, sizeof c);
             uint32_t* top_root = c_words.data();
             if (c == 1) {
                 iota<<<1, 1>>>(1, c_order.data());
