@@ -200,19 +200,6 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
     return b;
 }
 
-/// Figures of a GPU build: device time per stage (CUDA events), Mtris/s, peak device memory.
-nlohmann::json gpu_build_figures(const GpuBuild& g, size_t triangles) {
-    const GpuBuildTimes& t = g.times;
-    nlohmann::json f = gpu_stage_times(t);
-    f["reinsertion_passes"] = g.reinsertion_passes;
-    f["reinsertion_undone"] = g.reinsertion_undone;
-    if (g.clusters) f["clusters"] = g.clusters;
-    f["total_ms"] = t.total_ms;
-    f["mtris_per_s"] = t.total_ms > 0.0 ? double(triangles) / (t.total_ms * 1e3) : 0.0;
-    f["peak_device_bytes"] = g.peak_bytes;
-    return f;
-}
-
 /// A GPU builder: the BVH2 layout is made on the device and kept there; the host gets a copy
 /// and its BuildTree for the figures, a CWBVH collapse and structure files.
 std::pair<AccelStructure, std::shared_ptr<const DeviceStructure>> build_on_device(const scene::TriangleMesh& mesh,
@@ -238,6 +225,18 @@ std::pair<AccelStructure, std::shared_ptr<const DeviceStructure>> build_on_devic
 }
 
 }  // namespace
+
+nlohmann::json gpu_build_figures(const GpuBuild& g, size_t triangles) {
+    const GpuBuildTimes& t = g.times;
+    nlohmann::json f = gpu_stage_times(t);
+    f["reinsertion_passes"] = g.reinsertion_passes;
+    f["reinsertion_undone"] = g.reinsertion_undone;
+    if (g.clusters) f["clusters"] = g.clusters;
+    f["total_ms"] = t.total_ms;
+    f["mtris_per_s"] = t.total_ms > 0.0 ? double(triangles) / (t.total_ms * 1e3) : 0.0;
+    f["peak_device_bytes"] = g.peak_bytes;
+    return f;
+}
 
 nlohmann::json gpu_stage_times(const GpuBuildTimes& t) {
     return {{"upload_ms", t.upload_ms},  {"bounds_ms", t.bounds_ms},       {"morton_ms", t.morton_ms},

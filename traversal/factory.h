@@ -113,6 +113,12 @@ struct GpuBuildTimes;
 /// `gpu_build` figures of a build and the `gpu_tlas` figures of a TLAS rebuild.
 nlohmann::json gpu_stage_times(const GpuBuildTimes& t);
 
+struct GpuBuild;
+/// A GPU build of `triangles` triangles as its `gpu_build` figures: gpu_stage_times, the
+/// reinsertion passes run (and whether they were undone), the clusters binned (gpu-binned with a
+/// cluster alpha only), total_ms, mtris_per_s and peak_device_bytes.
+nlohmann::json gpu_build_figures(const GpuBuild& g, size_t triangles);
+
 /// Builds `spec` over `mesh`: builder, validation (throws bvhlab::Error on an invalid tree),
 /// figures (SAH, EPO, sizes), and the traversal layout. A GPU builder's BVH2 stays on the device
 /// as built (device() returns it without an upload); its figures add "gpu_build" (the device

@@ -240,12 +240,14 @@ std::vector<RefCluster> make_clusters(const scene::TriangleMesh& mesh, float alp
             const size_t k = c.size();
             std::vector<size_t> nn(k, k);
             std::vector<float> best(k, std::numeric_limits<float>::infinity());
-            for (size_t i = 0; i < k; ++i)
+            for (size_t i = 0; i < k; ++i) {
+                uint32_t least = kNoClusterPair;  // keys carry places in the chunk, ordered as the list is
                 for (size_t j = 0; j < k; ++j) {
                     if (j == i || c[i].tris.size() + c[j].tris.size() > kMaxClusterTriangles) continue;
-                    const float a = merge(c[i].box, c[j].box).half_area();
-                    if (a < best[i]) best[i] = a, nn[i] = j;
+                    const uint32_t key = cluster_pair_key(merge(c[i].box, c[j].box).half_area(), uint32_t(j));
+                    if (key < least) least = key, nn[i] = j, best[i] = cluster_key_area(key);
                 }
+            }
             std::vector<char> gone(k, 0);
             bool merged = false;
             for (size_t i = 0; i < k; ++i) {

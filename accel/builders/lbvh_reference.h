@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "accel/core/aabb.h"
@@ -50,15 +51,37 @@ RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, in
 
 /// gpu-binned's clusters (BuilderOptions::cluster_alpha = alpha, at least 1): the triangles in
 /// Morton order (30-bit codes) in chunks of 32; in each chunk, rounds in which every cluster finds
-/// the cluster whose union with it has the least half area (on equal areas the lower place)
-/// among those it may join (at most kMaxClusterTriangles together), and each mutual pair whose
-/// union's half area is at most alpha times the larger one's merges, the lower place keeping
+/// the cluster whose union with it has the least half area (to 2^-18 relative, on equal areas the
+/// lower place: cluster_pair_key) among those it may join (at most kMaxClusterTriangles together),
+/// and each mutual pair whose union's half area (that key's) is at most alpha times the larger
+/// one's merges, the lower place keeping
 /// the cluster with its own triangles first; until a round merges nothing. The clusters in order
 /// of chunk and place, each as its triangle ids. Throws bvhlab::Error for an empty mesh or an
 /// alpha below 1.
 std::vector<std::vector<uint32_t>> triangle_clusters(const scene::TriangleMesh& mesh, float alpha);
 
 constexpr uint32_t kMaxClusterTriangles = 16;
+
+/// No pair: the two clusters may not merge, or their union's area is not finite.
+constexpr uint32_t kNoClusterPair = 0xffffffffu;
+
+/// A union of two clusters as the clustering compares them: its half area's float with the low 5
+/// bits cleared (to 2^-18 relative) and the other cluster's place in its chunk (0-31) there, so
+/// one unsigned minimum finds the least area and, on equal ones, the lower place.
+BVHLAB_HD inline uint32_t cluster_pair_key(float half_area, uint32_t place) {
+    if (!(half_area >= 0.0f && half_area < 3.402823466e38f)) return kNoClusterPair;
+    uint32_t u;
+    std::memcpy(&u, &half_area, sizeof u);
+    return (u & ~31u) | (place & 31u);
+}
+
+/// The half area a key keeps (cluster_pair_key; not kNoClusterPair).
+BVHLAB_HD inline float cluster_key_area(uint32_t key) {
+    const uint32_t u = key & ~31u;
+    float a;
+    std::memcpy(&a, &u, sizeof a);
+    return a;
+}
 
 /// gpu-binned's hierarchy with clusters, as traversal/gpu/gpu_builder.cu makes it, bit for bit:
 /// binned SAH over the clusters' boxes (BinnedSahBuilder's splits, down to single clusters), each

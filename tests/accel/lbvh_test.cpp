@@ -23,6 +23,7 @@
 #include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 #include "traversal/factory.h"
+#include "traversal/factory.h"
 #include "traversal/gpu/gpu_builder.h"
 
 namespace bvhlab::accel {
@@ -488,6 +489,30 @@ TEST(Bvh2Convert, BuildTreeOfTheLayoutKeepsTreeAndFigures) {
     ASSERT_EQ(leaf_back.nodes.size(), 1u);
     EXPECT_EQ(leaf_back.nodes[0].prim_count, 2u);
     EXPECT_EQ(validate(leaf_back, two, big.config), "");
+}
+
+TEST(GpuBuildFigures, NameEveryFigureOfTheBuild) {
+    trav::GpuBuild g;
+    g.times.bounds_ms = 0.25;
+    g.times.convert_ms = 0.5;
+    g.times.total_ms = 2.0;
+    g.peak_bytes = 12345;
+    g.reinsertion_passes = 3;
+    g.reinsertion_undone = true;
+    nlohmann::json f = trav::gpu_build_figures(g, 4000000);
+    EXPECT_EQ(f.at("bounds_ms").get<double>(), 0.25);
+    EXPECT_EQ(f.at("convert_ms").get<double>(), 0.5);
+    EXPECT_EQ(f.at("total_ms").get<double>(), 2.0);
+    EXPECT_EQ(f.at("mtris_per_s").get<double>(), 2000.0);  // 4M triangles in 2 ms
+    EXPECT_EQ(f.at("peak_device_bytes").get<size_t>(), 12345u);
+    EXPECT_EQ(f.at("reinsertion_passes").get<int>(), 3);
+    EXPECT_TRUE(f.at("reinsertion_undone").get<bool>());
+    EXPECT_FALSE(f.contains("clusters"));  // named only when gpu-binned made clusters
+    g.clusters = 763944;
+    g.times.total_ms = 0.0;
+    f = trav::gpu_build_figures(g, 4000000);
+    EXPECT_EQ(f.at("clusters").get<size_t>(), 763944u);
+    EXPECT_EQ(f.at("mtris_per_s").get<double>(), 0.0);  // no time, no rate
 }
 
 TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {

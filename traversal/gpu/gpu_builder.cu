@@ -1071,11 +1071,19 @@ __global__ void __launch_bounds__(kBlock)
         atomicAdd(&num[set][k], x.count);
     };
     for (int a = 0; a < 3; ++a) run[a].count = 0;
+    // The thread's triangles' boxes loaded first, all at once: one load latency, not one a triangle.
     const uint32_t i0 = c.b + threadIdx.x * kSahPerThread;
+    uint32_t id[kSahPerThread];
+    AABB boxes[kSahPerThread];
+#pragma unroll
+    for (uint32_t j = 0; j < kSahPerThread; ++j) id[j] = i0 + j < c.e ? in[i0 + j] : kInvalid;
+#pragma unroll
+    for (uint32_t j = 0; j < kSahPerThread; ++j)
+        if (id[j] != kInvalid) boxes[j] = tri_boxes[id[j]];
+#pragma unroll
     for (uint32_t j = 0; j < kSahPerThread; ++j) {
-        const uint32_t i = i0 + j;
-        if (i >= c.e) break;
-        const AABB box = tri_boxes[in[i]];
+        if (id[j] == kInvalid) break;
+        const AABB& box = boxes[j];
         const Vec3 ct = box.center();
         const uint32_t corner[6] = {ordered_bits(box.lo.x), ordered_bits(box.lo.y), ordered_bits(box.lo.z),
                                     ordered_bits(box.hi.x), ordered_bits(box.hi.y), ordered_bits(box.hi.z)};
@@ -1215,15 +1223,23 @@ __global__ void __launch_bounds__(kBlock)
     const uint32_t lane = threadIdx.x & 31, warp = threadIdx.x / kWarp;
     const unsigned lt = (1u << lane) - 1;
     if (threadIdx.x < 12) side_box[threadIdx.x / 6][threadIdx.x % 6] = threadIdx.x % 6 < 3 ? ~0u : 0u;
+    // Every round's ids, then their centres, loaded before the ballots: one load latency each.
     uint32_t ids[kSahPerThread];
+    Vec3 centre[kSahPerThread];
     unsigned ballots[kSahPerThread];
+#pragma unroll
+    for (uint32_t r = 0; r < kSahPerThread; ++r) {
+        const uint32_t i = c.b + r * kBlock + threadIdx.x;
+        ids[r] = i < c.e ? in[i] : kInvalid;
+    }
+#pragma unroll
+    for (uint32_t r = 0; r < kSahPerThread; ++r)
+        if (ids[r] != kInvalid) centre[r] = centres[ids[r]];
+#pragma unroll
     for (uint32_t r = 0; r < kSahPerThread; ++r) {
         const uint32_t i = c.b + r * kBlock + threadIdx.x;
         bool l = false;
-        if (i < c.e) {
-            ids[r] = in[i];
-            l = s.axis < 0 ? i < s.m : map.bin(centres[ids[r]][s.axis], s.axis) <= s.bin;
-        }
+        if (i < c.e) l = s.axis < 0 ? i < s.m : map.bin(centre[r][s.axis], s.axis) <= s.bin;
         ballots[r] = __ballot_sync(~0u, l);
         if (lane == 0) before[r][warp] = __popc(ballots[r]);
     }
@@ -1247,7 +1263,7 @@ __global__ void __launch_bounds__(kBlock)
         const uint32_t at = is_left ? t.b + l : s.m + (i - t.b - l);
         out[at] = ids[r];
         if (!s.child_cb[is_left ? 0 : 1]) final_ids[at] = ids[r];
-        const Vec3 c = centres[ids[r]];
+        const Vec3 c = centre[r];
         if (is_left)
             side[0].extend(c);
         else
@@ -1609,7 +1625,7 @@ struct Layout {
 
 // --- Clusters for binned SAH (BuilderOptions::cluster_alpha; accel::clustered_binned_reference): the Morton order in
 // chunks of a warp; in each, rounds in which every cluster finds the cluster whose union with it has the least area
-// (ties to the lower lane) among those it may join (at most kClusterCap triangles together), and mutual pairs merge
+// (accel::cluster_pair_key: to 2^-18 relative, ties to the lower lane) among those it may join (at most kClusterCap triangles together), and mutual pairs merge
 // when the merge is nearly free (the union's half area at most alpha times the larger one's), until a round merges
 // nothing. Binned SAH then runs over the clusters, and each cluster's merges become the nodes below it. Node ids stay n
 // + m - 1 (every subtree a range of the final order): a merge's split is at its right cluster's first triangle.
@@ -1633,14 +1649,15 @@ __global__ void __launch_bounds__(kBlock)
     // A cluster's triangles as a list through next_ from the lane that holds it (its first) to
     // its tail; at the end, the chunk's triangles in cluster order.
     __shared__ uint8_t next_[kBlock / kWarp][kWarp], order_[kBlock / kWarp][kWarp];
-    // The lanes' boxes, the count in lo's w; rewritten by the lanes whose cluster grew.
+    // The lanes' boxes, the count in lo's w (kDead for a lane whose cluster merged away or that
+    // holds none); rewritten by the lanes whose cluster grew or went.
     __shared__ float4 lo4[kBlock / kWarp][kWarp], hi4[kBlock / kWarp][kWarp];
-    // The pairs' union half areas, +inf where the two may not merge (the same lane, a dead one, over the cap):
-    // lane l reads its row at area_[j][l], so each round's search touches no box, and a merge
-    // recomputes only the merged clusters' pairs. Row length 33: both area_[j][l] and area_[l][j]
-    // over the lanes l fall on 32 banks.
-    __shared__ float area_[kBlock / kWarp][kWarp * (kWarp + 1)];
-    constexpr float kInf = __builtin_huge_valf();
+    // The pairs' keys (accel::cluster_pair_key: the union's half area and the other's lane;
+    // kNoClusterPair where the two may not merge, the same lane, a dead one, over the cap): lane l
+    // reads its row at key_[j][l], so each round's search is one unsigned minimum over 32 words and
+    // touches no box, and a merge recomputes only the merged clusters' pairs. Row length 33: both
+    // key_[j][l] and key_[l][j] over the lanes l fall on 32 banks.
+    __shared__ uint32_t key_[kBlock / kWarp][kWarp * (kWarp + 1)];
     const uint32_t lane = threadIdx.x % kWarp, w = threadIdx.x / kWarp;
     const uint32_t chunk = blockIdx.x * (kBlock / kWarp) + w;
     const uint32_t base = chunk * kWarp;
@@ -1650,39 +1667,36 @@ __global__ void __launch_bounds__(kBlock)
     AABB box = alive ? tri_boxes[sorted_ids[s]] : AABB::empty();
     uint32_t count = alive ? 1 : 0;
     uint32_t ref = s, tail = lane;
-    float* area = area_[w];
+    uint32_t* key = key_[w];
+    constexpr uint32_t kDead = 4 * kClusterCap;  // over the cap with any cluster
     const auto put_box = [&] {
-        lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(count));
+        lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(alive ? count : kDead));
         hi4[w][lane] = make_float4(box.hi.x, box.hi.y, box.hi.z, 0.0f);
     };
-    // This lane's union with lane j's cluster, +inf if they may not merge.
-    const auto pair_area = [&](uint32_t j, uint32_t live) {
+    // This lane's pair with lane j: the keys for this lane's search (place j) and for j's (place
+    // lane), kNoClusterPair twice if they may not merge (the same lane, or over the cap, which a
+    // dead lane always is). The union's half area as AABB::half_area's (never empty here, so
+    // without its test), for every lane: no branch.
+    const auto put_pair = [&](uint32_t j) {
         const float4 a = lo4[w][j], b = hi4[w][j];
-        if (j == lane || !alive || !(live >> j & 1u) || count + __float_as_uint(a.w) > kClusterCap) return kInf;
-        return merge(box, AABB{{a.x, a.y, a.z}, {b.x, b.y, b.z}}).half_area();
+        const float ex = fmaxf(box.hi.x, b.x) - fminf(box.lo.x, a.x);
+        const float ey = fmaxf(box.hi.y, b.y) - fminf(box.lo.y, a.y);
+        const float ez = fmaxf(box.hi.z, b.z) - fminf(box.lo.z, a.z);
+        const float area = ex * ey + ey * ez + ez * ex;
+        const bool may = j != lane && (alive ? count : kDead) + __float_as_uint(a.w) <= kClusterCap;
+        key[j * (kWarp + 1) + lane] = may ? accel::cluster_pair_key(area, j) : accel::kNoClusterPair;
+        key[lane * (kWarp + 1) + j] = may ? accel::cluster_pair_key(area, lane) : accel::kNoClusterPair;
     };
     put_box();
-    uint32_t live = __ballot_sync(~0u, alive);
     __syncwarp();
-    area[lane * (kWarp + 1) + lane] = kInf;
-    for (uint32_t d = 1; d <= kWarp / 2; ++d) {  // every pair once (at d = 16 twice, the same value)
-        const uint32_t j = (lane + d) % kWarp;
-        const float a = pair_area(j, live);
-        area[j * (kWarp + 1) + lane] = a;
-        area[lane * (kWarp + 1) + j] = a;
-    }
+    key[lane * (kWarp + 1) + lane] = accel::kNoClusterPair;
+    for (uint32_t d = 1; d <= kWarp / 2; ++d) put_pair((lane + d) % kWarp);  // each pair once (d = 16 twice)
     __syncwarp();
     for (;;) {
-        float best = kInf;
-        uint32_t nn = kWarp;
-        for (uint32_t j = 0; j < kWarp; ++j) {  // lowest lane first on equal areas
-            const float a = area[j * (kWarp + 1) + lane];
-            if (a < best) {
-                best = a;
-                nn = j;
-            }
-        }
-        if (!alive) nn = kWarp;
+        uint32_t least = accel::kNoClusterPair;
+        for (uint32_t j = 0; j < kWarp; ++j) least = min(least, key[j * (kWarp + 1) + lane]);
+        const uint32_t nn = least == accel::kNoClusterPair || !alive ? kWarp : least & (kWarp - 1);
+        const float best = accel::cluster_key_area(least);
         const uint32_t nn_of_nn = __shfl_sync(~0u, nn, int(nn % kWarp));
         const float4 oa = lo4[w][nn % kWarp], ob = hi4[w][nn % kWarp];
         const AABB other{{oa.x, oa.y, oa.z}, {ob.x, ob.y, ob.z}};
@@ -1710,20 +1724,16 @@ __global__ void __launch_bounds__(kBlock)
             alive = false;
             count = 0;
             box = AABB::empty();
+            put_box();
         }
         const uint32_t gone = __ballot_sync(~0u, taken);
-        live &= ~gone;
         __syncwarp();
-        for (uint32_t rest = grew; rest; rest &= rest - 1) {  // the grown clusters' pairs anew
-            const uint32_t i = uint32_t(__ffs(int(rest))) - 1;
-            const float a = pair_area(i, live);
-            area[i * (kWarp + 1) + lane] = a;
-            area[lane * (kWarp + 1) + i] = a;
-        }
+        for (uint32_t rest = grew; rest; rest &= rest - 1)  // the grown clusters' pairs anew
+            put_pair(uint32_t(__ffs(int(rest))) - 1);
         for (uint32_t rest = gone; rest; rest &= rest - 1) {  // and no pair with the merged-away ones
             const uint32_t i = uint32_t(__ffs(int(rest))) - 1;
-            area[i * (kWarp + 1) + lane] = kInf;
-            area[lane * (kWarp + 1) + i] = kInf;
+            key[i * (kWarp + 1) + lane] = accel::kNoClusterPair;
+            key[lane * (kWarp + 1) + i] = accel::kNoClusterPair;
         }
         __syncwarp();
     }
