@@ -138,7 +138,7 @@ AccelStructure finish_bvh(const scene::TriangleMesh& mesh, const StructureSpec& 
                           AccelStructure b, const std::string& path, accel::Bvh2* built = nullptr) {
     const std::string builder = accel::builder_name(spec.kind());
     accel::ValidateOptions vo;
-    vo.allow_duplicates = spec.kind() == accel::BuilderKind::kSbvh;
+    vo.allow_duplicates = accel::splits_references(spec.kind());
     const std::string err = accel::validate(b.result.tree, mesh, spec.options.config, vo);
     if (!err.empty())
         throw Error((path.empty() ? "builder '" + builder + "' produced" : "structure file '" + path + "' holds") +
@@ -313,7 +313,7 @@ AccelStructure build_structure(const scene::InstancedScene& placed, const Struct
     AccelStructure b;
     b.spec = spec;
     accel::ValidateOptions vo;
-    vo.allow_duplicates = spec.kind() == accel::BuilderKind::kSbvh;
+    vo.allow_duplicates = accel::splits_references(spec.kind());
     const auto t0 = std::chrono::steady_clock::now();
     {
         auto st = begin(stage, "building " + std::to_string(scene::placed_mesh_count(placed)) + " " + spec.builder +

@@ -32,6 +32,11 @@ inline bool uses_radius(BuilderKind kind) { return kind == BuilderKind::kPloc ||
 /// Whether `kind` takes a cluster alpha (gpu-binned).
 inline bool uses_clusters(BuilderKind kind) { return kind == BuilderKind::kGpuBinned; }
 
+/// Whether `kind` may reference a triangle more than once (SBVH's spatial splits), so that its
+/// trees are validated with ValidateOptions::allow_duplicates; every other builder's reference
+/// each triangle exactly once.
+inline bool splits_references(BuilderKind kind) { return kind == BuilderKind::kSbvh; }
+
 /// "binned", "sweep", "sbvh", "lbvh", "ploc", "hploc" or "gpu-binned"; throws bvhlab::Error otherwise.
 BuilderKind parse_builder_kind(const std::string& name);
 const char* builder_name(BuilderKind kind);

@@ -526,6 +526,10 @@ TEST(GpuBuilderOptions, NamesRangesAndTheCpuPath) {
     EXPECT_FALSE(runs_on_gpu(BuilderKind::kSbvh));
     EXPECT_TRUE(uses_radius(BuilderKind::kPloc));
     EXPECT_FALSE(uses_radius(BuilderKind::kLbvh));
+    // Only SBVH's trees may reference a triangle twice: every other tree is validated strictly.
+    for (BuilderKind k : {BuilderKind::kBinned, BuilderKind::kSweep, BuilderKind::kSbvh, BuilderKind::kLbvh,
+                          BuilderKind::kPloc, BuilderKind::kHploc, BuilderKind::kGpuBinned})
+        EXPECT_EQ(splits_references(k), k == BuilderKind::kSbvh) << builder_name(k);
     BuilderOptions o;
     o.morton_bits = 31;
     EXPECT_NE(options_problem(o).find("morton_bits 31"), std::string::npos);
