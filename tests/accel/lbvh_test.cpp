@@ -23,7 +23,6 @@
 #include "scene/io/procedural.h"
 #include "tests/support/test_support.h"
 #include "traversal/factory.h"
-#include "traversal/factory.h"
 #include "traversal/gpu/gpu_builder.h"
 
 namespace bvhlab::accel {

@@ -1033,8 +1033,10 @@ __device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80
 constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
-    sah_bin(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, const uint32_t* __restrict__ first,
-            SahOrder order, const AABB* __restrict__ tri_boxes, SahBin* bins, uint32_t* __restrict__ chunk_counts) {
+    sah_bin(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
+            const uint32_t* __restrict__ first, SahOrder order, const AABB* __restrict__ tri_boxes, SahBin* bins,
+            uint32_t* __restrict__ chunk_counts, uint32_t* __restrict__ next_count) {
+    if (blockIdx.x == 0 && threadIdx.x == 0) *next_count = 0;  // for sah_split's pushes, which come after
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     __shared__ uint32_t lo[kBinSets][3 * kSahBins][3], hi[kBinSets][3 * kSahBins][3];
@@ -1200,20 +1202,22 @@ __global__ void __launch_bounds__(kBlock)
 }
 
 /// The stable partition of each chunk into the other order buffer (left side from the task's
-/// first position, right side from m; `lefts` scanned over all chunks), the children's centroid
+/// first position, after the lefts of the task's chunks before it, which the block sums; right
+/// side from m), the children's centroid
 /// bounds added to, and one-triangle children's triangles written to final_ids. The block reads
 /// its chunk in kSahPerThread coalesced rounds; each triangle's place among the lefts comes from
 /// the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
     sah_scatter(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
                 const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits, SahOrder order,
-                const Vec3* __restrict__ centres, const uint32_t* __restrict__ lefts_before,
+                const Vec3* __restrict__ centres, const uint32_t* __restrict__ lefts,
                 uint32_t* __restrict__ final_ids) {
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     constexpr uint32_t kWarps = kBlock / kWarp;
     __shared__ uint32_t before[kSahPerThread][kWarps];  // lefts counted before each round and warp
     __shared__ uint32_t side_box[2][6];                 // the children's centroid bounds, ordered bits
+    __shared__ uint32_t task_lefts[kWarps];             // per warp: lefts of the task's chunks before this one
     const SahChunk c(tasks, first, count);
     const SahTask& t = tasks[c.task];
     const SahSplit s = splits[c.task];
@@ -1243,9 +1247,14 @@ __global__ void __launch_bounds__(kBlock)
         ballots[r] = __ballot_sync(~0u, l);
         if (lane == 0) before[r][warp] = __popc(ballots[r]);
     }
+    uint32_t part = 0;  // the task's chunks before this one, their lefts (sah_lefts)
+    for (uint32_t k = first[c.task] + threadIdx.x; k < blockIdx.x; k += kBlock) part += lefts[k];
+    part = __reduce_add_sync(~0u, part);
+    if (lane == 0) task_lefts[warp] = part;
     __syncthreads();
     if (threadIdx.x == 0) {  // exclusive scan over rounds, then warps
-        uint32_t sum = lefts_before[blockIdx.x] - lefts_before[first[c.task]];
+        uint32_t sum = 0;
+        for (uint32_t w = 0; w < kWarps; ++w) sum += task_lefts[w];
         for (uint32_t r = 0; r < kSahPerThread; ++r)
             for (uint32_t w = 0; w < kWarps; ++w) {
                 const uint32_t k = before[r][w];
@@ -1625,10 +1634,11 @@ struct Layout {
 
 // --- Clusters for binned SAH (BuilderOptions::cluster_alpha; accel::clustered_binned_reference): the Morton order in
 // chunks of a warp; in each, rounds in which every cluster finds the cluster whose union with it has the least area
-// (accel::cluster_pair_key: to 2^-18 relative, ties to the lower lane) among those it may join (at most kClusterCap triangles together), and mutual pairs merge
-// when the merge is nearly free (the union's half area at most alpha times the larger one's), until a round merges
-// nothing. Binned SAH then runs over the clusters, and each cluster's merges become the nodes below it. Node ids stay n
-// + m - 1 (every subtree a range of the final order): a merge's split is at its right cluster's first triangle.
+// (accel::cluster_pair_key: to 2^-18 relative, ties to the lower lane) among those it may join (at most kClusterCap
+// triangles together), and mutual pairs merge when the merge is nearly free (the union's half area at most alpha times
+// the larger one's), until a round merges nothing. Binned SAH then runs over the clusters, and each cluster's merges
+// become the nodes below it. Node ids stay n + m - 1 (every subtree a range of the final order): a merge's split is
+// at its right cluster's first triangle.
 
 constexpr uint32_t kClusterCap = accel::kMaxClusterTriangles;
 constexpr uint32_t kMergeRef = 0x80000000u;  ///< a cluster reference to an interior node (by its right-first triangle)
@@ -1763,13 +1773,13 @@ __global__ void __launch_bounds__(kBlock)
 }
 
 /// Cluster k (k-th head in chunk order; chunk_end: the clusters up to each chunk's end) at its
-/// place: its box, centre and info, and the centres' bounds (a block's reduced, then atomics).
+/// place: its box, centre and info, and the centres' bounds (a block's reduced, then atomics: a
+/// few blocks a SM, each slot a grid apart, so few atomics meet on the bounds).
 __global__ void __launch_bounds__(kBlock)
     cluster_compact(uint32_t n, const uint32_t* __restrict__ chunk_end, ClusterOut in, AABB* __restrict__ boxes,
                     Vec3* __restrict__ centres, uint4* __restrict__ info, AABB* __restrict__ bounds) {
-    const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     AABB cb = AABB::empty();
-    if (s < n) {
+    for (uint32_t s = blockIdx.x * blockDim.x + threadIdx.x; s < n; s += gridDim.x * blockDim.x) {
         const uint32_t chunk = s / kWarp, lane = s % kWarp, heads = in.mask[chunk];
         if (heads >> lane & 1u) {
             const uint32_t k = chunk_end[chunk] - __popc(heads) + __popc(heads & ((1u << lane) - 1u));
@@ -2021,8 +2031,8 @@ public:
     Readback(const Readback&) = delete;
     Readback& operator=(const Readback&) = delete;
     void copy(int slot, const uint32_t* d, size_t words) {
-        BVHLAB_CUDA_CHECK(cudaMemcpyAsync(h_ + slot * kWords, d, std::min(words, kWords) * sizeof(uint32_t),
-                                          cudaMemcpyDeviceToHost));
+        BVHLAB_CUDA_CHECK(
+            cudaMemcpyAsync(h_ + slot * kWords, d, std::min(words, kWords) * sizeof(uint32_t), cudaMemcpyDeviceToHost));
         BVHLAB_CUDA_CHECK(cudaEventRecord(e_[slot]));
     }
     const uint32_t* wait(int slot) {
@@ -2097,7 +2107,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
-    DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_lefts_scan(s_chunks), final_ids(sah ? n : 0);
+    DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), final_ids(sah ? n : 0);
     DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
@@ -2139,9 +2149,6 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         cub::DeviceScan::ExclusiveSum(nullptr, scan_bytes, layout_flags_.data(), layout_scan.data(), int(nodes)));
     if (sah) {
         size_t b = 0;
-        BVHLAB_CUDA_CHECK(
-            cub::DeviceScan::ExclusiveSum(nullptr, b, s_lefts.data(), s_lefts_scan.data(), int(s_chunks)));
-        scan_bytes = std::max(scan_bytes, b);
         BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, b, tk, ti, int(s_tiny.size()), 0, 5));
         sort_bytes = std::max(sort_bytes, b);
         if (clustered) {
@@ -2168,8 +2175,6 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
     if (sah) detail::fill_device_bytes(s_words.data(), 0, s_words.bytes());
-    // Binned SAH's level scans run over a bound on the chunks: the rest of the lefts are zeros.
-    if (sah) detail::fill_device_bytes(s_lefts.data(), 0, s_lefts.bytes());
     std::optional<Readback> readback;  // binned SAH's level counts
     if (sah) readback.emplace();
     if (clustered) detail::fill_device_bytes(c_record.data(), 0xff, c_record.bytes());
@@ -2234,18 +2239,14 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                 const uint32_t* now = s_words.data() + 4 + k % 2;
                 uint32_t* after = s_words.data() + 4 + (k + 1) % 2;
                 sah_bin<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), order, pboxes, s_bins.data(),
-                                                           s_chunk_counts.data());
-                set_word<<<1, 1>>>(after, 0);
+                                                           s_chunk_counts.data(), after);
                 sah_split<<<unsigned((grid_tasks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
                     level, now, s_bins.data(), s_splits.data(), next, after, s_small.data(), s_words.data() + 1, m,
                     kids, proot);
                 sah_lefts<<<unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
                     level, now, s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
-                BVHLAB_CHECK_LAUNCH();
-                BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, s_lefts.data(),
-                                                                s_lefts_scan.data(), int(grid_chunks)));
                 sah_scatter<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), s_splits.data(), order,
-                                                               pcentres, s_lefts_scan.data(), fin);
+                                                               pcentres, s_lefts.data(), fin);
                 sah_chunks<<<1, 1024>>>(next, after, s_first.data(), s_words.data() + 2);
                 BVHLAB_CHECK_LAUNCH();
                 readback->copy(int(k % 2), s_words.data(), s_words.size());
@@ -2282,8 +2283,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(
                 cub::DeviceScan::InclusiveSum(scratch.data(), scan_bytes, c_count.data(), c_end.data(), int(chunks)));
-            cluster_compact<<<grid_for(n), kBlock>>>(n, c_end.data(), co, c_boxes.data(), c_centres.data(),
-                                                     c_info.data(), c_bounds.data());
+            cluster_compact<<<box_grid, kBlock>>>(n, c_end.data(), co, c_boxes.data(), c_centres.data(), c_info.data(),
+                                                  c_bounds.data());
             BVHLAB_CHECK_LAUNCH();
             uint32_t c = 0;  // the clusters: the last chunk's end
             detail::copy_to_host(&c, c_end.data() + chunks - 1, sizeof c);
