@@ -28,6 +28,16 @@ bench() {  # scene names...
         $B bench $s ${OPTS[$name]} --device gpu --kernel dynamic-speculative-fma --types primary,diffuse --json -q 2>>$OUT/err.txt | tag $name >> $OUT/bench.jsonl
     done
 }
+if [[ $phases == *,alltests,* ]]; then
+    $R/b/bin/bvhlab_gpu_tests --gtest_filter='-GpuRender.DumpedRaysOfEveryBounceVerifyAgainstEmbree' > $OUT/gpu-tests.txt 2>&1
+    echo "gpu tests rc=$? $(grep -E '^\[  (PASSED|FAILED|SKIPPED)' $OUT/gpu-tests.txt | tr '\n' ' ') $(date +%T)" >> $OUT/log.txt
+fi
+if [[ $phases == *,fbrec,* ]]; then
+    mkdir -p $S/furball && python3 "$here/rebuild.py" "$here/furball-v.xz" $S/furball/furball.obj
+    for round in 1 2; do builds furball gpu-binned c130 c150 hploc; done
+    bench furball binned gpu-binned c130 c150 hploc
+    echo "fbrec done $(date +%T)" >> $OUT/log.txt
+fi
 if [[ $phases == *,ctest,* ]]; then
     $R/b/bin/bvhlab_gpu_tests --gtest_filter='GpuBuilder.*:GpuReinsertion.*' > $OUT/gpu-tests-builders.txt 2>&1; echo "builder tests rc=$? $(date +%T)" >> $OUT/log.txt
 fi
