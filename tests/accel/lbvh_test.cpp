@@ -402,6 +402,26 @@ TEST(TriangleClusters, NearlyCoincidentNeighboursMergeUpToTheCap) {
     EXPECT_THROW(triangle_clusters(scene::TriangleMesh{}, 1.3f), Error);
 }
 
+TEST(TriangleClusters, PairKeysOrderAreasThenPlacesAtAnyScale) {
+    // The least area first, then the lower place; areas to 2^-18 relative, so nearly equal
+    // areas tie and the place decides.
+    EXPECT_LT(cluster_pair_key(1.0f, 31), cluster_pair_key(2.0f, 0));
+    EXPECT_LT(cluster_pair_key(1.0f, 1), cluster_pair_key(1.0f, 2));
+    // One ulp apart is a tie: the lower place wins with the larger area.
+    EXPECT_LT(cluster_pair_key(std::nextafter(1.0f, 2.0f), 0), cluster_pair_key(1.0f, 1));
+    EXPECT_LT(cluster_pair_key(1.0f, 0), cluster_pair_key(1.0f, 1));
+    EXPECT_EQ(cluster_pair_key(1.0f, 7) & 31u, 7u);
+    EXPECT_EQ(cluster_key_area(cluster_pair_key(1.5f, 7)), 1.5f);
+    EXPECT_EQ(cluster_key_area(cluster_pair_key(0.0f, 3)), 0.0f);
+    // Every finite area has a key, whatever the scene's scale; no key for what is not one.
+    for (const float a : {1e-30f, 34.0f, 1e6f, 1e30f, 3e38f}) {
+        EXPECT_NE(cluster_pair_key(a, 0), kNoClusterPair) << a;
+        EXPECT_LT(cluster_pair_key(a, 0), cluster_pair_key(a * 1.5f < 3.4e38f ? a * 1.5f : a, 1)) << a;
+    }
+    for (const float bad : {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(), -1.0f})
+        EXPECT_EQ(cluster_pair_key(bad, 0), kNoClusterPair) << bad;
+}
+
 TEST(ClusteredBinnedReference, ClustersBecomeSubtreesUnderBinnedSplits) {
     for (auto kind : {scene::ProceduralKind::kSoup, scene::ProceduralKind::kStructured}) {
         const scene::TriangleMesh mesh = scene::make_procedural(kind, 3000, 5);
