@@ -245,8 +245,9 @@ std::vector<RefCluster> make_clusters(const scene::TriangleMesh& mesh, float alp
                 for (size_t j = 0; j < k; ++j) {
                     if (j == i || c[i].tris.size() + c[j].tris.size() > kMaxClusterTriangles) continue;
                     const uint32_t key = cluster_pair_key(merge(c[i].box, c[j].box).half_area(), uint32_t(j));
-                    if (key < least) least = key, nn[i] = j, best[i] = cluster_key_area(key);
+                    if (key < least) least = key, nn[i] = j;
                 }
+                if (least != kNoClusterPair) best[i] = cluster_key_area(least);
             }
             std::vector<char> gone(k, 0);
             bool merged = false;

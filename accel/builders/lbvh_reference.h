@@ -54,10 +54,9 @@ RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, in
 /// the cluster whose union with it has the least half area (to 2^-18 relative, on equal areas the
 /// lower place: cluster_pair_key) among those it may join (at most kMaxClusterTriangles together),
 /// and each mutual pair whose union's half area (that key's) is at most alpha times the larger
-/// one's merges, the lower place keeping
-/// the cluster with its own triangles first; until a round merges nothing. The clusters in order
-/// of chunk and place, each as its triangle ids. Throws bvhlab::Error for an empty mesh or an
-/// alpha below 1.
+/// one's merges, the lower place keeping the cluster with its own triangles first; until a round
+/// merges nothing. The clusters in order of chunk and place, each as its triangle ids. Throws
+/// bvhlab::Error for an empty mesh or an alpha below 1.
 std::vector<std::vector<uint32_t>> triangle_clusters(const scene::TriangleMesh& mesh, float alpha);
 
 constexpr uint32_t kMaxClusterTriangles = 16;

@@ -2100,8 +2100,9 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, (unused), PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     // Binned SAH: two lists of a level's large tasks, their splits, bins and chunks (each chunk's
-    // lefts and their scan), the small and tiny tasks, the triangles' final order, and four
-    // counters: the next level's large tasks, the small tasks, the next level's chunks, the tiny tasks.
+    // lefts), the small and tiny tasks, the triangles' final order, and counters: [1] the small
+    // tasks, [2] the next level's chunks, [3] the tiny tasks, [4] and [5] the large tasks of even
+    // and odd levels ([0] is not used).
     const size_t s_large = sah ? n / (kSahWarpTask + 1) + 1 : 0;
     const size_t s_chunks = sah ? n / kSahChunk + s_large + 1 : 0;
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
