@@ -825,11 +825,13 @@ __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, cons
 // LBVH's are of the sorted keys.
 // Large tasks (more than kSahWarpTask triangles) are split level by level, every kernel over all
 // of a level's tasks: their triangles binned in chunks (a block each, bins in shared memory, then
-// added to the task's bins, the chunk's counts per bin kept), one warp per task sweeps, and the
-// chunks partition stably (their lefts from those counts, CUB's scan, a scatter) into the other
-// order buffer. The host reads each level's task and chunk counts. Then one warp per small task
-// builds its subtree in shared memory down to tiny tasks (at most kSahSweep triangles), which one
-// thread each sweeps exactly. The tiers' costs on furball: experiments/NOTES.md, session 33.
+// added to the task's bins, the chunk's counts per bin kept), one warp of the task's last chunk to
+// finish sweeps, and the chunks partition stably (each chunk's lefts from those counts, each
+// chunk after its task's earlier chunks' lefts) into the other order buffer. Each level's grids
+// are bounded from the level before; the host reads the counts while the device runs the next
+// level. Then one warp per small task builds its subtree in shared memory down to tiny tasks (at
+// most kSahSweep triangles), which one thread each sweeps exactly. The tiers' costs on furball:
+// experiments/NOTES.md, session 33.
 
 constexpr int kSahBins = 32;  ///< a warp sweeps one axis, a lane per bin
 static_assert(kSahBins == int(kWarp), "one lane per bin");
@@ -839,6 +841,10 @@ constexpr uint32_t kSahChunk = kSahPerThread * kBlock;  ///< and per block
 constexpr uint32_t kSahSweep = 16;                      ///< exact sweep at or below (BinnedSahBuilder's)
 constexpr int kSahWarps = 4;                            ///< warps per block of the small tasks
 constexpr int kSahStack = 12;                           ///< > log2(kSahWarpTask): the smaller child first
+/// Tasks of at most this many chunks: the scatter sums the lefts of a chunk's predecessors from
+/// their bin counts; larger ones' lefts come from sah_lefts (a launch a level, as long as a task
+/// is this large).
+constexpr uint32_t kSahSumChunks = 64;
 
 struct SahTask {
     uint32_t b, e;  ///< positions in the order buffers
@@ -1027,16 +1033,82 @@ __device__ uint32_t ordered_bits(float v) {
 
 __device__ float from_ordered_bits(uint32_t u) { return __uint_as_float(u & 0x80000000u ? u & 0x7fffffffu : ~u); }
 
+/// Appends a child task (two or more triangles) to `list`; returns its centroid bounds to add to.
+__device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e, uint32_t slot, uint32_t buf) {
+    const uint32_t k = atomicAdd(count, 1u);
+    list[k] = {b, e, slot, buf, AABB::empty()};
+    return &list[k].cb;
+}
+
+/// Where a large task's split goes: the level's bins, splits and done counters, the lists (and
+/// counters) of the next level's large tasks and of the small tasks, and the hierarchy's links.
+struct SahSplitOut {
+    SahBin* bins;
+    SahSplit* splits;
+    uint32_t* done;  ///< per task: its chunks binned (the last to finish splits it, and zeroes this)
+    SahTask* next;
+    uint32_t* next_count;
+    SahTask* small;
+    uint32_t* small_count;
+    uint32_t n;
+    uint2* children;
+    uint32_t* root;
+};
+
+/// One warp: task `task`'s best split over its bins, which every chunk's block has added to (read
+/// from L2; the bins made empty again for the next level), the node linked to its parent, the
+/// children queued (large, small) or linked (leaves).
+__device__ void sah_split_task(const SahTask* __restrict__ tasks, uint32_t task, const SahSplitOut& o) {
+    const uint32_t lane = threadIdx.x & 31;
+    const SahTask t = tasks[task];
+    const SahMap map(t.cb);
+    AABB box[3];
+    uint32_t num[3];
+    bool splittable[3];
+    for (int a = 0; a < 3; ++a) {
+        SahBin* g = o.bins + (size_t(task) * 3 + a) * kSahBins + lane;
+        box[a] = {{__ldcg(&g->lo[0]), __ldcg(&g->lo[1]), __ldcg(&g->lo[2])},
+                  {__ldcg(&g->hi[0]), __ldcg(&g->hi[1]), __ldcg(&g->hi[2])}};
+        num[a] = __ldcg(&g->count);
+        *g = SahBin::empty();
+        splittable[a] = map.scale[a] > 0.0f;
+    }
+    const WarpSplit best = sweep_bins_warp<3>(
+        [&](int a, AABB& bx, uint32_t& c) {
+            bx = box[a];
+            c = num[a];
+        },
+        splittable);
+    const int axis = best.axis, bin = best.bin;
+    const uint32_t left = best.left;
+    if (lane != 0) return;
+    const uint32_t m = axis >= 0 ? t.b + left : t.b + (t.e - t.b) / 2;
+    const uint32_t id = o.n + m - 1;
+    set_link(o.children, o.root, t.slot, id);
+    SahSplit s{axis, bin, m, 0, {nullptr, nullptr}};
+    const uint32_t range[3] = {t.b, m, t.e};
+    for (int side = 0; side < 2; ++side) {
+        const uint32_t b = range[side], e = range[side + 1], slot = id << 1 | uint32_t(side);
+        if (e - b == 1)
+            set_link(o.children, o.root, slot, b);
+        else if (e - b > kSahWarpTask)
+            s.child_cb[side] = sah_push(o.next, o.next_count, b, e, slot, 1 - t.buf);
+        else
+            s.child_cb[side] = sah_push(o.small, o.small_count, b, e, slot, 1 - t.buf);
+    }
+    o.splits[task] = s;
+}
+
 /// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
 /// address), runs of neighbours in one bin merged first, then adds them to its task's bins and keeps the chunk's counts
-/// per bin (its lefts, once the split is known).
+/// per bin (its lefts, once the split is known). The last of a task's chunks to finish splits the task.
 constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
     sah_bin(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
-            const uint32_t* __restrict__ first, SahOrder order, const AABB* __restrict__ tri_boxes, SahBin* bins,
-            uint32_t* __restrict__ chunk_counts, uint32_t* __restrict__ next_count) {
-    if (blockIdx.x == 0 && threadIdx.x == 0) *next_count = 0;  // for sah_split's pushes, which come after
+            const uint32_t* __restrict__ first, SahOrder order, const AABB* __restrict__ tri_boxes,
+            uint32_t* __restrict__ chunk_counts, SahSplitOut out) {
+    SahBin* bins = out.bins;
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     __shared__ uint32_t lo[kBinSets][3 * kSahBins][3], hi[kBinSets][3 * kSahBins][3];
@@ -1126,63 +1198,25 @@ __global__ void __launch_bounds__(kBlock)
         }
         atomicAdd(&g->count, total);
     }
-}
-
-/// Appends a child task (two or more triangles) to `list`; returns its centroid bounds to add to.
-__device__ AABB* sah_push(SahTask* list, uint32_t* count, uint32_t b, uint32_t e, uint32_t slot, uint32_t buf) {
-    const uint32_t k = atomicAdd(count, 1u);
-    list[k] = {b, e, slot, buf, AABB::empty()};
-    return &list[k].cb;
-}
-
-/// One warp per large task: the best split over its bins (the bins made empty again for the next
-/// level), the node linked to its parent, the children queued (large, small) or linked (leaves).
-__global__ void __launch_bounds__(kBlock)
-    sah_split(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, SahBin* bins,
-              SahSplit* __restrict__ splits, SahTask* next, uint32_t* next_count, SahTask* small, uint32_t* small_count,
-              uint32_t n, uint2* children, uint32_t* root) {
-    const uint32_t task = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
-    if (task >= *task_count) return;  // whole warps
-    const SahTask t = tasks[task];
-    const SahMap map(t.cb);
-    AABB box[3];
-    uint32_t num[3];
-    bool splittable[3];
-    for (int a = 0; a < 3; ++a) {
-        SahBin* g = bins + (size_t(task) * 3 + a) * kSahBins + lane;
-        const SahBin sb = *g;
-        *g = SahBin::empty();
-        box[a] = {{sb.lo[0], sb.lo[1], sb.lo[2]}, {sb.hi[0], sb.hi[1], sb.hi[2]}};
-        num[a] = sb.count;
-        splittable[a] = map.scale[a] > 0.0f;
+    // The task's last chunk to finish splits it: each block's bin atomics made visible before its
+    // count of the task's chunks goes up.
+    __shared__ bool last;
+    __threadfence();
+    __syncthreads();
+    if (threadIdx.x == 0) {
+        const uint32_t chunks = first[c.task + 1] - first[c.task];
+        last = atomicAdd(&out.done[c.task], 1u) == chunks - 1;
+        if (last) out.done[c.task] = 0;  // for the next level's task c.task
     }
-    const WarpSplit best = sweep_bins_warp<3>(
-        [&](int a, AABB& bx, uint32_t& c) {
-            bx = box[a];
-            c = num[a];
-        },
-        splittable);
-    const int axis = best.axis, bin = best.bin;
-    const uint32_t left = best.left;
-    if (lane != 0) return;
-    const uint32_t m = axis >= 0 ? t.b + left : t.b + (t.e - t.b) / 2;
-    const uint32_t id = n + m - 1;
-    set_link(children, root, t.slot, id);
-    SahSplit s{axis, bin, m, 0, {nullptr, nullptr}};
-    const uint32_t range[3] = {t.b, m, t.e};
-    for (int side = 0; side < 2; ++side) {
-        const uint32_t b = range[side], e = range[side + 1], slot = id << 1 | uint32_t(side);
-        if (e - b == 1)
-            set_link(children, root, slot, b);
-        else if (e - b > kSahWarpTask)
-            s.child_cb[side] = sah_push(next, next_count, b, e, slot, 1 - t.buf);
-        else
-            s.child_cb[side] = sah_push(small, small_count, b, e, slot, 1 - t.buf);
+    __syncthreads();
+    if (last && threadIdx.x < kWarp) {
+        __threadfence();
+        sah_split_task(tasks, c.task, out);
     }
-    splits[task] = s;
 }
 
-/// Each chunk's count of triangles going left, from its counts per bin (one warp per chunk).
+/// Each chunk's count of triangles going left, from its counts per bin (one warp per chunk), for
+/// the tasks of more than kSahSumChunks chunks.
 __global__ void __launch_bounds__(kBlock)
     sah_lefts(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
               const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits,
@@ -1191,6 +1225,7 @@ __global__ void __launch_bounds__(kBlock)
     const uint32_t count = *task_count;
     if (chunk >= first[count]) return;  // whole warps
     const SahChunk c(tasks, first, count, chunk);
+    if (first[c.task + 1] - first[c.task] <= kSahSumChunks) return;
     const SahSplit s = splits[c.task];
     if (s.axis < 0) {  // by place
         if (lane == 0) lefts[chunk] = s.m > c.b ? min(s.m, c.e) - c.b : 0;
@@ -1203,15 +1238,14 @@ __global__ void __launch_bounds__(kBlock)
 
 /// The stable partition of each chunk into the other order buffer (left side from the task's
 /// first position, after the lefts of the task's chunks before it, which the block sums; right
-/// side from m), the children's centroid
-/// bounds added to, and one-triangle children's triangles written to final_ids. The block reads
-/// its chunk in kSahPerThread coalesced rounds; each triangle's place among the lefts comes from
-/// the warps' ballots, counted per round and warp.
+/// side from m), the children's centroid bounds added to, and one-triangle children's triangles
+/// written to final_ids. The block reads its chunk in kSahPerThread coalesced rounds; each triangle's place among the
+/// lefts comes from the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
     sah_scatter(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
                 const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits, SahOrder order,
-                const Vec3* __restrict__ centres, const uint32_t* __restrict__ lefts,
-                uint32_t* __restrict__ final_ids) {
+                const Vec3* __restrict__ centres, const uint32_t* __restrict__ chunk_counts,
+                const uint32_t* __restrict__ lefts, uint32_t* __restrict__ final_ids) {
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     constexpr uint32_t kWarps = kBlock / kWarp;
@@ -1247,8 +1281,18 @@ __global__ void __launch_bounds__(kBlock)
         ballots[r] = __ballot_sync(~0u, l);
         if (lane == 0) before[r][warp] = __popc(ballots[r]);
     }
-    uint32_t part = 0;  // the task's chunks before this one, their lefts (sah_lefts)
-    for (uint32_t k = first[c.task] + threadIdx.x; k < blockIdx.x; k += kBlock) part += lefts[k];
+    // The lefts of the task's chunks before this one: by place, the split's distance from the
+    // task's start; else from sah_lefts, or for a task of at most kSahSumChunks chunks from their
+    // counts of the bins <= s.bin (sah_bin's), a warp per chunk and a lane per bin.
+    uint32_t part = 0;
+    if (s.axis < 0) {
+        part = threadIdx.x == 0 ? min(s.m, c.b) - t.b : 0;
+    } else if (first[c.task + 1] - first[c.task] > kSahSumChunks) {
+        for (uint32_t k = first[c.task] + threadIdx.x; k < blockIdx.x; k += kBlock) part += lefts[k];
+    } else if (lane <= uint32_t(s.bin)) {
+        const uint32_t* counts = chunk_counts + size_t(s.axis) * kSahBins + lane;
+        for (uint32_t k = first[c.task] + warp; k < blockIdx.x; k += kWarps) part += counts[size_t(k) * 3 * kSahBins];
+    }
     part = __reduce_add_sync(~0u, part);
     if (lane == 0) task_lefts[warp] = part;
     __syncthreads();
@@ -1297,12 +1341,14 @@ __global__ void __launch_bounds__(kBlock)
 }
 
 /// The next level's chunks: each large task's first chunk (first[count] = the chunk count, also
-/// in *total). One block.
+/// in *total), and the most chunks of one task in *most. One block.
 __global__ void __launch_bounds__(1024)
     sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, uint32_t* __restrict__ first,
-               uint32_t* __restrict__ total) {
+               uint32_t* __restrict__ total, uint32_t* __restrict__ most, uint32_t* __restrict__ done_count) {
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
+    __shared__ uint32_t largest;
+    if (threadIdx.x == 0) largest = 0;
     const uint32_t count = *task_count;
     uint32_t base = 0;
     for (uint32_t k0 = 0; k0 < count; k0 += 1024) {
@@ -1311,12 +1357,15 @@ __global__ void __launch_bounds__(1024)
         uint32_t before, sum;
         Scan(scratch).ExclusiveSum(chunks, before, sum);
         if (k < count) first[k] = base + before;
+        if (chunks) atomicMax(&largest, chunks);
         base += sum;
         __syncthreads();
     }
     if (threadIdx.x == 0) {
         first[count] = base;
         *total = base;
+        *most = largest;
+        *done_count = 0;  // this level's task counter: the next level's tasks' pushes start from 0
     }
 }
 
@@ -2099,17 +2148,18 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<unsigned long long> flags(ploc ? n : 0), flag_scan(ploc ? n : 0);
     DeviceBuffer<uint32_t> words(4);  // root, (H-)PLOC's node counter, (unused), PLOC's list length
     DeviceBuffer<Bvh2Node> out_nodes(inner);
-    // Binned SAH: two lists of a level's large tasks, their splits, bins and chunks (each chunk's
-    // lefts), the small and tiny tasks, the triangles' final order, and counters: [1] the small
-    // tasks, [2] the next level's chunks, [3] the tiny tasks, [4] and [5] the large tasks of even
-    // and odd levels ([0] is not used).
+    // Binned SAH: two lists of a level's large tasks, their splits, bins, first chunks and chunks
+    // binned (per task), each chunk's counts per bin and lefts, the small and tiny tasks, the
+    // triangles' final order, and counters: [1] the small tasks, [2] the next level's chunks, [3]
+    // the tiny tasks, [4] and [5] the large tasks of even and odd levels, [6] the most chunks of a
+    // task of the next level ([0] is not used).
     const size_t s_large = sah ? n / (kSahWarpTask + 1) + 1 : 0;
     const size_t s_chunks = sah ? n / kSahChunk + s_large + 1 : 0;
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
-    DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
+    DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_done(s_large), final_ids(sah ? n : 0);
+    DeviceBuffer<uint32_t> s_words(sah ? 7 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -2176,6 +2226,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     }
     detail::fill_device_bytes(words.data(), 0, words.bytes());
     if (sah) detail::fill_device_bytes(s_words.data(), 0, s_words.bytes());
+    if (sah) detail::fill_device_bytes(s_done.data(), 0, s_done.bytes());
     std::optional<Readback> readback;  // binned SAH's level counts
     if (sah) readback.emplace();
     if (clustered) detail::fill_device_bytes(c_record.data(), 0xff, c_record.bytes());
@@ -2233,30 +2284,42 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             // host enqueues level k before it knows level k's counts, then reads them (copied after
             // level k - 1) while the device runs level k; a level with no tasks does nothing.
             uint32_t tasks = m > kSahWarpTask ? 1 : 0, chunks = (m + kSahChunk - 1) / kSahChunk;
-            size_t grid_tasks = tasks, grid_chunks = chunks;
+            size_t grid_chunks = chunks;
+            // The most chunks of a task at the level enqueued next (a child has at most its parent's):
+            // sah_lefts runs while a task may have more than kSahSumChunks.
+            uint32_t most = chunks;
             SahTask* level = s_tasks.data();
             SahTask* next = s_tasks.data() + s_large;
             for (uint32_t k = 0; tasks; ++k) {
                 const uint32_t* now = s_words.data() + 4 + k % 2;
                 uint32_t* after = s_words.data() + 4 + (k + 1) % 2;
-                sah_bin<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), order, pboxes, s_bins.data(),
-                                                           s_chunk_counts.data(), after);
-                sah_split<<<unsigned((grid_tasks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, now, s_bins.data(), s_splits.data(), next, after, s_small.data(), s_words.data() + 1, m,
-                    kids, proot);
-                sah_lefts<<<unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                    level, now, s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+                const SahSplitOut split_out{s_bins.data(),
+                                            s_splits.data(),
+                                            s_done.data(),
+                                            next,
+                                            after,
+                                            s_small.data(),
+                                            s_words.data() + 1,
+                                            m,
+                                            kids,
+                                            proot};
+                sah_bin<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), order, pboxes,
+                                                           s_chunk_counts.data(), split_out);
+                if (most > kSahSumChunks)
+                    sah_lefts<<<unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
+                        level, now, s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
                 sah_scatter<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), s_splits.data(), order,
-                                                               pcentres, s_lefts.data(), fin);
-                sah_chunks<<<1, 1024>>>(next, after, s_first.data(), s_words.data() + 2);
+                                                               pcentres, s_chunk_counts.data(), s_lefts.data(), fin);
+                sah_chunks<<<1, 1024>>>(next, after, s_first.data(), s_words.data() + 2, s_words.data() + 6,
+                                        s_words.data() + 4 + k % 2);
                 BVHLAB_CHECK_LAUNCH();
                 readback->copy(int(k % 2), s_words.data(), s_words.size());
                 if (k > 0) {  // level k's counts
                     const uint32_t* w = readback->wait(int((k - 1) % 2));
                     tasks = w[4 + k % 2];
                     chunks = w[2];
+                    most = w[6];
                 }
-                grid_tasks = std::min(2 * size_t(tasks), s_large);
                 grid_chunks = std::min(size_t(chunks) + tasks, s_chunks);
                 std::swap(level, next);
             }
