@@ -58,6 +58,30 @@ struct BoxUnion {
 
 unsigned grid_for(size_t n) { return unsigned((n + kBlock - 1) / kBlock); }
 
+/// A kernel started by launch() runs its blocks as the kernel before it finishes (programmatic
+/// dependent launch, sm_90): it waits here, before it touches memory, for that kernel's end and
+/// its writes. A no-op in a kernel launched otherwise.
+__device__ __forceinline__ void wait_for_previous() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+    asm volatile("griddepcontrol.wait;" ::: "memory");
+#endif
+}
+
+/// Launches kernel k (which calls wait_for_previous first) so that the device starts it while
+/// the kernel before it in the stream ends, not after a launch's latency.
+template <typename... Params, typename... Args>
+void launch(void (*k)(Params...), unsigned grid, unsigned block, Args... args) {
+    cudaLaunchAttribute attr{};
+    attr.id = cudaLaunchAttributeProgrammaticStreamSerialization;
+    attr.val.programmaticStreamSerializationAllowed = 1;
+    cudaLaunchConfig_t config{};
+    config.gridDim = dim3(grid);
+    config.blockDim = dim3(block);
+    config.attrs = &attr;
+    config.numAttrs = 1;
+    BVHLAB_CUDA_CHECK(cudaLaunchKernelEx(&config, k, Params(args)...));
+}
+
 // Loads through L2 (not L1, which is not coherent): data that another block wrote before an
 // atomic that this thread has seen.
 __device__ AABB load_box(const AABB* b) {
@@ -326,6 +350,7 @@ __global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted
                                  const AABB* __restrict__ tri_boxes, const uint32_t* __restrict__ parent,
                                  uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
                                  LeafRule rule) {
+    wait_for_previous();
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     if (s >= n) return;
     NodeMeta m;
@@ -809,6 +834,7 @@ __device__ void emit_leaf(uint32_t node, uint32_t first, uint32_t n, const uint2
 /// mesh's order was slower, experiments/NOTES.md).
 __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, const Vec3* __restrict__ verts,
                           const uint32_t* __restrict__ idx, WoopTriangle* __restrict__ tris) {
+    wait_for_previous();
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= n) return;
     const uint32_t t = tri_ids[k];
@@ -988,6 +1014,7 @@ __device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) 
 __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
                           uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
                           uint32_t bin_count) {
+    wait_for_previous();
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     for (uint32_t k = i; k < bin_count; k += gridDim.x * blockDim.x) bins[k] = SahBin::empty();
     if (i != 0) return;
@@ -1108,6 +1135,7 @@ __global__ void __launch_bounds__(kBlock)
     sah_bin(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
             const uint32_t* __restrict__ first, SahOrder order, const AABB* __restrict__ tri_boxes,
             uint32_t* __restrict__ chunk_counts, SahSplitOut out) {
+    wait_for_previous();
     SahBin* bins = out.bins;
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
@@ -1221,6 +1249,7 @@ __global__ void __launch_bounds__(kBlock)
     sah_lefts(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
               const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits,
               const uint32_t* __restrict__ chunk_counts, uint32_t* __restrict__ lefts) {
+    wait_for_previous();
     const uint32_t chunk = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
     const uint32_t count = *task_count;
     if (chunk >= first[count]) return;  // whole warps
@@ -1246,6 +1275,7 @@ __global__ void __launch_bounds__(kBlock)
                 const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits, SahOrder order,
                 const Vec3* __restrict__ centres, const uint32_t* __restrict__ chunk_counts,
                 const uint32_t* __restrict__ lefts, uint32_t* __restrict__ final_ids) {
+    wait_for_previous();
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
     constexpr uint32_t kWarps = kBlock / kWarp;
@@ -1340,11 +1370,11 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
-/// The next level's chunks: each large task's first chunk (first[count] = the chunk count, also
-/// in *total), and the most chunks of one task in *most. One block.
+/// The next level's chunks: each large task's first chunk (first[count] = the chunk count), and
+/// for the host (mapped memory) the tasks, chunks and most chunks of one task. One block.
 __global__ void __launch_bounds__(1024)
     sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, uint32_t* __restrict__ first,
-               uint32_t* __restrict__ total, uint32_t* __restrict__ most, uint32_t* __restrict__ done_count) {
+               uint32_t* __restrict__ done_count, uint32_t* host) {
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
     __shared__ uint32_t largest;
@@ -1363,9 +1393,11 @@ __global__ void __launch_bounds__(1024)
     }
     if (threadIdx.x == 0) {
         first[count] = base;
-        *total = base;
-        *most = largest;
         *done_count = 0;  // this level's task counter: the next level's tasks' pushes start from 0
+        host[0] = count;
+        host[1] = base;
+        host[2] = largest;
+        __threadfence_system();
     }
 }
 
@@ -1376,6 +1408,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
     sah_small(const SahTask* __restrict__ tasks, uint32_t* words, SahOrder order, const AABB* __restrict__ tri_boxes,
               const Vec3* __restrict__ centres, uint32_t n, uint2* children, uint32_t* root,
               uint32_t* __restrict__ final_ids, uint3* __restrict__ tiny) {
+    wait_for_previous();
     __shared__ uint32_t ids_of[kSahWarps][kSahWarpTask], tmp_of[kSahWarps][kSahWarpTask];
     __shared__ uint32_t lo_of[kSahWarps][3 * kSahBins][3], hi_of[kSahWarps][3 * kSahBins][3];  // ordered bits
     __shared__ uint32_t num_of[kSahWarps][3 * kSahBins];
@@ -1490,6 +1523,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
 /// The tiny tasks' sort keys (the largest first; past the last task, last) and their numbers.
 __global__ void tiny_keys(uint32_t total, const uint3* __restrict__ tiny, const uint32_t* __restrict__ words,
                           uint8_t* __restrict__ keys, uint32_t* __restrict__ index) {
+    wait_for_previous();
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= total) return;
     keys[k] = k < words[3] ? uint8_t(kSahSweep - (tiny[k].y - tiny[k].x)) : uint8_t(kSahSweep);
@@ -1513,6 +1547,7 @@ __global__ void __launch_bounds__(kTinyBlock)
     sah_tiny(const uint3* __restrict__ tiny, const uint32_t* __restrict__ by_size, const uint32_t* __restrict__ words,
              const AABB* __restrict__ tri_boxes, uint32_t n, uint2* children, uint32_t* root,
              uint32_t* __restrict__ final_ids) {
+    wait_for_previous();
     __shared__ float corner[6][kSahSweep][kTinyBlock];
     __shared__ float left_area[kSahSweep][kTinyBlock];
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
@@ -1705,6 +1740,7 @@ struct ClusterOut {
 __global__ void __launch_bounds__(kBlock)
     cluster_chunks(uint32_t n, const uint32_t* __restrict__ sorted_ids, const AABB* __restrict__ tri_boxes, float alpha,
                    ClusterOut out) {
+    wait_for_previous();
     // A cluster's triangles as a list through next_ from the lane that holds it (its first) to
     // its tail; at the end, the chunk's triangles in cluster order.
     __shared__ uint8_t next_[kBlock / kWarp][kWarp], order_[kBlock / kWarp][kWarp];
@@ -1827,6 +1863,7 @@ __global__ void __launch_bounds__(kBlock)
 __global__ void __launch_bounds__(kBlock)
     cluster_compact(uint32_t n, const uint32_t* __restrict__ chunk_end, ClusterOut in, AABB* __restrict__ boxes,
                     Vec3* __restrict__ centres, uint4* __restrict__ info, AABB* __restrict__ bounds) {
+    wait_for_previous();
     AABB cb = AABB::empty();
     for (uint32_t s = blockIdx.x * blockDim.x + threadIdx.x; s < n; s += gridDim.x * blockDim.x) {
         const uint32_t chunk = s / kWarp, lane = s % kWarp, heads = in.mask[chunk];
@@ -1857,6 +1894,7 @@ __global__ void cluster_expand(uint32_t c, const uint32_t* __restrict__ order, c
                                const uint32_t* __restrict__ offset, const uint32_t* __restrict__ members,
                                const uint32_t* __restrict__ tris, uint32_t* __restrict__ final_ids,
                                uint32_t* __restrict__ place) {
+    wait_for_previous();
     const uint32_t p = blockIdx.x * blockDim.x + threadIdx.x;
     if (p >= c) return;
     const uint4 x = info[order[p]];
@@ -1874,6 +1912,7 @@ __device__ uint32_t cluster_node(uint32_t ref, uint32_t n, const uint32_t* place
 /// Each merge inside a cluster as its node: id n + (its right cluster's first place) - 1.
 __global__ void cluster_nodes(uint32_t n, const uint2* __restrict__ record, const uint32_t* __restrict__ place,
                               uint2* __restrict__ children) {
+    wait_for_previous();
     const uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
     if (s >= n) return;
     const uint2 r = record[s];
@@ -1888,6 +1927,7 @@ __global__ void cluster_top(uint32_t c, uint32_t n, const uint2* __restrict__ to
                             const uint4* __restrict__ info, const uint32_t* __restrict__ offset,
                             const uint32_t* __restrict__ place, uint2* __restrict__ children,
                             uint32_t* __restrict__ root) {
+    wait_for_previous();
     const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
     if (j >= c) return;
     auto node_of = [&](uint32_t x) {
@@ -1911,6 +1951,7 @@ struct LayoutInput {
 
 /// Every node's parent from the children (PLOC and H-PLOC record none while they merge).
 __global__ void parents_of(uint32_t n, const uint2* __restrict__ children, uint32_t* __restrict__ parent) {
+    wait_for_previous();
     const uint32_t x = n + blockIdx.x * blockDim.x + threadIdx.x;
     if (x >= 2 * n - 1) return;
     const uint2 c = children[x];
@@ -1939,6 +1980,7 @@ struct LayoutOrder {
 /// leaf when an ancestor chose to be one, and only ancestors of at most max_leaf triangles can.
 __global__ void layout_flags(LayoutOrder order, uint32_t max_leaf, const uint32_t* __restrict__ parent,
                              const NodeMeta* __restrict__ meta, unsigned long long* __restrict__ flags) {
+    wait_for_previous();
     const uint32_t x = blockIdx.x * blockDim.x + threadIdx.x;
     if (x >= order.total) return;
     const NodeMeta m = meta[x];
@@ -1963,6 +2005,7 @@ __global__ void layout_flags(LayoutOrder order, uint32_t max_leaf, const uint32_
 __global__ void layout_write(LayoutOrder order, LayoutInput in, const uint32_t* __restrict__ parent, Layout out,
                              const unsigned long long* __restrict__ flags,
                              const unsigned long long* __restrict__ scan) {
+    wait_for_previous();
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= order.total) return;
     const unsigned long long f = flags[k];
@@ -2039,6 +2082,7 @@ __global__ void refit_leaves(detail::RefitInput in) {
 __global__ void set_word(uint32_t* p, uint32_t v) { *p = v; }
 
 __global__ void iota(uint32_t n, uint32_t* __restrict__ out) {
+    wait_for_previous();
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i < n) out[i] = i;
 }
@@ -2064,13 +2108,16 @@ private:
     std::vector<cudaEvent_t> e_;
 };
 
-/// Counters read back without stalling the device: copy() puts them, after the work enqueued so
-/// far, in pinned slot k; wait() waits for that copy alone. The host enqueues more work meanwhile.
+/// Binned SAH's level counts, which the device writes into mapped pinned memory (two slots: the
+/// host reads one level's while the device writes the next's). mark(k) records, after the work
+/// enqueued so far, that slot k is written; wait(k) waits for that alone. Nothing is copied in the
+/// stream.
 class Readback {
 public:
-    static constexpr size_t kWords = 8;
+    static constexpr size_t kWords = 4;
     Readback() {
-        BVHLAB_CUDA_CHECK(cudaHostAlloc(&h_, 2 * kWords * sizeof(uint32_t), cudaHostAllocDefault));
+        BVHLAB_CUDA_CHECK(cudaHostAlloc(&h_, 2 * kWords * sizeof(uint32_t), cudaHostAllocMapped));
+        BVHLAB_CUDA_CHECK(cudaHostGetDevicePointer(reinterpret_cast<void**>(&d_), h_, 0));
         for (cudaEvent_t& e : e_) BVHLAB_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
     }
     ~Readback() {
@@ -2079,18 +2126,17 @@ public:
     }
     Readback(const Readback&) = delete;
     Readback& operator=(const Readback&) = delete;
-    void copy(int slot, const uint32_t* d, size_t words) {
-        BVHLAB_CUDA_CHECK(
-            cudaMemcpyAsync(h_ + slot * kWords, d, std::min(words, kWords) * sizeof(uint32_t), cudaMemcpyDeviceToHost));
-        BVHLAB_CUDA_CHECK(cudaEventRecord(e_[slot]));
-    }
-    const uint32_t* wait(int slot) {
-        BVHLAB_CUDA_CHECK(cudaEventSynchronize(e_[slot]));
-        return h_ + slot * kWords;
+    /// Slot k as the device writes it.
+    uint32_t* slot(int k) const { return d_ + k * kWords; }
+    void mark(int k) { BVHLAB_CUDA_CHECK(cudaEventRecord(e_[k])); }
+    const uint32_t* wait(int k) {
+        BVHLAB_CUDA_CHECK(cudaEventSynchronize(e_[k]));
+        return h_ + k * kWords;
     }
 
 private:
     uint32_t* h_ = nullptr;
+    uint32_t* d_ = nullptr;
     cudaEvent_t e_[2] = {};
 };
 
@@ -2150,16 +2196,15 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     // Binned SAH: two lists of a level's large tasks, their splits, bins, first chunks and chunks
     // binned (per task), each chunk's counts per bin and lefts, the small and tiny tasks, the
-    // triangles' final order, and counters: [1] the small tasks, [2] the next level's chunks, [3]
-    // the tiny tasks, [4] and [5] the large tasks of even and odd levels, [6] the most chunks of a
-    // task of the next level ([0] is not used).
+    // triangles' final order, and counters: [1] the small tasks, [3] the tiny tasks, [4] and [5]
+    // the large tasks of even and odd levels ([0] and [2] are not used).
     const size_t s_large = sah ? n / (kSahWarpTask + 1) + 1 : 0;
     const size_t s_chunks = sah ? n / kSahChunk + s_large + 1 : 0;
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_done(s_large), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 7 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
+    DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -2252,7 +2297,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
     if (sah && n == 1) {
-        iota<<<1, 1>>>(1, final_ids.data());
+        launch(iota, 1, 1, 1, final_ids.data());
         BVHLAB_CHECK_LAUNCH();
     }
     if ((!lbvh && !sah) || n == 1) {  // the LBVH's climb makes its leaves, binned SAH's come last
@@ -2272,11 +2317,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         // in kids, the root in *proot, the primitives' final order in fin.
         const auto binned = [&](uint32_t m, const AABB* pboxes, const Vec3* pcentres, const AABB* pbounds, uint2* kids,
                                 uint32_t* proot, uint32_t* fin) {
-            iota<<<grid_for(m), kBlock>>>(m, ids.data());
+            launch(iota, grid_for(m), kBlock, m, ids.data());
             const SahOrder order{{ids.data(), ids_alt.data()}};
             const uint32_t bin_count = uint32_t(s_bins.size());
-            sah_start<<<std::min(grid_for(bin_count), 1024u), kBlock>>>(
-                m, pbounds, s_tasks.data(), s_small.data(), s_first.data(), s_words.data(), s_bins.data(), bin_count);
+            launch(sah_start, std::min(grid_for(bin_count), 1024u), kBlock, m, pbounds, s_tasks.data(), s_small.data(),
+                   s_first.data(), s_words.data(), s_bins.data(), bin_count);
             BVHLAB_CHECK_LAUNCH();
             // Large tasks level by level. Level k's kernels read its task count (words[4 + k % 2]) and
             // chunk count (first[tasks]) on the device; their grids are bounded from level k - 1's counts
@@ -2303,35 +2348,35 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                             m,
                                             kids,
                                             proot};
-                sah_bin<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), order, pboxes,
-                                                           s_chunk_counts.data(), split_out);
+                launch(sah_bin, unsigned(grid_chunks), kBlock, level, now, s_first.data(), order, pboxes,
+                       s_chunk_counts.data(), split_out);
                 if (most > kSahSumChunks)
-                    sah_lefts<<<unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock>>>(
-                        level, now, s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
-                sah_scatter<<<unsigned(grid_chunks), kBlock>>>(level, now, s_first.data(), s_splits.data(), order,
-                                                               pcentres, s_chunk_counts.data(), s_lefts.data(), fin);
-                sah_chunks<<<1, 1024>>>(next, after, s_first.data(), s_words.data() + 2, s_words.data() + 6,
-                                        s_words.data() + 4 + k % 2);
+                    launch(sah_lefts, unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock, level, now,
+                           s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+                launch(sah_scatter, unsigned(grid_chunks), kBlock, level, now, s_first.data(), s_splits.data(), order,
+                       pcentres, s_chunk_counts.data(), s_lefts.data(), fin);
+                launch(sah_chunks, 1, 1024, next, after, s_first.data(), s_words.data() + 4 + k % 2,
+                       readback->slot(int(k % 2)));
                 BVHLAB_CHECK_LAUNCH();
-                readback->copy(int(k % 2), s_words.data(), s_words.size());
+                readback->mark(int(k % 2));
                 if (k > 0) {  // level k's counts
                     const uint32_t* w = readback->wait(int((k - 1) % 2));
-                    tasks = w[4 + k % 2];
-                    chunks = w[2];
-                    most = w[6];
+                    tasks = w[0];
+                    chunks = w[1];
+                    most = w[2];
                 }
                 grid_chunks = std::min(size_t(chunks) + tasks, s_chunks);
                 std::swap(level, next);
             }
-            sah_small<<<unsigned(8 * gpu_sm_count()), kSahWarps * kWarp>>>(
-                s_small.data(), s_words.data(), order, pboxes, pcentres, m, kids, proot, fin, s_tiny.data());
-            tiny_keys<<<grid_for(s_tiny.size()), kBlock>>>(uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
-                                                           tk.Current(), ti.Current());
+            launch(sah_small, unsigned(8 * gpu_sm_count()), kSahWarps * kWarp, s_small.data(), s_words.data(), order,
+                   pboxes, pcentres, m, kids, proot, fin, s_tiny.data());
+            launch(tiny_keys, grid_for(s_tiny.size()), kBlock, uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
+                   tk.Current(), ti.Current());
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(
                 cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, tk, ti, int(s_tiny.size()), 0, 5));
-            sah_tiny<<<unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock>>>(
-                s_tiny.data(), ti.Current(), s_words.data(), pboxes, m, kids, proot, fin);
+            launch(sah_tiny, unsigned((s_tiny.size() + kTinyBlock - 1) / kTinyBlock), kTinyBlock, s_tiny.data(),
+                   ti.Current(), s_words.data(), pboxes, m, kids, proot, fin);
             BVHLAB_CHECK_LAUNCH();
         };
         if (!clustered) {
@@ -2342,19 +2387,19 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                 c_info_slot.data(), c_box_slot.data(), c_record.data()};
             const uint32_t* morton_ids = dv.Current();
             set_empty<<<1, 1>>>(c_bounds.data());
-            cluster_chunks<<<(chunks + kBlock / kWarp - 1) / (kBlock / kWarp), kBlock>>>(n, morton_ids,
-                                                                                         tri_boxes.data(), alpha, co);
+            launch(cluster_chunks, (chunks + kBlock / kWarp - 1) / (kBlock / kWarp), kBlock, n, morton_ids,
+                   tri_boxes.data(), alpha, co);
             BVHLAB_CHECK_LAUNCH();
             BVHLAB_CUDA_CHECK(
                 cub::DeviceScan::InclusiveSum(scratch.data(), scan_bytes, c_count.data(), c_end.data(), int(chunks)));
-            cluster_compact<<<box_grid, kBlock>>>(n, c_end.data(), co, c_boxes.data(), c_centres.data(), c_info.data(),
-                                                  c_bounds.data());
+            launch(cluster_compact, box_grid, kBlock, n, c_end.data(), co, c_boxes.data(), c_centres.data(),
+                   c_info.data(), c_bounds.data());
             BVHLAB_CHECK_LAUNCH();
             uint32_t c = 0;  // the clusters: the last chunk's end
             detail::copy_to_host(&c, c_end.data() + chunks - 1, sizeof c);
             uint32_t* top_root = c_words.data();
             if (c == 1) {
-                iota<<<1, 1>>>(1, c_order.data());
+                launch(iota, 1, 1, 1, c_order.data());
                 set_word<<<1, 1>>>(top_root, 0);
                 BVHLAB_CHECK_LAUNCH();
             } else {
@@ -2362,19 +2407,19 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             }
             BVHLAB_CUDA_CHECK(
                 cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, c_weights, c_offset.data(), int(c)));
-            cluster_expand<<<grid_for(c), kBlock>>>(c, c_order.data(), c_info.data(), c_offset.data(), c_members.data(),
-                                                    c_tris.data(), final_ids.data(), c_place.data());
-            cluster_nodes<<<grid_for(n), kBlock>>>(n, c_record.data(), c_place.data(), children.data());
-            cluster_top<<<grid_for(c), kBlock>>>(c, n, c_top.data(), top_root, c_order.data(), c_info.data(),
-                                                 c_offset.data(), c_place.data(), children.data(), root);
+            launch(cluster_expand, grid_for(c), kBlock, c, c_order.data(), c_info.data(), c_offset.data(),
+                   c_members.data(), c_tris.data(), final_ids.data(), c_place.data());
+            launch(cluster_nodes, grid_for(n), kBlock, n, c_record.data(), c_place.data(), children.data());
+            launch(cluster_top, grid_for(c), kBlock, c, n, c_top.data(), top_root, c_order.data(), c_info.data(),
+                   c_offset.data(), c_place.data(), children.data(), root);
             BVHLAB_CHECK_LAUNCH();
             g.clusters = c;
         }
-        parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
+        launch(parents_of, grid_for(n - 1), kBlock, n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
         detail::fill_device_bytes(visits.data(), 0, visits.bytes());
-        leaves_and_climb<<<grid_for(n), kBlock>>>(n, final_ids.data(), tri_boxes.data(), parent.data(), children.data(),
-                                                  boxes.data(), meta.data(), visits.data(), rule);
+        launch(leaves_and_climb, grid_for(n), kBlock, n, final_ids.data(), tri_boxes.data(), parent.data(),
+               children.data(), boxes.data(), meta.data(), visits.data(), rule);
         BVHLAB_CHECK_LAUNCH();
     } else if (ploc) {
         // Rounds over the whole list until a block can finish it; the host reads each round's
@@ -2407,7 +2452,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CHECK_LAUNCH();
     }
     if (!lbvh && !sah && n > 1) {  // PLOC and H-PLOC record no parents while they merge
-        parents_of<<<grid_for(n - 1), kBlock>>>(n, children.data(), parent.data());
+        launch(parents_of, grid_for(n - 1), kBlock, n, children.data(), parent.data());
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(6);
@@ -2477,16 +2522,16 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     const LayoutInput in{n, children.data(), boxes.data(), meta.data(), sorted_ids};
     const LayoutOrder order{uint32_t(nodes), !lbvh && !sah, (lbvh || sah) && (!passes || g.reinsertion_undone), root};
     {
-        layout_flags<<<grid_for(nodes), kBlock>>>(order, rule.max_leaf, parent.data(), meta.data(),
-                                                  layout_flags_.data());
+        launch(layout_flags, grid_for(nodes), kBlock, order, rule.max_leaf, parent.data(), meta.data(),
+               layout_flags_.data());
         BVHLAB_CHECK_LAUNCH();
         BVHLAB_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scratch.data(), scan_bytes, layout_flags_.data(),
                                                         layout_scan.data(), int(nodes)));
-        layout_write<<<grid_for(nodes), kBlock>>>(order, in, parent.data(), out, layout_flags_.data(),
-                                                  layout_scan.data());
+        launch(layout_write, grid_for(nodes), kBlock, order, in, parent.data(), out, layout_flags_.data(),
+               layout_scan.data());
         BVHLAB_CHECK_LAUNCH();
         if (prims.mesh) {
-            woop_maps<<<grid_for(n), kBlock>>>(n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
+            launch(woop_maps, grid_for(n), kBlock, n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
             BVHLAB_CHECK_LAUNCH();
         }
     }
@@ -2553,7 +2598,7 @@ double gpu_refit(const RefitInput& in) {
     ev.record(0);
     refit_leaves<<<grid_for(in.leaf_count), kBlock>>>(in);
     BVHLAB_CHECK_LAUNCH();
-    woop_maps<<<grid_for(in.tri_count), kBlock>>>(in.tri_count, in.tri_ids, in.verts, in.idx, in.tris);
+    launch(woop_maps, grid_for(in.tri_count), kBlock, in.tri_count, in.tri_ids, in.verts, in.idx, in.tris);
     BVHLAB_CHECK_LAUNCH();
     ev.record(1);
     ev.sync(1);
