@@ -1023,10 +1023,10 @@ __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* 
         large[0] = root;
         first[0] = 0;
         first[1] = (n + kSahChunk - 1) / kSahChunk;
-        words[2] = 1;
+        words[4] = 1;
     } else {
         small[0] = root;
-        words[0] = 1;
+        words[1] = 1;
     }
 }
 
@@ -1418,7 +1418,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
     uint32_t(*lo)[3] = lo_of[w];
     uint32_t(*hi)[3] = hi_of[w];
     uint32_t* num = num_of[w];
-    const uint32_t count = words[0];
+    const uint32_t count = words[1];
     const unsigned lt = (1u << lane) - 1;
     for (uint32_t task = blockIdx.x * kSahWarps + w; task < count; task += gridDim.x * kSahWarps) {
         const SahTask t = tasks[task];
@@ -1436,7 +1436,7 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
                     if (size == 1)
                         set_link(children, root, slot, t.b + b);
                     else
-                        tiny[atomicAdd(words + 1, 1u)] = make_uint3(t.b + b, t.b + e, slot);
+                        tiny[atomicAdd(words + 3, 1u)] = make_uint3(t.b + b, t.b + e, slot);
                 }
                 if (sp == 0) break;
                 const uint3 top = stack[--sp];
@@ -1526,7 +1526,7 @@ __global__ void tiny_keys(uint32_t total, const uint3* __restrict__ tiny, const 
     wait_for_previous();
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= total) return;
-    keys[k] = k < words[1] ? uint8_t(kSahSweep - (tiny[k].y - tiny[k].x)) : uint8_t(kSahSweep);
+    keys[k] = k < words[3] ? uint8_t(kSahSweep - (tiny[k].y - tiny[k].x)) : uint8_t(kSahSweep);
     index[k] = k;
 }
 
@@ -1551,7 +1551,7 @@ __global__ void __launch_bounds__(kTinyBlock)
     __shared__ float corner[6][kSahSweep][kTinyBlock];
     __shared__ float left_area[kSahSweep][kTinyBlock];
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-    if (k >= words[1]) return;
+    if (k >= words[3]) return;
     const unsigned me = threadIdx.x;
     const uint3 t = tiny[by_size[k]];
     const uint32_t count = t.y - t.x;
@@ -1763,10 +1763,9 @@ __global__ void __launch_bounds__(kBlock)
     uint32_t count = alive ? 1 : 0;
     uint32_t ref = s, tail = lane;
     uint32_t* key = key_[w];
-    constexpr uint32_t kDead = 4 * kClusterCap;                 // over the cap with any cluster
-    const auto weight = [&] { return alive ? count : kDead; };  // the lane's count for the cap
+    constexpr uint32_t kDead = 4 * kClusterCap;  // over the cap with any cluster
     const auto put_box = [&] {
-        lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(weight()));
+        lo4[w][lane] = make_float4(box.lo.x, box.lo.y, box.lo.z, __uint_as_float(alive ? count : kDead));
         hi4[w][lane] = make_float4(box.hi.x, box.hi.y, box.hi.z, 0.0f);
     };
     // This lane's pair with lane j: the keys for this lane's search (place j) and for j's (place
@@ -1779,7 +1778,7 @@ __global__ void __launch_bounds__(kBlock)
         const float ey = fmaxf(box.hi.y, b.y) - fminf(box.lo.y, a.y);
         const float ez = fmaxf(box.hi.z, b.z) - fminf(box.lo.z, a.z);
         const float area = ex * ey + ey * ez + ez * ex;
-        const bool may = j != lane && weight() + __float_as_uint(a.w) <= kClusterCap;
+        const bool may = j != lane && (alive ? count : kDead) + __float_as_uint(a.w) <= kClusterCap;
         key[j * (kWarp + 1) + lane] = may ? accel::cluster_pair_key(area, j) : accel::kNoClusterPair;
         key[lane * (kWarp + 1) + j] = may ? accel::cluster_pair_key(area, lane) : accel::kNoClusterPair;
     };
@@ -2197,15 +2196,15 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<Bvh2Node> out_nodes(inner);
     // Binned SAH: two lists of a level's large tasks, their splits, bins, first chunks and chunks
     // binned (per task), each chunk's counts per bin and lefts, the small and tiny tasks, the
-    // triangles' final order, and counters: [0] the small tasks, [1] the tiny tasks, [2] and [3]
-    // the large tasks of even and odd levels.
+    // triangles' final order, and counters: [1] the small tasks, [3] the tiny tasks, [4] and [5]
+    // the large tasks of even and odd levels ([0] and [2] are not used).
     const size_t s_large = sah ? n / (kSahWarpTask + 1) + 1 : 0;
     const size_t s_chunks = sah ? n / kSahChunk + s_large + 1 : 0;
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
     DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_done(s_large), final_ids(sah ? n : 0);
-    DeviceBuffer<uint32_t> s_words(sah ? 4 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
+    DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
     DeviceBuffer<uint8_t> t_keys(s_tiny.size()), t_keys_alt(s_tiny.size());
@@ -2324,11 +2323,11 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             launch(sah_start, std::min(grid_for(bin_count), 1024u), kBlock, m, pbounds, s_tasks.data(), s_small.data(),
                    s_first.data(), s_words.data(), s_bins.data(), bin_count);
             BVHLAB_CHECK_LAUNCH();
-            // Large tasks level by level. Level k's kernels read its task count (words[2 + k % 2]) and
+            // Large tasks level by level. Level k's kernels read its task count (words[4 + k % 2]) and
             // chunk count (first[tasks]) on the device; their grids are bounded from level k - 1's counts
             // (a task makes at most two large tasks, with at most one chunk more than its own). So the
-            // host enqueues level k before it knows level k's counts, then reads them (written by level
-            // k - 1's sah_chunks) while the device runs level k; a level with no tasks does nothing.
+            // host enqueues level k before it knows level k's counts, then reads them (copied after
+            // level k - 1) while the device runs level k; a level with no tasks does nothing.
             uint32_t tasks = m > kSahWarpTask ? 1 : 0, chunks = (m + kSahChunk - 1) / kSahChunk;
             size_t grid_chunks = chunks;
             // The most chunks of a task at the level enqueued next (a child has at most its parent's):
@@ -2337,11 +2336,18 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             SahTask* level = s_tasks.data();
             SahTask* next = s_tasks.data() + s_large;
             for (uint32_t k = 0; tasks; ++k) {
-                const uint32_t* now = s_words.data() + 2 + k % 2;
-                uint32_t* after = s_words.data() + 2 + (k + 1) % 2;
-                const SahSplitOut split_out{
-                    s_bins.data(), s_splits.data(), s_done.data(), next, after, s_small.data(), s_words.data(), m, kids,
-                    proot};
+                const uint32_t* now = s_words.data() + 4 + k % 2;
+                uint32_t* after = s_words.data() + 4 + (k + 1) % 2;
+                const SahSplitOut split_out{s_bins.data(),
+                                            s_splits.data(),
+                                            s_done.data(),
+                                            next,
+                                            after,
+                                            s_small.data(),
+                                            s_words.data() + 1,
+                                            m,
+                                            kids,
+                                            proot};
                 launch(sah_bin, unsigned(grid_chunks), kBlock, level, now, s_first.data(), order, pboxes,
                        s_chunk_counts.data(), split_out);
                 if (most > kSahSumChunks)
@@ -2349,7 +2355,7 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                            s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
                 launch(sah_scatter, unsigned(grid_chunks), kBlock, level, now, s_first.data(), s_splits.data(), order,
                        pcentres, s_chunk_counts.data(), s_lefts.data(), fin);
-                launch(sah_chunks, 1, 1024, next, after, s_first.data(), s_words.data() + 2 + k % 2,
+                launch(sah_chunks, 1, 1024, next, after, s_first.data(), s_words.data() + 4 + k % 2,
                        readback->slot(int(k % 2)));
                 BVHLAB_CHECK_LAUNCH();
                 readback->mark(int(k % 2));
