@@ -1127,8 +1127,9 @@ __device__ void sah_split_task(const SahTask* __restrict__ tasks, uint32_t task,
 }
 
 /// Bins each chunk's triangles in shared memory, a set of bins per warp (fewer threads meet on an
-/// address), runs of neighbours in one bin merged first, then adds them to its task's bins and keeps the chunk's counts
-/// per bin (its lefts, once the split is known). The last of a task's chunks to finish splits the task.
+/// address), runs of neighbours in one bin merged first, then adds them to its task's bins and
+/// keeps the chunk's counts per bin (its lefts, once the split is known). The last of a task's
+/// chunks to finish splits the task.
 constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
@@ -1268,8 +1269,8 @@ __global__ void __launch_bounds__(kBlock)
 /// The stable partition of each chunk into the other order buffer (left side from the task's
 /// first position, after the lefts of the task's chunks before it, which the block sums; right
 /// side from m), the children's centroid bounds added to, and one-triangle children's triangles
-/// written to final_ids. The block reads its chunk in kSahPerThread coalesced rounds; each triangle's place among the
-/// lefts comes from the warps' ballots, counted per round and warp.
+/// written to final_ids. The block reads its chunk in kSahPerThread coalesced rounds; each
+/// triangle's place among the lefts comes from the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
     sah_scatter(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
                 const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits, SahOrder order,
