@@ -2327,8 +2327,9 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
             // Large tasks level by level. Level k's kernels read its task count (words[4 + k % 2]) and
             // chunk count (first[tasks]) on the device; their grids are bounded from level k - 1's counts
             // (a task makes at most two large tasks, with at most one chunk more than its own). So the
-            // host enqueues level k before it knows level k's counts, then reads them (copied after
-            // level k - 1) while the device runs level k; a level with no tasks does nothing.
+            // host enqueues level k before it knows level k's counts, then reads them (written by level
+            // k - 1's sah_chunks into mapped memory) while the device runs level k; a level with no
+            // tasks does nothing.
             uint32_t tasks = m > kSahWarpTask ? 1 : 0, chunks = (m + kSahChunk - 1) / kSahChunk;
             size_t grid_chunks = chunks;
             // The most chunks of a task at the level enqueued next (a child has at most its parent's):
