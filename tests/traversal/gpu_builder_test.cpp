@@ -208,9 +208,8 @@ TEST(GpuBuilder, ClusteredGpuBinnedEqualsItsCpuReferenceBitForBit) {
 
 TEST(GpuBuilder, LeavesEqualTheCpuLeafChoice) {
     // The device decides leaves by SAH as accel::tree_from_hierarchy does, in the same float
-    // operations: the same nodes, leaves, depth and SAH, for the references' hierarchies. The
-    // clustered gpu-binned build gives its clusters' nodes their meta as it merges them, and
-    // climbs from the clusters' roots only. ("one centre": see the bit-for-bit test.)
+    // operations: the same nodes, leaves, depth and SAH, for the references' hierarchies, the
+    // clustered gpu-binned build's among them (not on "one centre": see its bit-for-bit test).
     BVHLAB_SKIP_WITHOUT_GPU();
     for (const NamedMesh& m : builder_meshes()) {
         for (auto kind : {accel::BuilderKind::kLbvh, accel::BuilderKind::kPloc, accel::BuilderKind::kGpuBinned}) {
