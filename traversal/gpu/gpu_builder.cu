@@ -98,10 +98,9 @@ __device__ void store_meta(NodeMeta* at, const NodeMeta& m) {
     *reinterpret_cast<uint4*>(at) = make_uint4(m.count, m.interior, __float_as_uint(m.cost), m.height);
 }
 
-/// Writes interior node `id` over children a and b (complete) with box `box`, and decides by
-/// SAH whether its subtree becomes one leaf.
-__device__ NodeMeta make_node(uint32_t id, uint32_t a, uint32_t b, const NodeMeta& ma, const NodeMeta& mb,
-                              const AABB& box, AABB* boxes, uint2* children, NodeMeta* meta, const LeafRule& rule) {
+/// The meta of an interior node over children with metas ma and mb (left, right) and box `box`:
+/// decides by SAH whether its subtree becomes one leaf.
+__device__ NodeMeta node_meta(const NodeMeta& ma, const NodeMeta& mb, const AABB& box, const LeafRule& rule) {
     NodeMeta m;
     m.count = ma.count + mb.count;
     const float area = box.half_area();
@@ -111,6 +110,13 @@ __device__ NodeMeta make_node(uint32_t id, uint32_t a, uint32_t b, const NodeMet
     m.cost = leaf ? as_leaf : inner;
     m.interior = leaf ? 0 : 1 + ma.interior + mb.interior;
     m.height = leaf ? 0 : 1 + max(ma.height, mb.height);
+    return m;
+}
+
+/// Writes interior node `id` over children a and b (complete) with box `box` (node_meta).
+__device__ NodeMeta make_node(uint32_t id, uint32_t a, uint32_t b, const NodeMeta& ma, const NodeMeta& mb,
+                              const AABB& box, AABB* boxes, uint2* children, NodeMeta* meta, const LeafRule& rule) {
+    const NodeMeta m = node_meta(ma, mb, box, rule);
     boxes[id] = box;
     children[id] = make_uint2(a, b);
     store_meta(meta + id, m);
@@ -310,24 +316,62 @@ __global__ void lbvh_climb(uint32_t n, const Key* __restrict__ keys, const uint3
     *root = node;
 }
 
+/// Climbs that read every node's box and meta from memory (an earlier kernel or the sibling's
+/// thread wrote them).
+struct WrittenLeaves {
+    static constexpr bool kMade = false;
+    __device__ AABB operator()(uint32_t, NodeMeta&) const { return AABB::empty(); }
+};
+
+/// leaves_and_climb's leaves: every leaf has a thread, and a leaf's box and meta are made again
+/// from the triangle's box by whichever thread needs them.
+struct MadeLeaves {
+    static constexpr bool kMade = true;
+    const uint32_t* sorted_ids;
+    const AABB* tri_boxes;
+    LeafRule rule;
+    __device__ AABB operator()(uint32_t s, NodeMeta& m) const {
+        const AABB box = tri_boxes[sorted_ids[s]];
+        m = leaf_meta(box, rule);
+        return box;
+    }
+};
+
 /// From node `node` upwards, its box and meta (written already) in `box` and `m`: the second of
 /// two siblings to arrive at their parent boxes it and goes on, the first stops. The node's box
 /// and meta stay in registers, so each step loads only the sibling's; one acquire-release add on
-/// the parent's counter hands them from the sibling's thread to this one.
+/// the parent's counter hands them from the sibling's thread to this one. The links and parents
+/// do not change, so they are read before the add. With MadeLeaves a parent with a leaf child
+/// takes no add and no wait: its other child's thread makes the leaf again and goes on (of two
+/// leaves, the left one's thread), and a leaf beside an interior node stops.
+template <typename Leaves = WrittenLeaves>
 __device__ void climb(uint32_t node, AABB box, NodeMeta m, uint32_t n, const uint32_t* __restrict__ parent,
-                      uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
-                      const LeafRule& rule) {
-    for (uint32_t p = parent[node]; p != kInvalid; p = parent[p]) {
-        cuda::atomic_ref<uint32_t, cuda::thread_scope_device> count(visits[p - n]);
-        if (count.fetch_add(1u, cuda::memory_order_acq_rel) == 0) return;
+                      const uint2* children, AABB* boxes, NodeMeta* meta, uint32_t* __restrict__ visits,
+                      const LeafRule& rule, const Leaves& leaves = {}) {
+    for (uint32_t p = parent[node]; p != kInvalid;) {
         const uint2 c = children[p];
+        const uint32_t up = parent[p];
         const bool first = c.x == node;
         const uint32_t sibling = first ? c.y : c.x;
-        box = merge(box, load_box(boxes + sibling));
-        const NodeMeta sm = load_meta(meta + sibling);
-        m = first ? make_node(p, c.x, c.y, m, sm, box, boxes, children, meta, rule)
-                  : make_node(p, c.x, c.y, sm, m, box, boxes, children, meta, rule);
+        AABB sb;
+        NodeMeta sm;
+        if (Leaves::kMade && sibling < n) {
+            if (node < n && !first) return;
+            sb = leaves(sibling, sm);
+        } else if (Leaves::kMade && node < n) {
+            return;
+        } else {
+            cuda::atomic_ref<uint32_t, cuda::thread_scope_device> count(visits[p - n]);
+            if (count.fetch_add(1u, cuda::memory_order_acq_rel) == 0) return;
+            sb = load_box(boxes + sibling);
+            sm = load_meta(meta + sibling);
+        }
+        box = merge(box, sb);
+        m = first ? node_meta(m, sm, box, rule) : node_meta(sm, m, box, rule);
+        boxes[p] = box;
+        store_meta(meta + p, m);
         node = p;
+        p = up;
     }
 }
 
@@ -355,7 +399,7 @@ __global__ void leaves_and_climb(uint32_t n, const uint32_t* __restrict__ sorted
     if (s >= n) return;
     NodeMeta m;
     const AABB box = make_leaf(s, sorted_ids, tri_boxes, boxes, meta, rule, m);
-    climb(s, box, m, n, parent, children, boxes, meta, visits, rule);
+    climb(s, box, m, n, parent, children, boxes, meta, visits, rule, MadeLeaves{sorted_ids, tri_boxes, rule});
 }
 
 // --- PLOC (Meister & Bittner 2018): rounds over the whole cluster list, as
@@ -833,11 +877,13 @@ __device__ void emit_leaf(uint32_t node, uint32_t first, uint32_t n, const uint2
 /// The Woop map of every triangle in leaf order (gathered: writing each map to its place from the
 /// mesh's order was slower, experiments/NOTES.md).
 __global__ void woop_maps(uint32_t n, const uint32_t* __restrict__ tri_ids, const Vec3* __restrict__ verts,
-                          const uint32_t* __restrict__ idx, WoopTriangle* __restrict__ tris) {
+                          const uint32_t* __restrict__ idx, WoopTriangle* __restrict__ tris,
+                          uint32_t* __restrict__ copy_ids = nullptr) {
     wait_for_previous();
     const uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     if (k >= n) return;
     const uint32_t t = tri_ids[k];
+    if (copy_ids) copy_ids[k] = t;  // the layout's ids, when they are the sorted ones
     WoopTriangle w;
     accel::woop_map(verts[idx[3 * t]], verts[idx[3 * t + 1]], verts[idx[3 * t + 2]], w);
     tris[k] = w;
@@ -887,7 +933,7 @@ struct SahSplit {
     AABB* child_cb[2];  ///< the children's tasks' centroid bounds; null for a one-triangle child
 };
 
-struct SahBin {
+struct alignas(16) SahBin {  // 16-byte aligned: sah_start clears it in two vector stores
     float lo[3], hi[3];
     uint32_t count, pad;
 
@@ -1010,13 +1056,20 @@ __device__ WarpSplit sweep_bins_warp(BinOf bin_of, const bool (&splittable)[3]) 
     return {at / 32, at % 32, __shfl_sync(~0u, left, at % 32)};
 }
 
-/// The root task (or, for a small mesh, the first small task), and every large task's bins empty.
+/// The root task (or, for a small mesh, the first small task), and the first bin_count bins
+/// empty (those of the most large tasks a level can have), written as 16-byte halves.
 __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* large, SahTask* small,
-                          uint32_t* __restrict__ first, uint32_t* __restrict__ words, SahBin* bins,
-                          uint32_t bin_count) {
+                          uint32_t* __restrict__ first, uint32_t* __restrict__ chunk_task, uint32_t* __restrict__ words,
+                          SahBin* bins, uint32_t bin_count) {
     wait_for_previous();
+    static_assert(sizeof(SahBin) == 2 * sizeof(uint4), "a bin is two 16-byte halves");
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    for (uint32_t k = i; k < bin_count; k += gridDim.x * blockDim.x) bins[k] = SahBin::empty();
+    const SahBin e = SahBin::empty();
+    const uint4 half[2] = {reinterpret_cast<const uint4*>(&e)[0], reinterpret_cast<const uint4*>(&e)[1]};
+    uint4* out = reinterpret_cast<uint4*>(bins);
+    for (uint32_t k = i; k < 2 * bin_count; k += gridDim.x * blockDim.x) out[k] = half[k & 1];
+    if (n > kSahWarpTask)  // the root's chunks
+        for (uint32_t k = i; k < (n + kSahChunk - 1) / kSahChunk; k += gridDim.x * blockDim.x) chunk_task[k] = 0;
     if (i != 0) return;
     const SahTask root{0, n, kInvalid, 0, *bounds};
     if (n > kSahWarpTask) {
@@ -1030,21 +1083,13 @@ __global__ void sah_start(uint32_t n, const AABB* __restrict__ bounds, SahTask* 
     }
 }
 
-/// The task of chunk k: the last t with first[t] <= k (first[tasks] is the chunk count).
-__device__ uint32_t sah_task_of(const uint32_t* first, uint32_t tasks, uint32_t k) {
-    uint32_t lo = 0, hi = tasks;
-    while (hi - lo > 1) {
-        const uint32_t mid = (lo + hi) / 2;
-        (first[mid] <= k ? lo : hi) = mid;
-    }
-    return lo;
-}
-
-/// Chunk k of a level's large tasks (by default the block's own): its task and range.
+/// Chunk k of a level's large tasks (by default the block's own): its task (chunk_task, written
+/// with first by sah_chunks) and range.
 struct SahChunk {
     uint32_t task, b, e;
-    __device__ SahChunk(const SahTask* tasks, const uint32_t* first, uint32_t count, uint32_t k = blockIdx.x) {
-        task = sah_task_of(first, count, k);
+    __device__ SahChunk(const SahTask* tasks, const uint32_t* first, const uint32_t* chunk_task,
+                        uint32_t k = blockIdx.x) {
+        task = chunk_task[k];
         const SahTask& t = tasks[task];
         b = t.b + (k - first[task]) * kSahChunk;
         e = min(b + kSahChunk, t.e);
@@ -1134,8 +1179,8 @@ constexpr int kBinSets = kBlock / int(kWarp);
 
 __global__ void __launch_bounds__(kBlock)
     sah_bin(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
-            const uint32_t* __restrict__ first, SahOrder order, const AABB* __restrict__ tri_boxes,
-            uint32_t* __restrict__ chunk_counts, SahSplitOut out) {
+            const uint32_t* __restrict__ first, const uint32_t* __restrict__ chunk_task, SahOrder order,
+            const AABB* __restrict__ tri_boxes, uint32_t* __restrict__ chunk_counts, SahSplitOut out) {
     wait_for_previous();
     SahBin* bins = out.bins;
     const uint32_t count = *task_count;
@@ -1149,7 +1194,7 @@ __global__ void __launch_bounds__(kBlock)
         }
         num[0][k] = 0;
     }
-    const SahChunk c(tasks, first, count);
+    const SahChunk c(tasks, first, chunk_task);
     const SahTask& t = tasks[c.task];
     const SahMap map(t.cb);
     const uint32_t* in = order.buf[t.buf];
@@ -1248,13 +1293,14 @@ __global__ void __launch_bounds__(kBlock)
 /// the tasks of more than kSahSumChunks chunks.
 __global__ void __launch_bounds__(kBlock)
     sah_lefts(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
-              const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits,
-              const uint32_t* __restrict__ chunk_counts, uint32_t* __restrict__ lefts) {
+              const uint32_t* __restrict__ first, const uint32_t* __restrict__ chunk_task,
+              const SahSplit* __restrict__ splits, const uint32_t* __restrict__ chunk_counts,
+              uint32_t* __restrict__ lefts) {
     wait_for_previous();
     const uint32_t chunk = (blockIdx.x * blockDim.x + threadIdx.x) / kWarp, lane = threadIdx.x & 31;
     const uint32_t count = *task_count;
     if (chunk >= first[count]) return;  // whole warps
-    const SahChunk c(tasks, first, count, chunk);
+    const SahChunk c(tasks, first, chunk_task, chunk);
     if (first[c.task + 1] - first[c.task] <= kSahSumChunks) return;
     const SahSplit s = splits[c.task];
     if (s.axis < 0) {  // by place
@@ -1273,9 +1319,10 @@ __global__ void __launch_bounds__(kBlock)
 /// triangle's place among the lefts comes from the warps' ballots, counted per round and warp.
 __global__ void __launch_bounds__(kBlock)
     sah_scatter(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count,
-                const uint32_t* __restrict__ first, const SahSplit* __restrict__ splits, SahOrder order,
-                const Vec3* __restrict__ centres, const uint32_t* __restrict__ chunk_counts,
-                const uint32_t* __restrict__ lefts, uint32_t* __restrict__ final_ids) {
+                const uint32_t* __restrict__ first, const uint32_t* __restrict__ chunk_task,
+                const SahSplit* __restrict__ splits, SahOrder order, const Vec3* __restrict__ centres,
+                const uint32_t* __restrict__ chunk_counts, const uint32_t* __restrict__ lefts,
+                uint32_t* __restrict__ final_ids) {
     wait_for_previous();
     const uint32_t count = *task_count;
     if (blockIdx.x >= first[count]) return;  // a grid for the most chunks the level can have
@@ -1283,7 +1330,7 @@ __global__ void __launch_bounds__(kBlock)
     __shared__ uint32_t before[kSahPerThread][kWarps];  // lefts counted before each round and warp
     __shared__ uint32_t side_box[2][6];                 // the children's centroid bounds, ordered bits
     __shared__ uint32_t task_lefts[kWarps];             // per warp: lefts of the task's chunks before this one
-    const SahChunk c(tasks, first, count);
+    const SahChunk c(tasks, first, chunk_task);
     const SahTask& t = tasks[c.task];
     const SahSplit s = splits[c.task];
     const SahMap map(t.cb);
@@ -1371,11 +1418,13 @@ __global__ void __launch_bounds__(kBlock)
     }
 }
 
-/// The next level's chunks: each large task's first chunk (first[count] = the chunk count), and
-/// for the host (mapped memory) the tasks, chunks and most chunks of one task. One block.
+/// The next level's chunks: each large task's first chunk (first[count] = the chunk count) and
+/// each chunk's task, and for the host (mapped memory) the tasks, chunks and most chunks of one
+/// task. One block.
 __global__ void __launch_bounds__(1024)
     sah_chunks(const SahTask* __restrict__ tasks, const uint32_t* __restrict__ task_count, uint32_t* __restrict__ first,
-               uint32_t* __restrict__ done_count, uint32_t* host) {
+               uint32_t* __restrict__ chunk_task, uint32_t* __restrict__ done_count, uint32_t* host) {
+    wait_for_previous();
     using Scan = cub::BlockScan<uint32_t, 1024>;
     __shared__ typename Scan::TempStorage scratch;
     __shared__ uint32_t largest;
@@ -1387,7 +1436,10 @@ __global__ void __launch_bounds__(1024)
         const uint32_t chunks = k < count ? (tasks[k].e - tasks[k].b + kSahChunk - 1) / kSahChunk : 0;
         uint32_t before, sum;
         Scan(scratch).ExclusiveSum(chunks, before, sum);
-        if (k < count) first[k] = base + before;
+        if (k < count) {
+            first[k] = base + before;
+            for (uint32_t j = 0; j < chunks; ++j) chunk_task[base + before + j] = k;
+        }
         if (chunks) atomicMax(&largest, chunks);
         base += sum;
         __syncthreads();
@@ -1519,6 +1571,14 @@ __global__ void __launch_bounds__(kSahWarps* kWarp)
         }
         __syncwarp();
     }
+}
+
+/// sah_small's grid: as many blocks as the device holds at once (each warp takes tasks in turn, so
+/// the kernel lasts as long as its longest warp).
+unsigned small_grid() {
+    int blocks = 0;
+    BVHLAB_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&blocks, sah_small, kSahWarps * kWarp, 0));
+    return unsigned(std::max(blocks, 1) * gpu_sm_count());
 }
 
 /// The tiny tasks' sort keys (the largest first; past the last task, last) and their numbers.
@@ -2033,7 +2093,9 @@ __global__ void layout_write(LayoutOrder order, LayoutInput in, const uint32_t* 
         out.nodes[at >> 32] = o;
         return;
     }
-    emit_leaf(x, first_of(x, at), in.n, in.children, in.sorted_ids, out.tri_ids);
+    // With id ranges the leaves' triangles, left to right, are the sorted order itself: tri_ids is
+    // sorted_ids, copied whole after the layout.
+    if (!order.id_ranges) emit_leaf(x, first_of(x, at), in.n, in.children, in.sorted_ids, out.tri_ids);
     if (parent[x] == kInvalid) {
         Bvh2Node o{};
         o.set_child_box(0, in.boxes[x]);
@@ -2204,7 +2266,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
     DeviceBuffer<SahTask> s_tasks(2 * s_large), s_small(sah ? n / 2 + 1 : 0);
     DeviceBuffer<SahSplit> s_splits(s_large);
     DeviceBuffer<SahBin> s_bins(3 * kSahBins * s_large);
-    DeviceBuffer<uint32_t> s_first(s_large + 1), s_lefts(s_chunks), s_done(s_large), final_ids(sah ? n : 0);
+    DeviceBuffer<uint32_t> s_first(s_large + 1), s_chunk_task(s_chunks), s_lefts(s_chunks), s_done(s_large),
+        final_ids(sah ? n : 0);
     DeviceBuffer<uint32_t> s_words(sah ? 6 : 0), s_chunk_counts(3 * kSahBins * s_chunks);
     DeviceBuffer<uint3> s_tiny(sah ? n / 2 + 1 : 0);
     // The tiny tasks in order of size (threads of a warp then walk subtrees of one size).
@@ -2320,9 +2383,9 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                 uint32_t* proot, uint32_t* fin) {
             launch(iota, grid_for(m), kBlock, m, ids.data());
             const SahOrder order{{ids.data(), ids_alt.data()}};
-            const uint32_t bin_count = uint32_t(s_bins.size());
-            launch(sah_start, std::min(grid_for(bin_count), 1024u), kBlock, m, pbounds, s_tasks.data(), s_small.data(),
-                   s_first.data(), s_words.data(), s_bins.data(), bin_count);
+            const uint32_t bin_count = uint32_t(3 * kSahBins * (m / (kSahWarpTask + 1) + 1));  // disjoint tasks
+            launch(sah_start, std::min(grid_for(2 * bin_count), 1024u), kBlock, m, pbounds, s_tasks.data(),
+                   s_small.data(), s_first.data(), s_chunk_task.data(), s_words.data(), s_bins.data(), bin_count);
             BVHLAB_CHECK_LAUNCH();
             // Large tasks level by level. Level k's kernels read its task count (words[4 + k % 2]) and
             // chunk count (first[tasks]) on the device; their grids are bounded from level k - 1's counts
@@ -2350,15 +2413,15 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                                             m,
                                             kids,
                                             proot};
-                launch(sah_bin, unsigned(grid_chunks), kBlock, level, now, s_first.data(), order, pboxes,
-                       s_chunk_counts.data(), split_out);
+                launch(sah_bin, unsigned(grid_chunks), kBlock, level, now, s_first.data(), s_chunk_task.data(), order,
+                       pboxes, s_chunk_counts.data(), split_out);
                 if (most > kSahSumChunks)
                     launch(sah_lefts, unsigned((grid_chunks * kWarp + kBlock - 1) / kBlock), kBlock, level, now,
-                           s_first.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
-                launch(sah_scatter, unsigned(grid_chunks), kBlock, level, now, s_first.data(), s_splits.data(), order,
-                       pcentres, s_chunk_counts.data(), s_lefts.data(), fin);
-                launch(sah_chunks, 1, 1024, next, after, s_first.data(), s_words.data() + 4 + k % 2,
-                       readback->slot(int(k % 2)));
+                           s_first.data(), s_chunk_task.data(), s_splits.data(), s_chunk_counts.data(), s_lefts.data());
+                launch(sah_scatter, unsigned(grid_chunks), kBlock, level, now, s_first.data(), s_chunk_task.data(),
+                       s_splits.data(), order, pcentres, s_chunk_counts.data(), s_lefts.data(), fin);
+                launch(sah_chunks, 1, 1024, next, after, s_first.data(), s_chunk_task.data(),
+                       s_words.data() + 4 + k % 2, readback->slot(int(k % 2)));
                 BVHLAB_CHECK_LAUNCH();
                 readback->mark(int(k % 2));
                 if (k > 0) {  // level k's counts
@@ -2370,8 +2433,8 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
                 grid_chunks = std::min(size_t(chunks) + tasks, s_chunks);
                 std::swap(level, next);
             }
-            launch(sah_small, unsigned(8 * gpu_sm_count()), kSahWarps * kWarp, s_small.data(), s_words.data(), order,
-                   pboxes, pcentres, m, kids, proot, fin, s_tiny.data());
+            launch(sah_small, small_grid(), kSahWarps * kWarp, s_small.data(), s_words.data(), order, pboxes, pcentres,
+                   m, kids, proot, fin, s_tiny.data());
             launch(tiny_keys, grid_for(s_tiny.size()), kBlock, uint32_t(s_tiny.size()), s_tiny.data(), s_words.data(),
                    tk.Current(), ti.Current());
             BVHLAB_CHECK_LAUNCH();
@@ -2532,9 +2595,13 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         launch(layout_write, grid_for(nodes), kBlock, order, in, parent.data(), out, layout_flags_.data(),
                layout_scan.data());
         BVHLAB_CHECK_LAUNCH();
-        if (prims.mesh) {
-            launch(woop_maps, grid_for(n), kBlock, n, g.tri_ids.data(), verts.data(), idx.data(), g.tris.data());
+        if (prims.mesh) {  // with id ranges, the maps read the sorted ids and copy them to tri_ids
+            launch(woop_maps, grid_for(n), kBlock, n, order.id_ranges ? sorted_ids : g.tri_ids.data(), verts.data(),
+                   idx.data(), g.tris.data(), order.id_ranges ? g.tri_ids.data() : nullptr);
             BVHLAB_CHECK_LAUNCH();
+        } else if (order.id_ranges) {
+            BVHLAB_CUDA_CHECK(
+                cudaMemcpyAsync(g.tri_ids.data(), sorted_ids, size_t(n) * sizeof(uint32_t), cudaMemcpyDeviceToDevice));
         }
     }
     ev.record(8);
@@ -2600,7 +2667,8 @@ double gpu_refit(const RefitInput& in) {
     ev.record(0);
     refit_leaves<<<grid_for(in.leaf_count), kBlock>>>(in);
     BVHLAB_CHECK_LAUNCH();
-    launch(woop_maps, grid_for(in.tri_count), kBlock, in.tri_count, in.tri_ids, in.verts, in.idx, in.tris);
+    launch(woop_maps, grid_for(in.tri_count), kBlock, in.tri_count, in.tri_ids, in.verts, in.idx, in.tris,
+           static_cast<uint32_t*>(nullptr));
     BVHLAB_CHECK_LAUNCH();
     ev.record(1);
     ev.sync(1);
