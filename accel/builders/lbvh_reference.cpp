@@ -51,8 +51,9 @@ void emit_hierarchy(RawHierarchy& h) {
 }
 
 /// The leaves in Morton order: keys, sorted ids and the leaves' boxes (boxes sized for 2n - 1
-/// nodes). The first step of every GPU builder.
-RawHierarchy morton_order(const scene::TriangleMesh& mesh, int morton_bits) {
+/// nodes). The first step of every GPU builder. The order compares the codes without their
+/// `ignored` low bits (the keys keep them).
+RawHierarchy morton_order(const scene::TriangleMesh& mesh, int morton_bits, int ignored = 0) {
     if (morton_bits != 30 && morton_bits != 60)
         throw Error("morton_bits " + std::to_string(morton_bits) + " is neither 30 nor 60");
     const size_t n = mesh.triangle_count();
@@ -77,7 +78,7 @@ RawHierarchy morton_order(const scene::TriangleMesh& mesh, int morton_bits) {
     std::iota(h.sorted_ids.begin(), h.sorted_ids.end(), 0u);
     // The GPU's radix sort is stable: equal keys keep the order of their triangle ids.
     std::stable_sort(h.sorted_ids.begin(), h.sorted_ids.end(),
-                     [&](uint32_t a, uint32_t b) { return codes[a] < codes[b]; });
+                     [&](uint32_t a, uint32_t b) { return codes[a] >> ignored < codes[b] >> ignored; });
     h.keys.resize(n);
     for (size_t k = 0; k < n; ++k) {
         h.keys[k] = codes[h.sorted_ids[k]];
@@ -229,7 +230,7 @@ std::vector<RefCluster> make_clusters(const scene::TriangleMesh& mesh, float alp
         s << "cluster alpha " << alpha << " is not at least 1";
         throw Error(s.str());
     }
-    const RawHierarchy order = morton_order(mesh, 30);
+    const RawHierarchy order = morton_order(mesh, 30, kClusterOrderIgnoredBits);
     const std::vector<uint32_t>& sorted = order.sorted_ids;
     constexpr size_t kChunk = 32;
     std::vector<RefCluster> out;

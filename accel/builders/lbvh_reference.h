@@ -50,16 +50,19 @@ RawHierarchy radix_tree(const std::vector<uint64_t>& keys);
 RawHierarchy ploc_reference(const scene::TriangleMesh& mesh, int morton_bits, int radius);
 
 /// gpu-binned's clusters (BuilderOptions::cluster_alpha = alpha, at least 1): the triangles in
-/// Morton order (30-bit codes) in chunks of 32; in each chunk, rounds in which every cluster finds
-/// the cluster whose union with it has the least half area (to 2^-18 relative, on equal areas the
-/// lower place: cluster_pair_key) among those it may join (at most kMaxClusterTriangles together),
-/// and each mutual pair whose union's half area (that key's) is at most alpha times the larger
-/// one's merges, the lower place keeping the cluster with its own triangles first; until a round
-/// merges nothing. The clusters in order of chunk and place, each as its triangle ids. Throws
-/// bvhlab::Error for an empty mesh or an alpha below 1.
+/// Morton order (the top 24 bits of 30-bit codes: kClusterOrderIgnoredBits) in chunks of 32; in each chunk, rounds in
+/// which every cluster finds the cluster whose union with it has the least half area (to 2^-18 relative, on equal areas
+/// the lower place: cluster_pair_key) among those it may join (at most kMaxClusterTriangles together), and each mutual
+/// pair whose union's half area (that key's) is at most alpha times the larger one's merges, the lower place keeping
+/// the cluster with its own triangles first; until a round merges nothing. The clusters in order of chunk and place,
+/// each as its triangle ids. Throws bvhlab::Error for an empty mesh or an alpha below 1.
 std::vector<std::vector<uint32_t>> triangle_clusters(const scene::TriangleMesh& mesh, float alpha);
 
 constexpr uint32_t kMaxClusterTriangles = 16;
+
+/// The clustering's order ignores the 30-bit codes' low 6 bits (8 bits per axis are left; equal
+/// codes keep the order of triangle ids): a cheaper sort, and no measurable change in the trees.
+constexpr int kClusterOrderIgnoredBits = 6;
 
 /// No pair: the two clusters may not merge, or their union's area is not finite.
 constexpr uint32_t kNoClusterPair = 0xffffffffu;

@@ -362,6 +362,18 @@ scene::TriangleMesh stacks_at(std::initializer_list<float> xs, int copies) {
     return m;
 }
 
+TEST(TriangleClusters, OrderIgnoresTheCodesLowSixBits) {
+    // Centres along x over [0, 1] from triangle 1's: triangle 0 lies 0.002 past it, cell 2 of
+    // 1024 (30-bit codes) but cell 0 of 256 (their top 24 bits), where equal codes keep the
+    // ids' order. At alpha 1 nothing merges (each union grows a box by 2%).
+    const auto c = triangle_clusters(row_of({0.002f, 0.0f, 1.0f}), 1.0f);
+    ASSERT_EQ(c.size(), 3u);
+    EXPECT_EQ(c[0], std::vector<uint32_t>{0u});
+    EXPECT_EQ(c[1], std::vector<uint32_t>{1u});
+    EXPECT_EQ(c[2], std::vector<uint32_t>{2u});
+    static_assert(kClusterOrderIgnoredBits == 6, "8 bits per axis are left");
+}
+
 TEST(TriangleClusters, NearlyCoincidentNeighboursMergeUpToTheCap) {
     // Three stacks of four equal triangles: at alpha 1 each stack is one cluster (a union that
     // grows no box), and no two stacks meet; at alpha 1e4 the stacks' unions are cheap too.

@@ -2356,7 +2356,10 @@ GpuBuild build(const Prims& prims, accel::BuilderKind kind, const accel::Builder
         BVHLAB_CHECK_LAUNCH();
     }
     ev.record(4);
-    if (coded) BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), 0, bits));
+    if (coded) {  // the clustering's order ignores low bits (accel::kClusterOrderIgnoredBits)
+        const int low = clustered ? accel::kClusterOrderIgnoredBits : 0;
+        BVHLAB_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.data(), sort_bytes, dk, dv, int(n), low, bits));
+    }
     ev.record(5);
     const Key* sorted_keys = dk.Current();
     const uint32_t* sorted_ids = sah ? final_ids.data() : dv.Current();
